@@ -1,0 +1,254 @@
+/*
+ * pstencil — meshless discretisations of the Laplacian and of div(M grad u) on disordered
+ * particle clouds in 2D and 3D.
+ *
+ * Conventions of the whole API:
+ *   - opaque handles with create/destroy pairs;
+ *   - every fallible call returns an int: PST_OK (0) or a negative PST_E* code;
+ *     pst_strerror() names the code, and the handle (or the `err` buffer the call was given)
+ *     holds a detail message of the last failure;
+ *   - the library never prints, never calls exit(), keeps no global mutable state;
+ *   - threads are OpenMP threads: results are identical for every thread count.
+ */
+#ifndef PSTENCIL_H
+#define PSTENCIL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PSTENCIL_VERSION_MAJOR 0
+#define PSTENCIL_VERSION_MINOR 1
+#define PSTENCIL_VERSION_PATCH 0
+
+/* ------------------------------------------------------------------------------------------ */
+/* Status codes                                                                               */
+/* ------------------------------------------------------------------------------------------ */
+
+enum {
+    PST_OK = 0,
+    PST_EINVAL = -1,   /* a bad argument from the caller (wrong dimension, negative size, ...) */
+    PST_EINPUT = -2,   /* bad input data: malformed file, NaN, duplicate particles, ...        */
+    PST_ENOMEM = -3,   /* an allocation failed, or an estimate exceeds the allowed memory       */
+    PST_EIO = -4,      /* a file could not be opened, written or renamed                       */
+    PST_ENUMERIC = -5  /* a numerical failure (singular system, no convergence)                 */
+};
+
+/* A static, human-readable name of a status code ("ok", "invalid argument", ...). */
+const char *pst_strerror(int status);
+
+/* The library version as "MAJOR.MINOR.PATCH". */
+const char *pst_version(void);
+
+/* Size of the error-detail buffers that functions without a handle fill. */
+#define PST_ERRLEN 512
+
+/* ------------------------------------------------------------------------------------------ */
+/* Particle clouds                                                                            */
+/* ------------------------------------------------------------------------------------------ */
+
+/* Role of a particle in a boundary-value problem. */
+typedef enum { PST_INTERIOR = 0, PST_DIRICHLET = 1, PST_NEUMANN = 2 } pst_kind;
+
+typedef struct pst_cloud pst_cloud;
+
+/* Create a cloud of `n` particles in `dim` (2 or 3) dimensions. Positions and normals start at
+ * 0, V at 1, h uniform at 1, every particle interior, mobility absent (meaning m = 1), ids
+ * 0..n-1. Returns PST_EINVAL for a bad dim, PST_ENOMEM when allocation fails. */
+int pst_cloud_create(pst_cloud **out, int dim, size_t n);
+
+/* Free a cloud and everything it owns. NULL is allowed. */
+void pst_cloud_destroy(pst_cloud *c);
+
+/* Dimension (2 or 3) and number of particles. */
+int pst_cloud_dim(const pst_cloud *c);
+size_t pst_cloud_size(const pst_cloud *c);
+
+/* Detail message of the last failure of a call on this cloud ("" when none). */
+const char *pst_cloud_error(const pst_cloud *c);
+
+/* The structure-of-arrays fields. Pointers stay valid until the cloud is destroyed or its
+ * smoothing-length or mobility layout is changed by the setters below. Writing through them
+ * is how callers fill a cloud. */
+double *pst_cloud_coord(pst_cloud *c, int axis);       /* axis < dim; NULL otherwise       */
+double *pst_cloud_volume(pst_cloud *c);
+double *pst_cloud_normal(pst_cloud *c, int axis);      /* outward unit normal (boundaries) */
+uint8_t *pst_cloud_kinds(pst_cloud *c);                /* pst_kind values                  */
+int64_t *pst_cloud_ids(pst_cloud *c);                  /* original (input) index           */
+const double *pst_cloud_coord_const(const pst_cloud *c, int axis);
+const double *pst_cloud_volume_const(const pst_cloud *c);
+const uint8_t *pst_cloud_kinds_const(const pst_cloud *c);
+const int64_t *pst_cloud_ids_const(const pst_cloud *c);
+
+/* Smoothing length: one value for every particle, or one per particle. */
+int pst_cloud_set_h_uniform(pst_cloud *c, double h);   /* frees any per-particle array     */
+double *pst_cloud_h_per_particle(pst_cloud *c);        /* allocates (filled with the uniform
+                                                          value) on first call; NULL on OOM */
+int pst_cloud_h_is_uniform(const pst_cloud *c);
+double pst_cloud_h_uniform(const pst_cloud *c);        /* the uniform value (0 if per particle) */
+const double *pst_cloud_h_array(const pst_cloud *c);   /* per-particle array or NULL        */
+double pst_cloud_h_max(const pst_cloud *c);            /* largest h over the cloud          */
+
+/* Mobility: absent (m = 1 everywhere), a scalar per particle (ncomp = 1), or a diagonal
+ * tensor per particle (ncomp = dim). Setting a layout allocates it filled with 1. */
+int pst_cloud_set_mobility(pst_cloud *c, int ncomp);   /* ncomp in {0, 1, dim}               */
+int pst_cloud_mobility_ncomp(const pst_cloud *c);
+double *pst_cloud_mobility(pst_cloud *c, int comp);    /* comp < ncomp; NULL otherwise       */
+
+/* Named scalar fields. Adding a field allocates it filled with 0; names are unique and are
+ * C identifiers (letters, digits, '_', not starting with a digit) that do not collide with
+ * the reserved CSV column names. */
+int pst_cloud_add_field(pst_cloud *c, const char *name, double **data);
+size_t pst_cloud_nfields(const pst_cloud *c);
+const char *pst_cloud_field_name(const pst_cloud *c, size_t k);
+double *pst_cloud_field(pst_cloud *c, size_t k);
+double *pst_cloud_field_by_name(pst_cloud *c, const char *name);   /* NULL when absent */
+
+/* Axis-aligned bounding box of the positions (lo[d], hi[d] for d < dim). An empty cloud
+ * gives lo = hi = 0. */
+void pst_cloud_bbox(const pst_cloud *c, double lo[3], double hi[3]);
+
+/* Check a cloud: finite positions, V > 0, h > 0, known kinds, finite normals, mobility > 0,
+ * no two particles at the same coordinates. On failure the cloud's error names the first
+ * offending particle; returns PST_EINPUT. */
+int pst_cloud_validate(pst_cloud *c);
+
+/* Reorder every field (positions, V, h, kind, normals, mobility, ids, fields) by one
+ * permutation: new particle i is old particle perm[i]. `perm` must be a permutation of 0..n-1
+ * (checked: PST_EINVAL otherwise). */
+int pst_cloud_permute(pst_cloud *c, const uint32_t *perm);
+
+/* Scatter a per-particle array given in the cloud's current order back to input order:
+ * out[ids[i]] = in[i]. `in` and `out` must not alias. */
+void pst_cloud_to_input_order(const pst_cloud *c, const double *in, double *out);
+
+/* --- Generators ---------------------------------------------------------------------------- */
+
+/* Lattice generator options. The lattice is x_i = lo + i*s0 for i = 0..n_d along each axis,
+ * n_d = round((hi - lo)/s0) (both ends included; the box must be a whole number of spacings,
+ * to 1e-9 relative). */
+typedef struct {
+    int dim;                 /* 2 or 3                                                          */
+    double lo[3], hi[3];     /* the box                                                         */
+    double s0;               /* lattice spacing                                                 */
+    double jitter;           /* K: each coordinate moves by K*delta*s0, delta uniform in [-1,1] */
+    uint64_t seed;           /* counter-based RNG seed: same cloud for every thread count       */
+    int boundary_layer;      /* 1: the outer layer stays unjittered and is marked Dirichlet     */
+    double h_ratio;          /* h = h_ratio * s0 (uniform)                                      */
+    double angle;            /* rotation of the lattice about the box centre, radians (2D: in
+                                the x-y plane; 3D: about the z axis). 0 for none.               */
+} pst_lattice_opts;
+
+/* Fill `o` with defaults: 2D unit box, s0 = 0.1, no jitter, seed 1, no boundary layer,
+ * h_ratio 1.2, no rotation. */
+void pst_lattice_defaults(pst_lattice_opts *o);
+
+/* Generate a jittered (optionally rotated) node lattice. V = s0^dim. On a rotated lattice the
+ * box is rotated with it (the particles are the rotated lattice points). `err` (PST_ERRLEN
+ * bytes, may be NULL) receives the reason of a failure. */
+int pst_cloud_lattice(pst_cloud **out, const pst_lattice_opts *o, char *err);
+
+/* Generate the Lukyanov–Vuik cell-centred layout: one interior particle at the centre of each
+ * of the cells of spacing s0 that tile the box, plus one Dirichlet particle at the centre of
+ * every cell face that lies on the box boundary (none on edges or corners), with its outward
+ * normal. Interior particles are jittered by K*delta*s0; face particles never move
+ * (o->boundary_layer is ignored). V = s0^dim for every particle (docs/clouds.md). */
+int pst_cloud_cell_centred(pst_cloud **out, const pst_lattice_opts *o, char *err);
+
+/* The counter-based RNG behind the generators: a uniform double in [-1, 1] from (seed, index,
+ * stream). Exposed so that tests and users can reproduce a jitter. */
+double pst_rng_symmetric(uint64_t seed, uint64_t index, uint64_t stream);
+
+/* --- CSV ----------------------------------------------------------------------------------- */
+
+/* Read a cloud from CSV. The header names the columns: x,y[,z],V,h,kind,nx,ny[,nz], then
+ * optionally m (scalar mobility) or mx,my[,mz] (diagonal), then any named fields. kind is
+ * "interior", "dirichlet", "neumann" (or 0, 1, 2). Errors (PST_EINPUT / PST_EIO) name the file,
+ * line and column in `err`: NaN/Inf, wrong column count, unknown kind, V or h <= 0, duplicate
+ * particles. The cloud is Morton-unsorted: particle i is data line i. */
+int pst_cloud_read_csv(pst_cloud **out, const char *path, char *err);
+
+/* Write a cloud to CSV in input order (by ids), with full round-trip precision (%.17g). The
+ * file is written to a temporary name in the same directory and renamed, so a failed write
+ * never leaves a half-written file. */
+int pst_cloud_write_csv(const pst_cloud *c, const char *path, char *err);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Smoothing kernels                                                                          */
+/* ------------------------------------------------------------------------------------------ */
+
+typedef enum {
+    PST_KERNEL_CUBIC = 0,       /* cubic B-spline, LV eq. 12, support 2h                     */
+    PST_KERNEL_QUINTIC = 1,     /* quintic spline, QSFDI eq. 9, support 3h                   */
+    PST_KERNEL_WENDLAND_C2 = 2, /* Wendland C2, support 2h                                   */
+    PST_KERNEL_WENDLAND_C4 = 3  /* Wendland C4, support 2h                                   */
+} pst_kernel;
+
+/* Name ("cubic", "quintic", "wendland_c2", "wendland_c4") and lookup by name (-1 if unknown). */
+const char *pst_kernel_name(pst_kernel k);
+int pst_kernel_from_name(const char *name);
+
+/* Support radius in units of h (2 or 3). */
+double pst_kernel_support(pst_kernel k);
+
+/* Kernel value W(r, h), dW/dr and d2W/dr2 in `dim` = 1, 2 or 3 dimensions, normalised so that
+ * the integral of W over R^dim is 1. All three are 0 at and beyond the support radius. */
+double pst_kernel_w(pst_kernel k, int dim, double r, double h);
+double pst_kernel_dw(pst_kernel k, int dim, double r, double h);
+double pst_kernel_d2w(pst_kernel k, int dim, double r, double h);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Morton order and neighbour lists                                                           */
+/* ------------------------------------------------------------------------------------------ */
+
+/* Sort the cloud along a Morton (Z-order) curve of cells of size `cell` (> 0): 64-bit keys,
+ * 21 bits per axis in 3D and 32 in 2D (coarser cells are used when the box needs more), a
+ * parallel LSD radix sort, and one permutation applied to every field. The ids keep the input
+ * order (pst_cloud_to_input_order). */
+int pst_cloud_morton_sort(pst_cloud *c, double cell);
+
+/* Morton key of integer cell coordinates (3D: 21 bits per axis; 2D: 32 bits per axis, iz
+ * ignored). */
+uint64_t pst_morton_key(int dim, uint32_t ix, uint32_t iy, uint32_t iz);
+
+typedef struct pst_nlist pst_nlist;
+
+/* Build the CSR neighbour list of spec choice 1: j is a neighbour of i iff j != i and
+ * |x_j - x_i| < support * (h_i + h_j)/2 (strict), with `support` the kernel's support radius
+ * in units of h (pst_kernel_support). Rows are sorted by neighbour index. Works on any order
+ * of the cloud; a Morton-sorted cloud is faster. */
+int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *err);
+
+void pst_nlist_destroy(pst_nlist *nl);
+
+/* Rows: the neighbours of particle i are index[offset[i] .. offset[i+1]). */
+size_t pst_nlist_rows(const pst_nlist *nl);
+const int64_t *pst_nlist_offsets(const pst_nlist *nl);   /* rows + 1 entries */
+const uint32_t *pst_nlist_indices(const pst_nlist *nl);
+int64_t pst_nlist_pairs(const pst_nlist *nl);            /* total entries (each pair twice) */
+
+/* Statistics of a list. */
+typedef struct {
+    int64_t pairs;             /* stored entries                                  */
+    int64_t min, max;          /* neighbours per particle                         */
+    double mean;
+    size_t isolated;           /* particles with no neighbour                     */
+    size_t bytes;              /* memory held by the list                         */
+} pst_nlist_stats;
+void pst_nlist_get_stats(const pst_nlist *nl, pst_nlist_stats *s);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Threads                                                                                    */
+/* ------------------------------------------------------------------------------------------ */
+
+/* The number of OpenMP threads the library will use (omp_get_max_threads). */
+int pst_threads(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PSTENCIL_H */
