@@ -1,0 +1,143 @@
+/* Inline core of the SPH smoothing kernels (docs/kernels.md). Hot loops include this header
+ * so that W, dW/dr and d2W/dr2 inline into them; the public pst_kernel_* functions in
+ * sph_kernels.c are thin checked wrappers around the same maths. Not installed.
+ *
+ * Every kernel is written branch-free in truncated powers t_i = max(c_i - q, 0), q = r/h, and
+ * the result is then selected against r < support*h: that is the product the neighbour search
+ * forms, so W, dW and d2W are exactly 0 at and beyond the support whatever the rounding of
+ * r/h, and q = 0 gives t_i = c_i exactly, so dW(0) is exactly 0. */
+#ifndef PSTENCIL_SPH_KERNELS_H
+#define PSTENCIL_SPH_KERNELS_H
+
+#include "pstencil.h"
+
+#include <math.h>
+
+/* pi to double precision; M_PI is POSIX, not C17. */
+#define PST_SPH_PI 3.14159265358979323846
+
+/* Dimensionless normalisation sigma[k][dim-1]: W = sigma / h^dim * f(q). Each value is the
+ * inverse of the radial integral of f (verified symbolically and by tests/test_kernels.c).
+ * The 1D cubic value is 2/3; LV print 3/2, a typo. */
+static const double pst_sph_sigma[4][3] = {
+    {2.0 / 3.0, 10.0 / (7.0 * PST_SPH_PI), 1.0 / PST_SPH_PI},                 /* cubic   */
+    {1.0 / 120.0, 7.0 / (478.0 * PST_SPH_PI), 1.0 / (120.0 * PST_SPH_PI)},    /* quintic */
+    {5.0 / 8.0, 7.0 / (4.0 * PST_SPH_PI), 21.0 / (16.0 * PST_SPH_PI)},        /* W. C2   */
+    {3.0 / 4.0, 9.0 / (4.0 * PST_SPH_PI), 495.0 / (256.0 * PST_SPH_PI)},      /* W. C4   */
+};
+
+/* Support radius in units of h, indexed by pst_kernel. */
+static const double pst_sph_support[4] = {2.0, 3.0, 2.0, 2.0};
+
+/* The arguments every kernel function accepts: a known kernel, dim 1..3, finite h > 0 and
+ * r >= 0 (r = +inf is allowed and gives 0). NaN fails every comparison, so it is rejected. */
+static inline int pst_sph_valid(pst_kernel k, int dim, double r, double h)
+{
+    return (unsigned)k <= (unsigned)PST_KERNEL_WENDLAND_C4 && dim >= 1 && dim <= 3 && h > 0.0
+           && h < INFINITY && r >= 0.0;
+}
+
+/* max(x, 0) as a compare-select (maxsd), not fmax: NaN never reaches here. */
+static inline double pst_sph_pos(double x)
+{
+    return x > 0.0 ? x : 0.0;
+}
+
+/* 1/h^n for n = 0..5 without pow(). */
+static inline double pst_sph_ipow(double ih, int n)
+{
+    double p = 1.0;
+    for (int i = 0; i < n; ++i)
+        p *= ih;
+    return p;
+}
+
+/* Dimensionless shape f(q) (deriv 0), df/dq (1) or d2f/dq2 (2) at q >= 0, without the cut
+ * at the support (pst_sph_eval applies it). `deriv` is a literal at every call site, so after
+ * inlining only one branch survives. */
+static inline double pst_sph_shape(pst_kernel k, int dim, double q, int deriv)
+{
+    switch (k) {
+    case PST_KERNEL_CUBIC: {
+        /* What = (t2^3 - 4 t1^3)/4 equals 1 - 1.5q^2 + 0.75q^3 on [0,1], (2-q)^3/4 on [1,2]. */
+        const double t2 = pst_sph_pos(2.0 - q), t1 = pst_sph_pos(1.0 - q);
+        if (deriv == 0)
+            return 0.25 * t2 * t2 * t2 - t1 * t1 * t1;
+        if (deriv == 1)
+            return 3.0 * t1 * t1 - 0.75 * t2 * t2;
+        return 1.5 * t2 - 6.0 * t1;
+    }
+    case PST_KERNEL_QUINTIC: {
+        /* QSFDI eq. 9: t3^5 - 6 t2^5 + 15 t1^5. */
+        const double t3 = pst_sph_pos(3.0 - q), t2 = pst_sph_pos(2.0 - q),
+                     t1 = pst_sph_pos(1.0 - q);
+        const double s3 = t3 * t3, s2 = t2 * t2, s1 = t1 * t1;
+        if (deriv == 0)
+            return s3 * s3 * t3 - 6.0 * s2 * s2 * t2 + 15.0 * s1 * s1 * t1;
+        if (deriv == 1)
+            return 30.0 * s2 * s2 - 5.0 * s3 * s3 - 75.0 * s1 * s1;
+        return 20.0 * s3 * t3 - 120.0 * s2 * t2 + 300.0 * s1 * t1;
+    }
+    case PST_KERNEL_WENDLAND_C2:
+    case PST_KERNEL_WENDLAND_C4: {
+        /* t = 1 - q/2 (Dehnen & Aly with H = 2h); derivatives are the sympy-factored forms. */
+        const double t = pst_sph_pos(1.0 - 0.5 * q), t2 = t * t;
+        if (k == PST_KERNEL_WENDLAND_C2) {
+            if (dim == 1) {
+                if (deriv == 0)
+                    return t2 * t * (1.5 * q + 1.0);
+                if (deriv == 1)
+                    return -3.0 * q * t2;
+                return t * (4.5 * q - 3.0);
+            }
+            if (deriv == 0)
+                return t2 * t2 * (2.0 * q + 1.0);
+            if (deriv == 1)
+                return -5.0 * q * t2 * t;
+            return t2 * (10.0 * q - 5.0);
+        }
+        if (dim == 1) {
+            if (deriv == 0)
+                return t2 * t2 * t * ((2.0 * q + 2.5) * q + 1.0);
+            if (deriv == 1)
+                return -3.5 * q * t2 * t2 * (2.0 * q + 1.0);
+            return 1.75 * t2 * t * ((12.0 * q - 3.0) * q - 2.0);
+        }
+        if (deriv == 0)
+            return t2 * t2 * t2 * ((35.0 / 12.0 * q + 3.0) * q + 1.0);
+        if (deriv == 1)
+            return -(7.0 / 3.0) * q * t2 * t2 * t * (5.0 * q + 2.0);
+        return (7.0 / 6.0) * t2 * t2 * ((35.0 * q - 8.0) * q - 4.0);
+    }
+    }
+    return NAN; /* unreachable under the preconditions */
+}
+
+/* h^-(dim+deriv) * sigma * f^(deriv)(r/h), cut to exactly 0 for r >= support*h (a select, not
+ * a branch; it also turns r = inf, where Wendland's q*t is inf*0, into 0). The chain rule
+ * d/dr = (1/h) d/dq gives the extra 1/h per derivative. Preconditions:
+ * pst_sph_valid(k, dim, r, h) and deriv in 0..2; callers check once, outside hot loops. */
+static inline double pst_sph_eval(pst_kernel k, int dim, double r, double h, int deriv)
+{
+    const double ih = 1.0 / h;
+    const double v = pst_sph_sigma[k][dim - 1] * pst_sph_ipow(ih, dim + deriv)
+                     * pst_sph_shape(k, dim, r * ih, deriv);
+    return r < pst_sph_support[k] * h ? v : 0.0;
+}
+
+static inline double pst_sph_w(pst_kernel k, int dim, double r, double h)
+{
+    return pst_sph_eval(k, dim, r, h, 0);
+}
+
+static inline double pst_sph_dw(pst_kernel k, int dim, double r, double h)
+{
+    return pst_sph_eval(k, dim, r, h, 1);
+}
+
+static inline double pst_sph_d2w(pst_kernel k, int dim, double r, double h)
+{
+    return pst_sph_eval(k, dim, r, h, 2);
+}
+
+#endif
