@@ -1,0 +1,357 @@
+/* CSV input and output: exact round trips in 2D and 3D with every optional column, the
+ * file:line:column messages of each kind of bad input, and the atomic-replace guarantees of
+ * the writer. */
+#define _POSIX_C_SOURCE 200809L /* mkdtemp, setrlimit, opendir */
+
+#include "check.h"
+#include "pstencil.h"
+
+#include <dirent.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static char dir[64];
+
+static const char *path_of(const char *name)
+{
+    static char buf[256];
+    snprintf(buf, sizeof buf, "%s/%s", dir, name);
+    return buf;
+}
+
+static void write_text(const char *name, const char *text)
+{
+    FILE *f = fopen(path_of(name), "w");
+    fputs(text, f);
+    fclose(f);
+}
+
+static int bits_equal(const double *a, const double *b, size_t n)
+{
+    return !memcmp(a, b, n * sizeof *a);
+}
+
+/* Temporary files the writer might have left behind. */
+static int leftovers(void)
+{
+    int k = 0;
+    DIR *d = opendir(dir);
+    for (struct dirent *e; d && (e = readdir(d));)
+        k += strstr(e->d_name, ".tmp.") != NULL;
+    if (d)
+        closedir(d);
+    return k;
+}
+
+/* A jittered cell-centred cloud with every kind, per-particle h, mobility and two fields,
+ * permuted so that its order differs from the input order. Hard values on purpose: -0,
+ * subnormals, 1/3, huge and tiny magnitudes. */
+static pst_cloud *make_cloud(int dim, int mob)
+{
+    pst_lattice_opts o;
+    pst_lattice_defaults(&o);
+    o.dim = dim;
+    o.s0 = 0.25;
+    o.jitter = 0.3;
+    o.seed = 99;
+    pst_cloud *c;
+    if (pst_cloud_cell_centred(&c, &o, NULL) != PST_OK)
+        return NULL;
+    size_t n = pst_cloud_size(c);
+    double *h = pst_cloud_h_per_particle(c), *u, *rhs;
+    pst_cloud_set_mobility(c, mob);
+    pst_cloud_add_field(c, "u", &u);
+    pst_cloud_add_field(c, "rhs_2", &rhs);
+    for (size_t i = 0; i < n; ++i) {
+        h[i] = 0.3 + (double)i / 3;
+        u[i] = i % 4 == 0 ? -0.0 : i % 4 == 1 ? 4.9e-320 : i % 4 == 2 ? 1e300 : -1.0 / 7;
+        rhs[i] = sin((double)i) * 1e-200;
+        for (int m = 0; m < mob; ++m)
+            pst_cloud_mobility(c, m)[i] = 1 + (double)(i + (size_t)m) / 9;
+    }
+    pst_cloud_kinds(c)[n - 1] = PST_NEUMANN;
+    pst_cloud_kinds(c)[n - 2] = PST_NEUMANN;
+    uint32_t *perm = malloc(n * sizeof *perm);
+    for (size_t i = 0; i < n; ++i)
+        perm[i] = (uint32_t)(n - 1 - i);
+    pst_cloud_permute(c, perm);
+    free(perm);
+    return c;
+}
+
+/* The read cloud, in input order, against the written one through its ids. */
+static int same_in_input_order(pst_cloud *w, pst_cloud *r)
+{
+    size_t n = pst_cloud_size(w);
+    if (pst_cloud_size(r) != n || pst_cloud_dim(r) != pst_cloud_dim(w) ||
+        pst_cloud_nfields(r) != pst_cloud_nfields(w) ||
+        pst_cloud_mobility_ncomp(r) != pst_cloud_mobility_ncomp(w) ||
+        pst_cloud_h_is_uniform(r) != pst_cloud_h_is_uniform(w))
+        return 0;
+    double *tmp = malloc(n * sizeof *tmp);
+    int ok = 1;
+#define SAME(wa, ra)                                                                           \
+    do {                                                                                       \
+        pst_cloud_to_input_order(w, wa, tmp);                                                  \
+        ok = ok && bits_equal(tmp, ra, n);                                                     \
+    } while (0)
+    for (int d = 0; d < pst_cloud_dim(w); ++d) {
+        SAME(pst_cloud_coord(w, d), pst_cloud_coord(r, d));
+        SAME(pst_cloud_normal(w, d), pst_cloud_normal(r, d));
+    }
+    SAME(pst_cloud_volume(w), pst_cloud_volume(r));
+    if (!pst_cloud_h_is_uniform(w))
+        SAME(pst_cloud_h_array(w), pst_cloud_h_array(r));
+    for (int m = 0; m < pst_cloud_mobility_ncomp(w); ++m)
+        SAME(pst_cloud_mobility(w, m), pst_cloud_mobility(r, m));
+    for (size_t k = 0; k < pst_cloud_nfields(w); ++k) {
+        ok = ok && !strcmp(pst_cloud_field_name(w, k), pst_cloud_field_name(r, k));
+        SAME(pst_cloud_field(w, k), pst_cloud_field(r, k));
+    }
+#undef SAME
+    for (size_t i = 0; i < n; ++i) {
+        int64_t id = pst_cloud_ids(w)[i];
+        ok = ok && pst_cloud_kinds(r)[id] == pst_cloud_kinds(w)[i];
+        ok = ok && pst_cloud_ids(r)[i] == (int64_t)i;
+    }
+    free(tmp);
+    return ok;
+}
+
+static void check_round_trip(int dim, int mob)
+{
+    char err[PST_ERRLEN] = "";
+    pst_cloud *w = make_cloud(dim, mob), *r = NULL;
+    CHECK(w != NULL);
+    const char *p = path_of(dim == 2 ? "rt2.csv" : "rt3.csv");
+    CHECK_INT(pst_cloud_write_csv(w, p, err), PST_OK);
+    CHECK_INT(pst_cloud_read_csv(&r, p, err), PST_OK);
+    if (r) {
+        CHECK(same_in_input_order(w, r));
+        int kinds[3] = {0, 0, 0};
+        for (size_t i = 0; i < pst_cloud_size(r); ++i)
+            kinds[pst_cloud_kinds(r)[i]]++;
+        CHECK(kinds[0] > 0 && kinds[1] > 0 && kinds[2] == 2);
+    }
+    /* a second write of the read cloud gives the same bytes */
+    const char *p2 = path_of("rt_again.csv");
+    static char a[1 << 20], b[1 << 20];
+    CHECK_INT(pst_cloud_write_csv(r, p2, err), PST_OK);
+    FILE *fa = fopen(p, "rb"), *fb = fopen(path_of("rt_again.csv"), "rb");
+    size_t la = fread(a, 1, sizeof a, fa), lb = fread(b, 1, sizeof b, fb);
+    fclose(fa);
+    fclose(fb);
+    CHECK(la == lb && la < sizeof a && !memcmp(a, b, la));
+    /* the header as documented */
+    const char *head = dim == 2 ? "x,y,V,h,kind,nx,ny," : "x,y,z,V,h,kind,nx,ny,nz,";
+    CHECK(!strncmp(a, head, strlen(head)));
+    const char *tail = mob == 1   ? ",m,u,rhs_2\n"
+                       : dim == 2 ? ",mx,my,u,rhs_2\n"
+                                  : ",mx,my,mz,u,rhs_2\n";
+    CHECK(strstr(a, tail) != NULL);
+    /* a file's mode is 0644 (not mkstemp's 0600) */
+    struct stat sb;
+    CHECK(stat(p, &sb) == 0 && (sb.st_mode & 0777) == 0644);
+    CHECK_INT(leftovers(), 0);
+    pst_cloud_destroy(w);
+    pst_cloud_destroy(r);
+}
+
+static void test_uniform_h_and_numeric_kinds(void)
+{
+    char err[PST_ERRLEN] = "";
+    write_text("plain.csv", "\xEF\xBB\xBFx,y,V,h,kind,nx,ny\r\n"
+                            "\r\n"
+                            "0, 0, 1, 0.5, 0, 0, 0\r\n"
+                            "   \n"
+                            "1,0,1,0.5,dirichlet,1,0\n"
+                            "0,1,1,0.5,2,0,1"); /* no final newline */
+    pst_cloud *c = NULL;
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("plain.csv"), err), PST_OK);
+    if (c) {
+        CHECK_INT(pst_cloud_size(c), 3);
+        CHECK_INT(pst_cloud_dim(c), 2);
+        CHECK(pst_cloud_h_is_uniform(c) && pst_cloud_h_uniform(c) == 0.5);
+        CHECK(pst_cloud_kinds(c)[0] == PST_INTERIOR && pst_cloud_kinds(c)[1] == PST_DIRICHLET &&
+              pst_cloud_kinds(c)[2] == PST_NEUMANN);
+        CHECK(pst_cloud_coord(c, 0)[1] == 1 && pst_cloud_normal(c, 1)[2] == 1);
+        CHECK_INT(pst_cloud_mobility_ncomp(c), 0);
+        CHECK_INT(pst_cloud_nfields(c), 0);
+    }
+    pst_cloud_destroy(c);
+
+    /* a header alone: an empty cloud of the header's dimension */
+    write_text("header_only.csv", "x,y,z,V,h,kind,nx,ny,nz\n");
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("header_only.csv"), err), PST_OK);
+    CHECK(c && pst_cloud_size(c) == 0 && pst_cloud_dim(c) == 3);
+    pst_cloud_destroy(c);
+}
+
+/* A line longer than any fixed buffer: a number padded with 200000 spaces. */
+static void test_long_line(void)
+{
+    size_t pad = 200000;
+    char *text = malloc(pad + 200);
+    strcpy(text, "x,y,V,h,kind,nx,ny,f\n0,0,1,1,0,0,0,");
+    size_t len = strlen(text);
+    memset(text + len, ' ', pad);
+    strcpy(text + len + pad, "2.5\n1,0,1,1,0,0,0,3\n");
+    write_text("long.csv", text);
+    free(text);
+    char err[PST_ERRLEN] = "";
+    pst_cloud *c = NULL;
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("long.csv"), err), PST_OK);
+    double *f = c ? pst_cloud_field_by_name(c, "f") : NULL;
+    CHECK(f && f[0] == 2.5 && f[1] == 3);
+    pst_cloud_destroy(c);
+}
+
+/* Read `text`; expect `status` and every needle in the message. */
+static void expect_error(const char *text, int status, const char *n1, const char *n2)
+{
+    write_text("bad.csv", text);
+    char err[PST_ERRLEN] = "";
+    pst_cloud *c = (pst_cloud *)&c;
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("bad.csv"), err), status);
+    CHECK(c == NULL);
+    int found = strstr(err, n1) && (!n2 || strstr(err, n2));
+    CHECK(found);
+    if (!found)
+        fprintf(stderr, "  message was: %s\n", err);
+}
+
+#define HDR "x,y,V,h,kind,nx,ny\n"
+#define ROW "0,0,1,1,interior,0,0\n"
+
+static void test_bad_input(void)
+{
+    /* values: line and column of the offending cell, and its column name */
+    expect_error(HDR ROW "1,0,nan,1,interior,0,0\n", PST_EINPUT, "bad.csv:3:3: column V", "finite");
+    expect_error(HDR "inf,0,1,1,interior,0,0\n", PST_EINPUT, "bad.csv:2:1: column x", "finite");
+    expect_error(HDR ROW "1,-Infinity,1,1,interior,0,0\n", PST_EINPUT, ":3:2: column y", NULL);
+    expect_error(HDR ROW "1,0,1,1,interior,0,1e999\n", PST_EINPUT, ":3:7: column ny", "finite");
+    expect_error(HDR ROW "1,0,1,1,interior,0\n", PST_EINPUT, ":3:7:",
+                 "expected 7 columns, found 6");
+    expect_error(HDR ROW "1,0,1,1,interior,0,0,5\n", PST_EINPUT, ":3:8:", "found 8");
+    expect_error(HDR "1,0,1,1,wall,0,0\n", PST_EINPUT, ":2:5: column kind", "unknown kind 'wall'");
+    expect_error(HDR "1,0,1,1,3,0,0\n", PST_EINPUT, ":2:5:", "unknown kind");
+    expect_error(HDR ROW "\n\n1,0,0,1,interior,0,0\n", PST_EINPUT, ":5:3: column V", "> 0");
+    expect_error(HDR "1,0,1,-1,interior,0,0\n", PST_EINPUT, ":2:4: column h", "> 0");
+    expect_error(HDR "1,0,1,1,interior,0,abc\n", PST_EINPUT, ":2:7:", "cannot parse 'abc'");
+    expect_error(HDR "1,0,1,1,interior,0,1.5x\n", PST_EINPUT, ":2:7:", "cannot parse");
+    expect_error(HDR "1,,1,1,interior,0,0\n", PST_EINPUT, ":2:2:", "missing value");
+    expect_error("x,y,V,h,kind,nx,ny,m\n1,0,1,1,interior,0,0,0\n", PST_EINPUT, ":2:8: column m",
+                 "mobility");
+    /* duplicates: the later line, naming the earlier one; blank lines count */
+    expect_error(HDR "0.5,0.25,1,1,0,0,0\n" ROW "\n0.5,0.25,2,1,0,0,0\n", PST_EINPUT,
+                 "bad.csv:5:1: duplicate particle", "line 2");
+    /* header problems */
+    expect_error("x,y,V,h,kind,nx,nyy\n" ROW, PST_EINPUT, "bad.csv:1:7:", "expected column 'ny'");
+    expect_error("y,x,V,h,kind,nx,ny\n" ROW, PST_EINPUT, ":1:1:", "found 'y'");
+    expect_error("x,y,h,V,kind,nx,ny\n" ROW, PST_EINPUT, ":1:3:", "'V'");
+    expect_error("x,y,V,h,kind,nx\n", PST_EINPUT, ":1:7:", "missing column 'ny'");
+    expect_error("x,y,V,h,kind,nx,ny,z\n", PST_EINPUT, ":1:3:", "expected column 'z'");
+    expect_error("x,y,V,h,kind,nx,ny,u,u\n", PST_EINPUT, ":1:9:", "duplicate column name 'u'");
+    expect_error("x,y,V,h,kind,nx,ny,u,x\n", PST_EINPUT, ":1:9:", "duplicate column name 'x'");
+    expect_error("x,y,V,h,kind,nx,ny,u,m\n", PST_EINPUT, ":1:9:", "misplaced column 'm'");
+    expect_error("x,y,V,h,kind,nx,ny,mx,mz\n", PST_EINPUT, ":1:9:", "'my'");
+    expect_error("x,y,V,h,kind,nx,ny,my\n", PST_EINPUT, ":1:8:", "misplaced");
+    expect_error("x,y,V,h,kind,nx,ny,2u\n", PST_EINPUT, ":1:8:", "unknown column '2u'");
+    expect_error("", PST_EINPUT, "bad.csv:1:1:", "empty");
+    expect_error("\n  \r\n", PST_EINPUT, "bad.csv:1:1:", "no header");
+    /* a missing file */
+    char err[PST_ERRLEN] = "";
+    pst_cloud *c = (pst_cloud *)&c;
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("absent.csv"), err), PST_EIO);
+    CHECK(c == NULL && strstr(err, "absent.csv: cannot open"));
+}
+
+static void test_write_failures(void)
+{
+    char err[PST_ERRLEN] = "";
+    pst_cloud *c = make_cloud(3, 3);
+    /* into a directory that does not exist: EIO, and nothing is created */
+    const char *p = path_of("no_such_dir/out.csv");
+    CHECK_INT(pst_cloud_write_csv(c, p, err), PST_EIO);
+    CHECK(strstr(err, "out.csv") != NULL);
+    struct stat sb;
+    CHECK(stat(path_of("no_such_dir"), &sb) != 0);
+
+    /* a write that fails half-way (file-size limit) leaves the old file as it was */
+    const char *old = "old contents\n";
+    write_text("keep.csv", old);
+    struct rlimit saved, small;
+    getrlimit(RLIMIT_FSIZE, &saved);
+    small = saved;
+    small.rlim_cur = 4096; /* the cloud needs far more */
+    void (*prev)(int) = signal(SIGXFSZ, SIG_IGN);
+    CHECK(setrlimit(RLIMIT_FSIZE, &small) == 0);
+    int st = pst_cloud_write_csv(c, path_of("keep.csv"), err);
+    setrlimit(RLIMIT_FSIZE, &saved);
+    signal(SIGXFSZ, prev);
+    CHECK_INT(st, PST_EIO);
+    CHECK(strstr(err, "keep.csv") != NULL);
+    char buf[64] = "";
+    FILE *f = fopen(path_of("keep.csv"), "r");
+    size_t got = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
+    if (f)
+        fclose(f);
+    CHECK(got == strlen(old) && !strcmp(buf, old));
+    CHECK_INT(leftovers(), 0);
+
+    /* rename onto a directory fails after the write: the temporary file is removed */
+    mkdir(path_of("a_dir"), 0755);
+    CHECK_INT(pst_cloud_write_csv(c, path_of("a_dir"), err), PST_EIO);
+    CHECK(strstr(err, "rename") != NULL);
+    CHECK_INT(leftovers(), 0);
+    rmdir(path_of("a_dir"));
+
+    /* replacing a file keeps its mode */
+    chmod(path_of("keep.csv"), 0640);
+    CHECK_INT(pst_cloud_write_csv(c, path_of("keep.csv"), err), PST_OK);
+    CHECK(stat(path_of("keep.csv"), &sb) == 0 && (sb.st_mode & 0777) == 0640);
+
+    /* ids that are not a permutation cannot give an input order */
+    pst_cloud_ids(c)[0] = pst_cloud_ids(c)[1];
+    CHECK_INT(pst_cloud_write_csv(c, path_of("ids.csv"), err), PST_EINVAL);
+    CHECK(strstr(err, "permutation") != NULL);
+    CHECK(stat(path_of("ids.csv"), &sb) != 0);
+    pst_cloud_destroy(c);
+}
+
+static void cleanup(void)
+{
+    DIR *d = opendir(dir);
+    char p[512];
+    for (struct dirent *e; d && (e = readdir(d));) {
+        if (e->d_name[0] == '.')
+            continue;
+        snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
+        unlink(p);
+    }
+    if (d)
+        closedir(d);
+    rmdir(dir);
+}
+
+int main(void)
+{
+    snprintf(dir, sizeof dir, "/tmp/pst_test_csv_XXXXXX");
+    if (!mkdtemp(dir)) {
+        perror("mkdtemp");
+        return 1;
+    }
+    check_round_trip(2, 1);
+    check_round_trip(3, 3);
+    check_round_trip(2, 2);
+    test_uniform_h_and_numeric_kinds();
+    test_long_line();
+    test_bad_input();
+    test_write_failures();
+    cleanup();
+    return check_summary("test_csv");
+}
