@@ -1,0 +1,151 @@
+/* The pstencil program: command dispatch, option parsing and the main job.
+ *
+ * Exit codes (docs/cli.md): 0 ok, 1 usage, 2 bad input, 3 numerical failure, 4 out of memory. */
+#include "cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int cli_exit_code(int status)
+{
+    switch (status) {
+    case PST_OK: return CLI_OK;
+    case PST_EINVAL: return CLI_USAGE;
+    case PST_EINPUT:
+    case PST_EIO: return CLI_BAD_INPUT;
+    case PST_ENUMERIC: return CLI_NUMERIC;
+    case PST_ENOMEM: return CLI_NOMEM;
+    default: return CLI_NUMERIC;
+    }
+}
+
+int cli_fail(int status, const char *what, const char *detail)
+{
+    fprintf(stderr, "pstencil: %s: %s%s%s\n", what, pst_strerror(status),
+            detail && *detail ? ": " : "", detail ? detail : "");
+    return cli_exit_code(status);
+}
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "pstencil: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\nTry 'pstencil --help'.\n");
+    return CLI_USAGE;
+}
+
+static void print_help(void)
+{
+    printf("pstencil %s — meshless Laplacian and div(M grad u) operators on particle clouds\n\n"
+           "usage: pstencil [--threads N] [--quiet] COMMAND [ARGS]\n\n"
+           "commands:\n"
+           "  run                 the main job on the built-in default scene: generate a 3D\n"
+           "                      jittered cloud, Morton-sort it, build neighbours, print\n"
+           "                      statistics and timings\n"
+           "  cloud [OPTIONS]     generate a particle cloud and write it as CSV\n"
+           "  neighbours FILE     read a CSV cloud, build its neighbour list, print statistics\n"
+           "  sysinfo             cores, caches and NUMA nodes (hwloc), threads, BLAS, flags\n\n"
+           "global options:\n"
+           "  --threads N         OpenMP threads (default: OMP_NUM_THREADS or all cores)\n"
+           "  --quiet             print results only\n"
+           "  --help, --version\n\n"
+           "'pstencil COMMAND --help' describes a command's options.\n"
+           "exit codes: 0 ok, 1 usage, 2 bad input, 3 numerical failure, 4 out of memory\n",
+           pst_version());
+}
+
+int cli_parse_double(const char *s, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end != '\0' || errno == ERANGE || !isfinite(v))
+        return -1;
+    *out = v;
+    return 0;
+}
+
+int cli_parse_long(const char *s, long *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (end == s || *end != '\0' || errno == ERANGE)
+        return -1;
+    *out = v;
+    return 0;
+}
+
+int cli_option(int argc, char **argv, int *i, const char *name, const char **value)
+{
+    const char *a = argv[*i];
+    size_t len = strlen(name);
+    if (strncmp(a, name, len) != 0)
+        return 0;
+    if (a[len] == '=') {
+        *value = a + len + 1;
+        return 1;
+    }
+    if (a[len] != '\0')
+        return 0;
+    if (*i + 1 >= argc) {
+        *value = NULL;
+        return 1;
+    }
+    *value = argv[++*i];
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    cli_ctx ctx = {.quiet = 0};
+    /* Global options may appear anywhere; strip them so that commands see only their own. */
+    int nargs = 0;
+    char **args = calloc((size_t)argc + 1, sizeof *args);
+    if (!args)
+        return CLI_NOMEM;
+    for (int i = 1; i < argc; ++i) {
+        const char *v;
+        if (cli_option(argc, argv, &i, "--threads", &v)) {
+            long t;
+            if (!v || cli_parse_long(v, &t) != 0 || t < 1 || t > 4096) {
+                free(args);
+                return usage_error("--threads needs a positive integer (got '%s')",
+                                   v ? v : "");
+            }
+            omp_set_num_threads((int)t);
+        } else if (strcmp(argv[i], "--quiet") == 0) {
+            ctx.quiet = 1;
+        } else {
+            args[nargs++] = argv[i];
+        }
+    }
+    int rc;
+    if (nargs == 0) {
+        print_help();
+        rc = CLI_USAGE;
+    } else if (strcmp(args[0], "--help") == 0 || strcmp(args[0], "-h") == 0 ||
+               strcmp(args[0], "help") == 0) {
+        print_help();
+        rc = CLI_OK;
+    } else if (strcmp(args[0], "--version") == 0) {
+        printf("pstencil %s\n", pst_version());
+        rc = CLI_OK;
+    } else if (strcmp(args[0], "run") == 0) {
+        rc = cli_run(&ctx, nargs - 1, args + 1);
+    } else if (strcmp(args[0], "cloud") == 0) {
+        rc = cli_cloud(&ctx, nargs - 1, args + 1);
+    } else if (strcmp(args[0], "neighbours") == 0 || strcmp(args[0], "neighbors") == 0) {
+        rc = cli_neighbours(&ctx, nargs - 1, args + 1);
+    } else if (strcmp(args[0], "sysinfo") == 0) {
+        rc = cli_sysinfo(&ctx, nargs - 1, args + 1);
+    } else {
+        rc = usage_error("unknown command '%s'", args[0]);
+    }
+    free(args);
+    return rc;
+}

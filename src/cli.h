@@ -1,0 +1,53 @@
+/* Internal interface between the pstencil program's command files. */
+#ifndef PSTENCIL_CLI_H
+#define PSTENCIL_CLI_H
+
+#include "pstencil.h"
+
+/* Exit codes of the program (docs/cli.md). */
+enum { CLI_OK = 0, CLI_USAGE = 1, CLI_BAD_INPUT = 2, CLI_NUMERIC = 3, CLI_NOMEM = 4 };
+
+typedef struct {
+    int quiet; /* print results only, no progress or headings */
+} cli_ctx;
+
+/* Map a library status to the program's exit code. */
+int cli_exit_code(int status);
+/* Print "pstencil: WHAT: <status name>: DETAIL" to stderr and return the exit code. */
+int cli_fail(int status, const char *what, const char *detail);
+
+/* Strict number parsing: the whole string must be a finite number. 0 on success. */
+int cli_parse_double(const char *s, double *out);
+int cli_parse_long(const char *s, long *out);
+
+/* Match option `name` at argv[*i] as "--name VALUE" or "--name=VALUE". Returns 1 on a match
+ * (with *value NULL when the value is missing), 0 otherwise; advances *i past a separate
+ * value. */
+int cli_option(int argc, char **argv, int *i, const char *name, const char **value);
+
+/* Options shared by the commands that generate a cloud. */
+typedef struct {
+    pst_lattice_opts lattice;
+    int cell_centred; /* 1: the Lukyanov–Vuik cell-centred layout */
+    pst_kernel kernel;
+} cli_cloud_opts;
+
+/* Parse one cloud option at argv[*i]: returns 1 if consumed, 0 if not a cloud option, and
+ * CLI_USAGE (negated, -1) after printing a message for a bad value. */
+int cli_parse_cloud_option(int argc, char **argv, int *i, cli_cloud_opts *o);
+/* Print the cloud options' help lines. */
+void cli_cloud_options_help(void);
+/* Generate the cloud the options describe; prints the error and returns an exit code. */
+int cli_generate(const cli_cloud_opts *o, pst_cloud **out);
+
+/* Morton-sort `c`, build its neighbour list for `kernel`, print statistics and timings. */
+int cli_neighbour_report(const cli_ctx *ctx, pst_cloud *c, pst_kernel kernel, double t_make,
+                         const char *make_label);
+
+/* The commands. argv[0] is the first argument after the command name. */
+int cli_run(const cli_ctx *ctx, int argc, char **argv);
+int cli_cloud(const cli_ctx *ctx, int argc, char **argv);
+int cli_neighbours(const cli_ctx *ctx, int argc, char **argv);
+int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv);
+
+#endif
