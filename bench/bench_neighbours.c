@@ -1,0 +1,122 @@
+/* Benchmarks of the Morton sort and the neighbour-list build on 10^6-particle jittered lattices
+ * (K = 0.5, h = 1.2 s0, quintic support 3h), with 1 and 2 OpenMP threads (the argument). */
+#include "bench_shim.h"
+#include "pstencil.h"
+
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SUPPORT 3.0 /* quintic spline: R = 3h, ~195 neighbours in 3D, ~40 in 2D */
+#define H_RATIO 1.2
+#define JITTER 0.5
+
+static uint64_t rng_state;
+static double rnd(void) /* splitmix64 -> [0, 1) */
+{
+    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return (double)(z >> 11) * 0x1p-53;
+}
+
+/* 10^6 particles (1000^2 or 100^3) in lattice order, x fastest, s0 = 1. */
+static pst_cloud *lattice(int dim)
+{
+    int side = dim == 2 ? 1000 : 100;
+    size_t n = dim == 2 ? 1000000 : 1000000;
+    pst_cloud *c;
+    if (pst_cloud_create(&c, dim, n) != PST_OK)
+        return NULL;
+    rng_state = 2024;
+    for (size_t i = 0; i < n; ++i) {
+        size_t s = i;
+        for (int d = 0; d < dim; ++d) {
+            pst_cloud_coord(c, d)[i] = (double)(s % (size_t)side) + JITTER * (2 * rnd() - 1);
+            s /= (size_t)side;
+        }
+    }
+    pst_cloud_set_h_uniform(c, H_RATIO);
+    return c;
+}
+
+/* The Morton-sorted clouds of the neighbour benchmarks, built once. */
+static pst_cloud *sorted[4];
+static pst_cloud *sorted_cloud(int dim)
+{
+    if (!sorted[dim]) {
+        sorted[dim] = lattice(dim);
+        if (sorted[dim])
+            pst_cloud_morton_sort(sorted[dim], SUPPORT * H_RATIO);
+    }
+    return sorted[dim];
+}
+
+static void morton_sort(pstb_state *s)
+{
+    int saved = omp_get_max_threads();
+    omp_set_num_threads((int)pstb_arg(s));
+    pst_cloud *c = lattice(3);
+    size_t n = c ? pst_cloud_size(c) : 0;
+    double *x0 = malloc(3 * n * sizeof *x0);
+    if (!c || !x0) {
+        pstb_skip(s, "out of memory");
+    } else {
+        for (int d = 0; d < 3; ++d)
+            memcpy(x0 + (size_t)d * n, pst_cloud_coord(c, d), n * sizeof *x0);
+        while (pstb_keep_running(s)) {
+            pstb_pause(s); /* back to lattice order */
+            for (int d = 0; d < 3; ++d)
+                memcpy(pst_cloud_coord(c, d), x0 + (size_t)d * n, n * sizeof *x0);
+            for (size_t i = 0; i < n; ++i)
+                pst_cloud_ids(c)[i] = (int64_t)i;
+            pstb_resume(s);
+            pst_cloud_morton_sort(c, SUPPORT * H_RATIO);
+        }
+        pstb_counter(s, "particles/s", (double)n, 1);
+    }
+    free(x0);
+    pst_cloud_destroy(c);
+    omp_set_num_threads(saved);
+}
+
+static void nlist_build(pstb_state *s, int dim)
+{
+    int saved = omp_get_max_threads();
+    omp_set_num_threads((int)pstb_arg(s));
+    pst_cloud *c = sorted_cloud(dim);
+    pst_nlist_stats st = {0};
+    char err[PST_ERRLEN] = "";
+    int status = c ? PST_OK : PST_ENOMEM;
+    while (status == PST_OK && pstb_keep_running(s)) {
+        pst_nlist *nl;
+        status = pst_nlist_build(&nl, c, SUPPORT, err);
+        pstb_pause(s);
+        if (status == PST_OK)
+            pst_nlist_get_stats(nl, &st);
+        pst_nlist_destroy(nl);
+        pstb_resume(s);
+    }
+    if (status != PST_OK) {
+        pstb_skip(s, err[0] ? err : "cannot build the cloud");
+    } else {
+        double n = (double)pst_cloud_size(c);
+        pstb_counter(s, "particles/s", n, 1);
+        pstb_counter(s, "neighbours/particle", st.mean, 0);
+        pstb_counter(s, "bytes/pair", (double)st.bytes / (double)st.pairs, 0);
+        pstb_counter(s, "bytes/particle", (double)st.bytes / n, 0);
+    }
+    omp_set_num_threads(saved);
+}
+
+static void nlist_2d(pstb_state *s) { nlist_build(s, 2); }
+static void nlist_3d(pstb_state *s) { nlist_build(s, 3); }
+
+void pstb_register_all(void)
+{
+    static const int64_t threads[2] = {1, 2};
+    pstb_register("morton_sort_3d_1e6", morton_sort, threads, 2);
+    pstb_register("nlist_build_2d_1e6", nlist_2d, threads, 2);
+    pstb_register("nlist_build_3d_1e6", nlist_3d, threads, 2);
+}

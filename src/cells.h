@@ -1,0 +1,46 @@
+/* A dense uniform cell grid over a cloud's bounding box, filled by a parallel counting sort.
+ * Internal to the library (neighbour lists); see docs/neighbours.md. */
+#ifndef PSTENCIL_CELLS_H
+#define PSTENCIL_CELLS_H
+
+#include "internal.h"
+
+typedef struct {
+    int dim;
+    double lo[3];       /* origin: the bounding box's lower corner (0 on unused axes)       */
+    double size, inv;   /* cell edge and 1/size                                             */
+    uint32_t dims[3];   /* cells per axis (1 on unused axes)                                */
+    size_t ncells;      /* dims[0]*dims[1]*dims[2] (< 2^32)                                 */
+    uint32_t *rank;     /* ncells, x fastest: the cell (ix, iy, iz) at (iz*dims[1] + iy)*dims[0]
+                         * + ix has rank rank[that] in Morton order of (ix, iy, iz)          */
+    uint32_t *start;    /* ncells + 1, by rank: cell r holds order[start[r] .. start[r+1])  */
+    uint32_t *order;    /* n particle indices grouped by cell, the cells in Morton order,
+                         * increasing inside each cell                                      */
+} pst_cells;
+
+/* Cell coordinate of position x along one axis: floor((x - lo)*inv), clamped to the grid.
+ * morton.c uses the same expression, so a grid of size cell*2^k nests exactly inside the Morton
+ * cells of size cell (1/(2^k cell) = inv/2^k exactly), and the result is monotone in x, which
+ * the neighbour search relies on to bound the cells it visits. NaN goes to cell 0. */
+static inline uint32_t pst_cell_coord(double x, double lo, double inv, uint32_t dims)
+{
+    double u = (x - lo) * inv;
+    if (!(u > 0))
+        return 0;
+    if (u >= (double)dims)
+        return dims - 1;
+    return (uint32_t)u;
+}
+
+/* Bin the particles of `c` into cells of edge >= min_size (> 0, finite). The edge is
+ * min_size * 2^k with the smallest k for which the grid has at most 8n + 1024 cells (and fewer
+ * than 2^32 in all): a sparse cloud in a huge box cannot blow up the memory. The cells are laid
+ * out in Morton order of their coordinates (the order of pst_morton_key, extended to any number
+ * of bits), so on a cloud Morton-sorted with cells of edge min_size (or a power-of-two fraction
+ * of it) `order` is the identity. The result does not depend on the thread count. PST_ENOMEM
+ * on allocation failure (message in err). */
+int pst_cells_build(pst_cells *g, const pst_cloud *c, double min_size, char *err);
+
+void pst_cells_free(pst_cells *g);
+
+#endif

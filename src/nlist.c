@@ -1,0 +1,564 @@
+/* CSR neighbour lists (spec choice 1): j is a neighbour of i iff j != i and
+ *     d2 < R_ij^2,  d2 = dx*dx + dy*dy (+ dz*dz),  dx = x_j - x_i (double),
+ *     R_ij = support*(h_i + h_j)/2  (uniform h: support*h).
+ * Both the rule and its evaluation are symmetric in i and j, so the list is symmetric.
+ *
+ * Algorithm (docs/neighbours.md): bin the particles into cells of edge >= R_max/CELL_DIV, laid
+ * out in Morton order (cells.c), copy positions into that slot order, then two lock-free passes
+ * over the cells, both symmetric: every pair of slots p < q is tested once, by the thread that
+ * owns p. Count: the hit is credited to both rows in the thread's per-slot counters; exclusive
+ * scan into int64 offsets and, per slot, into per-thread write cursors (thread u writes row s
+ * after threads 0..u-1); fill: the hit writes q into row p and p into row q through the thread's
+ * cursors. A thread owns whole cells, a static partition balanced by particle count; every entry
+ * goes to a fixed place, so the list is identical for any thread count.
+ *
+ * Row order: row s receives, in this order, the lower neighbours p < s (in increasing slot
+ * order: thread u's before thread u+1's, each thread's in its processing order) and then the
+ * upper ones (candidate cells in increasing slot order, increasing inside each). So rows are
+ * sorted by slot, which is the cloud order when the cloud is Morton-sorted with cell =
+ * support*h_max or a power-of-two fraction of it (the slot order is then the identity);
+ * otherwise each row is sorted afterwards by a natural merge sort of its runs. */
+#include "cells.h"
+
+#include <float.h>
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Cell edge = R_max / CELL_DIV. 1 (27/9 cells) measured faster than 2 (125/25 cells, pruned
+ * per particle): docs/neighbours.md has the numbers. */
+#define CELL_DIV 1
+
+#define SCAN_BLOCKS 64
+#define FILL_BLOCK 64
+
+/* A candidate cell: its slots in the cell-ordered copy and its box widened by the rounding
+ * margin. */
+typedef struct {
+    uint32_t a, b;
+    double lo[3], hi[3];
+} cand;
+
+typedef struct {
+    int dim;
+    const pst_cells *g;
+    const double *x[3]; /* positions in cell order (x[2] = NULL in 2D)        */
+    const double *h;    /* per-particle h in cell order, or NULL (uniform)    */
+    const uint32_t *pid;/* cloud index of every cell-order slot (g->order)    */
+    double halfs;       /* support/2                                          */
+    double huni, hmax;
+    double r2uni;       /* (support*h)^2 for uniform h                        */
+    double margin;      /* bound on the rounding of positions vs cell bounds  */
+    const int64_t *offset; /* fill pass: the row offsets (by cloud index)     */
+    uint32_t *index;       /* fill pass: the list                             */
+} ctx;
+
+/* Largest distance at which particle p (a cell-order slot) can have a neighbour, inflated so
+ * that rounding in d2 and in the cell coordinates can never lose one (cell_coord is monotone). */
+static inline double reach(const ctx *k, size_t p)
+{
+    double hp = k->h ? k->h[p] : k->huni;
+    return k->halfs * (hp + k->hmax) * (1.0 + 64 * DBL_EPSILON) + k->margin;
+}
+
+/* Candidate cells of the cell of rank r: every non-empty cell within the reach of one of its
+ * particles, sorted by slot. Returns their number. */
+static size_t cell_candidates(const ctx *k, size_t r, cand *out)
+{
+    const pst_cells *g = k->g;
+    uint32_t kl[3] = {0, 0, 0}, kh[3] = {0, 0, 0};
+    for (int d = 0; d < k->dim; ++d)
+        kl[d] = UINT32_MAX;
+    for (size_t p = g->start[r]; p < g->start[r + 1]; ++p) {
+        double rp = reach(k, p);
+        for (int d = 0; d < k->dim; ++d) {
+            uint32_t l = pst_cell_coord(k->x[d][p] - rp, g->lo[d], g->inv, g->dims[d]);
+            uint32_t u = pst_cell_coord(k->x[d][p] + rp, g->lo[d], g->inv, g->dims[d]);
+            kl[d] = l < kl[d] ? l : kl[d];
+            kh[d] = u > kh[d] ? u : kh[d];
+        }
+    }
+    size_t m = 0;
+    for (uint32_t iz = kl[2]; iz <= kh[2]; ++iz)
+        for (uint32_t iy = kl[1]; iy <= kh[1]; ++iy)
+            for (uint32_t ix = kl[0]; ix <= kh[0]; ++ix) {
+                size_t rc = g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
+                uint32_t a = g->start[rc], b = g->start[rc + 1];
+                if (a == b)
+                    continue;
+                cand e = {.a = a, .b = b};
+                uint32_t ic[3] = {ix, iy, iz};
+                for (int d = 0; d < 3; ++d) {
+                    e.lo[d] = d < k->dim ? g->lo[d] + ic[d] * g->size - k->margin : 0;
+                    e.hi[d] = d < k->dim ? g->lo[d] + (ic[d] + 1.0) * g->size + k->margin : 0;
+                }
+                size_t j = m++;
+                for (; j > 0 && out[j - 1].a > e.a; --j)
+                    out[j] = out[j - 1];
+                out[j] = e;
+            }
+    return m;
+}
+
+/* d2 < r2 as the sign bit of d2 - r2: equal for non-NaN d2 and finite r2 (the difference of
+ * two distinct doubles is never 0 and rounding keeps its sign; d2 = r2 gives +0). Unlike the
+ * compare, it vectorises into an integer count on baseline x86-64 (SSE2) and needs no
+ * unordered-compare fix-up in the scalar compaction. */
+static inline size_t closer(double d2, double r2)
+{
+    double diff = d2 - r2;
+    uint64_t bits;
+    memcpy(&bits, &diff, sizeof bits);
+    return (size_t)(bits >> 63);
+}
+
+/* The hot loops: slot p (at xp, smoothing length hi, cloud index self) against the slots
+ * [a, b), all after p. Count: `cur` is the thread's per-slot counter. Fill: `cur` is the
+ * thread's per-slot write cursor (relative to the row's offset) and `row` the next entry of
+ * row p. Returns the hits. The distance tests stream contiguous slot ranges of the SoA copy and
+ * are branch-free, so they vectorise; a cell's ranges stay in L1/L2 across its particles. With
+ * cells of edge R_max the tests per neighbour are ~4.9 (3D) and ~2.6 (2D) after the
+ * per-particle box pruning (expected volumes of the visited cells over the ball's, uniform
+ * density), halved by testing each pair once. */
+static inline __attribute__((always_inline)) size_t
+scan_range(const ctx *k, int dim, int varh, int fill, size_t a, size_t b, const double *xp,
+           double hi, uint32_t *restrict cur, uint32_t *row, uint32_t self)
+{
+    double xi[3] = {xp[0], xp[1], xp[2]}; /* in registers: no aliasing with the outputs */
+    const double *restrict X = k->x[0], *restrict Y = k->x[1], *restrict Z = k->x[2];
+    const double *restrict H = k->h;
+    const uint32_t *restrict pid = k->pid;
+    double halfs = k->halfs, r2u = k->r2uni;
+    if (!fill) {
+        /* count: bound by the flops and compare latency of the distance tests (vectorised);
+         * each hit is credited to q here and to p by the caller */
+        size_t cnt = 0;
+        for (size_t q = a; q < b; ++q) {
+            double dx = X[q] - xi[0], dy = Y[q] - xi[1];
+            double d2 = dx * dx + dy * dy;
+            if (dim == 3) {
+                double dz = Z[q] - xi[2];
+                d2 += dz * dz;
+            }
+            double r2 = r2u;
+            if (varh) {
+                double r = halfs * (hi + H[q]);
+                r2 = r * r;
+            }
+            size_t hit = closer(d2, r2);
+            cnt += hit;
+            cur[q] += (uint32_t)hit;
+        }
+        return cnt;
+    }
+    const int64_t *restrict offset = k->offset;
+    uint32_t *index = k->index;
+    size_t w = 0;
+    uint64_t hit[FILL_BLOCK];
+    uint32_t qs[FILL_BLOCK];
+    for (size_t q0 = a; q0 < b; q0 += FILL_BLOCK) {
+        size_t len = b - q0 < FILL_BLOCK ? b - q0 : FILL_BLOCK;
+        /* fill, tests: the same vectorised tests as the count, into a block of 0/1 flags */
+        for (size_t e = 0; e < len; ++e) {
+            size_t q = q0 + e;
+            double dx = X[q] - xi[0], dy = Y[q] - xi[1];
+            double d2 = dx * dx + dy * dy;
+            if (dim == 3) {
+                double dz = Z[q] - xi[2];
+                d2 += dz * dz;
+            }
+            double r2 = r2u;
+            if (varh) {
+                double r = halfs * (hi + H[q]);
+                r2 = r * r;
+            }
+            hit[e] = closer(d2, r2);
+        }
+        /* fill, compaction: branch-free list of the hit slots (bound by the chain of adds on m,
+         * one per flag) */
+        size_t m = 0;
+        for (size_t e = 0; e < len; ++e) {
+            qs[m] = (uint32_t)(q0 + e);
+            m += hit[e];
+        }
+        /* fill, writes: q into row p and p into row q; bound by the stores into the index
+         * array (first touch of its pages, the rows of the candidate cells in L2) */
+        for (size_t j = 0; j < m; ++j) {
+            uint32_t q = qs[j], i = pid[q];
+            row[w++] = i;
+            index[offset[i] + cur[q]++] = self;
+        }
+    }
+    return w;
+}
+
+/* The neighbours of slot p in later slots: counted (credited to both rows in `cur`) or
+ * written (row p from `row` on, row q through `cur`). Returns their number. */
+static inline __attribute__((always_inline)) size_t
+particle_row(const ctx *k, int dim, int varh, int fill, size_t p, const cand *cl, size_t m,
+             uint32_t *restrict cur, uint32_t *row)
+{
+    double xi[3] = {k->x[0][p], k->x[1][p], dim == 3 ? k->x[2][p] : 0};
+    double hi = varh ? k->h[p] : k->huni;
+    double r = reach(k, p), r2 = r * r;
+    uint32_t self = k->pid[p];
+    size_t w = 0;
+    for (size_t e = 0; e < m; ++e) {
+        const cand *c = &cl[e];
+        if (c->b <= p + 1)
+            continue;
+        double g2 = 0;
+        for (int d = 0; d < dim; ++d) {
+            double gl = c->lo[d] - xi[d], gh = xi[d] - c->hi[d];
+            double gap = gl > gh ? gl : gh;
+            gap = gap > 0 ? gap : 0;
+            g2 += gap * gap;
+        }
+        if (g2 >= r2)
+            continue;
+        size_t a = c->a > p ? c->a : p + 1;
+        w += scan_range(k, dim, varh, fill, a, c->b, xi, hi, cur, fill ? row + w : NULL, self);
+    }
+    return w;
+}
+
+/* Sort a row of distinct indices by merging its natural runs pairwise; tmp has len entries.
+ * An already sorted row costs one scan. */
+static void sort_row(uint32_t *row, uint32_t *tmp, size_t len)
+{
+    uint32_t *src = row, *dst = tmp;
+    for (;;) {
+        size_t i = 0, runs = 0;
+        while (i < len) {
+            size_t m = i + 1;
+            while (m < len && src[m - 1] < src[m])
+                ++m;
+            size_t e = m;
+            if (m < len)
+                for (e = m + 1; e < len && src[e - 1] < src[e];)
+                    ++e;
+            size_t u = i, v = m, o = i;
+            while (u < m && v < e)
+                dst[o++] = src[u] < src[v] ? src[u++] : src[v++];
+            while (u < m)
+                dst[o++] = src[u++];
+            while (v < e)
+                dst[o++] = src[v++];
+            ++runs;
+            i = e;
+        }
+        uint32_t *t = src;
+        src = dst;
+        dst = t;
+        if (runs <= 1)
+            break;
+    }
+    if (src != row)
+        memcpy(row, src, len * sizeof *row);
+}
+
+/* The count pass (k->index == NULL) or the fill pass over the cells of ranks [c0, c1), with
+ * the thread's counters / cursors `cur`, dispatched to a specialised instance of the loops. */
+static void pass(const ctx *k, size_t c0, size_t c1, cand *cl, uint32_t *cur)
+{
+    const pst_cells *g = k->g;
+    int fill = k->index != NULL, varh = k->h != NULL;
+    for (size_t r = c0; r < c1; ++r) {
+        if (g->start[r] == g->start[r + 1])
+            continue;
+        size_t m = cell_candidates(k, r, cl);
+        for (size_t p = g->start[r]; p < g->start[r + 1]; ++p) {
+            /* fill: row p's own part starts after this thread's writes of lower neighbours */
+            uint32_t *row = fill ? k->index + k->offset[k->pid[p]] + cur[p] : NULL;
+            size_t len;
+#define ROW(D, V, F) particle_row(k, D, V, F, p, cl, m, cur, row)
+            if (k->dim == 3)
+                len = varh ? (fill ? ROW(3, 1, 1) : ROW(3, 1, 0))
+                           : (fill ? ROW(3, 0, 1) : ROW(3, 0, 0));
+            else
+                len = varh ? (fill ? ROW(2, 1, 1) : ROW(2, 1, 0))
+                           : (fill ? ROW(2, 0, 1) : ROW(2, 0, 0));
+#undef ROW
+            cur[p] += (uint32_t)len;
+        }
+    }
+}
+
+/* First cell (rank) whose particles start at or after slot `pos`. */
+static size_t first_cell(const pst_cells *g, size_t pos)
+{
+    size_t lo = 0, hi = g->ncells;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (g->start[mid] < pos)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+static int check_input(const pst_cloud *c, double support, char *err)
+{
+    if (!(support > 0) || !isfinite(support)) {
+        pst_set_err(err, "neighbour list: support must be finite and > 0 (got %g)", support);
+        return PST_EINVAL;
+    }
+    size_t n = c->n, bad_h = n, bad_x = n;
+    if (!c->h && (!(c->h_uniform > 0) || !isfinite(c->h_uniform))) {
+        pst_set_err(err, "neighbour list: smoothing length h = %g must be finite and > 0",
+                    c->h_uniform);
+        return PST_EINVAL;
+    }
+#pragma omp parallel for schedule(static) reduction(min : bad_h, bad_x)
+    for (size_t i = 0; i < n; ++i) {
+        if (c->h && (!(c->h[i] > 0) || !isfinite(c->h[i])))
+            bad_h = i < bad_h ? i : bad_h;
+        for (int d = 0; d < c->dim; ++d)
+            if (!isfinite(c->x[d][i]))
+                bad_x = i < bad_x ? i : bad_x;
+    }
+    if (bad_h < n) {
+        pst_set_err(err, "neighbour list: particle %lld: h = %g must be finite and > 0",
+                    (long long)c->id[bad_h], c->h[bad_h]);
+        return PST_EINVAL;
+    }
+    if (bad_x < n) {
+        pst_set_err(err, "neighbour list: particle %lld: a coordinate is not finite",
+                    (long long)c->id[bad_x]);
+        return PST_EINPUT;
+    }
+    double hmax = pst_cloud_h_max(c), rmax = support * hmax;
+    if (!isfinite(rmax * rmax) || !isfinite(2 * hmax)) {
+        pst_set_err(err, "neighbour list: support radius %g * %g is too large", support, hmax);
+        return PST_EINVAL;
+    }
+    return PST_OK;
+}
+
+int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *err)
+{
+    *out = NULL;
+    int status = check_input(c, support, err);
+    if (status != PST_OK)
+        return status;
+    size_t n = c->n;
+    int dim = c->dim;
+    pst_nlist *nl = calloc(1, sizeof *nl);
+    if (nl)
+        nl->offset = pst_calloc(n + 1, sizeof *nl->offset);
+    if (!nl || !nl->offset) {
+        pst_nlist_destroy(nl);
+        pst_set_err(err, "neighbour list: cannot allocate the offsets of %zu rows", n);
+        return PST_ENOMEM;
+    }
+    nl->n = n;
+    if (n < 2) {
+        nl->index = pst_alloc(0);
+        if (!nl->index) {
+            pst_nlist_destroy(nl);
+            return PST_ENOMEM;
+        }
+        *out = nl;
+        return PST_OK;
+    }
+
+    double hmax = pst_cloud_h_max(c);
+    pst_cells g;
+    status = pst_cells_build(&g, c, support * hmax / CELL_DIV, err);
+    if (status != PST_OK) {
+        pst_nlist_destroy(nl);
+        return status;
+    }
+    int nth = omp_get_max_threads();
+    int varh = c->h != NULL;
+    double *copy = pst_alloc(n * (size_t)(dim + varh) * sizeof *copy);
+    cand *cl = NULL;
+    uint32_t *tmp = NULL;
+    /* per-thread per-slot counters of the count pass, turned into the write cursors of the
+     * fill: deterministic integer sums */
+    uint32_t *cnts = pst_calloc((size_t)nth * n, sizeof *cnts);
+    int64_t *bsum = calloc(SCAN_BLOCKS, sizeof *bsum);
+    size_t L = 0;         /* the longest row */
+    int identity = 1;     /* slot order == cloud order: rows come out sorted */
+    int64_t pairs = 0;
+    if (!copy || !cnts || !bsum) {
+        status = PST_ENOMEM;
+        pst_set_err(err, "neighbour list: cannot allocate the cell-ordered copy of %zu "
+                    "particles", n);
+        goto done;
+    }
+
+    ctx k = {.dim = dim, .g = &g, .pid = g.order, .halfs = 0.5 * support, .hmax = hmax};
+    for (int d = 0; d < dim; ++d)
+        k.x[d] = copy + (size_t)d * n;
+    k.h = varh ? copy + (size_t)dim * n : NULL;
+    k.huni = varh ? 0 : c->h_uniform;
+    k.r2uni = (support * k.huni) * (support * k.huni);
+    double maxabs = 0, span = 0;
+    for (int d = 0; d < dim; ++d) {
+        double ext = (g.dims[d] + 1.0) * g.size;
+        maxabs = fmax(maxabs, fabs(g.lo[d]) + ext);
+        span = fmax(span, ext);
+    }
+    k.margin = 64 * DBL_EPSILON * (maxabs + span);
+
+    /* Bound on the candidate cells of one cell: the reach spans at most this many per axis. */
+    double rmax = support * hmax * (1.0 + 64 * DBL_EPSILON) + k.margin;
+    size_t maxcand = 1;
+    for (int d = 0; d < dim; ++d) {
+        double per_axis = floor((2 * rmax + g.size) * g.inv) + 3;
+        maxcand *= per_axis < g.dims[d] ? (size_t)per_axis : g.dims[d];
+    }
+
+    cl = pst_alloc((size_t)nth * maxcand * sizeof *cl);
+    if (!cl) {
+        status = PST_ENOMEM;
+        pst_set_err(err, "neighbour list: cannot allocate %d x %zu candidate cells", nth,
+                    maxcand);
+        goto done;
+    }
+    /* One parallel region, so that the fill runs with the same threads and cell partition as
+     * the count its cursors come from. */
+#pragma omp parallel
+    {
+        int t = omp_get_thread_num(), nt = omp_get_num_threads();
+#pragma omp for schedule(static) reduction(&& : identity)
+        for (size_t p = 0; p < n; ++p) {
+            uint32_t i = g.order[p];
+            identity = identity && i == p;
+            for (int d = 0; d < dim; ++d)
+                copy[(size_t)d * n + p] = c->x[d][i];
+            if (varh)
+                copy[(size_t)dim * n + p] = c->h[i];
+        }
+        size_t c0 = first_cell(&g, (size_t)t * n / (size_t)nt);
+        size_t c1 = t + 1 == nt ? g.ncells : first_cell(&g, (size_t)(t + 1) * n / (size_t)nt);
+        uint32_t *cur = cnts + (size_t)t * n;
+        pass(&k, c0, c1, cl + (size_t)t * maxcand, cur);
+#pragma omp barrier
+        /* row lengths; thread u's counts of a row become its cursor: the sum of the counts of
+         * threads 0..u-1 */
+#pragma omp for schedule(static) reduction(max : L)
+        for (size_t p = 0; p < n; ++p) {
+            size_t len = 0;
+            for (int u = 0; u < nth; ++u) {
+                uint32_t v = cnts[(size_t)u * n + p];
+                cnts[(size_t)u * n + p] = (uint32_t)len;
+                len += v;
+            }
+            nl->offset[(size_t)g.order[p] + 1] = (int64_t)len;
+            L = len > L ? len : L;
+        }
+
+        /* exclusive scan of the counts, in fixed blocks */
+#pragma omp for schedule(static)
+        for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
+            int64_t s = 0;
+            for (size_t i = b * n / SCAN_BLOCKS; i < (b + 1) * n / SCAN_BLOCKS; ++i)
+                s += nl->offset[i + 1];
+            bsum[b] = s;
+        }
+#pragma omp single
+        {
+            int64_t s = 0;
+            for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
+                int64_t v = bsum[b];
+                bsum[b] = s;
+                s += v; /* no overflow: n < 2^32 rows of < 2^32 entries */
+            }
+        }
+#pragma omp for schedule(static)
+        for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
+            int64_t s = bsum[b];
+            for (size_t i = b * n / SCAN_BLOCKS; i < (b + 1) * n / SCAN_BLOCKS; ++i) {
+                int64_t v = nl->offset[i + 1];
+                nl->offset[i] = s;
+                s += v;
+            }
+        }
+#pragma omp single
+        {
+            /* offset[n] still holds the last row's count */
+            pairs = nl->offset[n - 1] + nl->offset[n];
+            nl->offset[n] = pairs;
+            if ((uint64_t)pairs > SIZE_MAX / sizeof(uint32_t)) {
+                status = PST_ENOMEM;
+                pst_set_err(err, "neighbour list: %lld pairs overflow the address space",
+                            (long long)pairs);
+            } else {
+                nl->index = pst_alloc((size_t)pairs * sizeof *nl->index);
+                /* merge buffers for the rows of a cloud not in slot order */
+                if (!identity)
+                    tmp = pst_alloc((size_t)nth * (L + 1) * sizeof *tmp);
+                if (!nl->index || (!identity && !tmp)) {
+                    status = PST_ENOMEM;
+                    pst_set_err(err, "neighbour list: cannot allocate %lld pairs (%.3g GB)",
+                                (long long)pairs, (double)pairs * 4e-9);
+                }
+                k.offset = nl->offset;
+                k.index = nl->index;
+            }
+        } /* implicit barrier: status, k and tmp are seen by every thread */
+        if (status == PST_OK) {
+            pass(&k, c0, c1, cl + (size_t)t * maxcand, cur);
+            if (!identity) {
+#pragma omp barrier
+#pragma omp for schedule(dynamic, 4096)
+                for (size_t i = 0; i < n; ++i)
+                    sort_row(nl->index + nl->offset[i], tmp + (size_t)t * (L + 1),
+                             (size_t)(nl->offset[i + 1] - nl->offset[i]));
+            }
+        }
+    }
+
+done:
+    pst_free(cl);
+    pst_free(tmp);
+    pst_free(copy);
+    pst_free(cnts);
+    free(bsum);
+    pst_cells_free(&g);
+    if (status != PST_OK) {
+        pst_nlist_destroy(nl);
+        return status;
+    }
+    *out = nl;
+    return PST_OK;
+}
+
+void pst_nlist_destroy(pst_nlist *nl)
+{
+    if (!nl)
+        return;
+    pst_free(nl->offset);
+    pst_free(nl->index);
+    free(nl);
+}
+
+size_t pst_nlist_rows(const pst_nlist *nl) { return nl->n; }
+const int64_t *pst_nlist_offsets(const pst_nlist *nl) { return nl->offset; }
+const uint32_t *pst_nlist_indices(const pst_nlist *nl) { return nl->index; }
+int64_t pst_nlist_pairs(const pst_nlist *nl) { return nl->offset[nl->n]; }
+
+void pst_nlist_get_stats(const pst_nlist *nl, pst_nlist_stats *s)
+{
+    size_t n = nl->n;
+    int64_t mn = n ? INT64_MAX : 0, mx = 0;
+    size_t isolated = 0;
+#pragma omp parallel for schedule(static) reduction(min : mn) reduction(max : mx)              \
+    reduction(+ : isolated)
+    for (size_t i = 0; i < n; ++i) {
+        int64_t len = nl->offset[i + 1] - nl->offset[i];
+        mn = len < mn ? len : mn;
+        mx = len > mx ? len : mx;
+        isolated += len == 0;
+    }
+    s->pairs = nl->offset[n];
+    s->min = mn;
+    s->max = mx;
+    s->mean = n ? (double)s->pairs / (double)n : 0.0;
+    s->isolated = isolated;
+    s->bytes = sizeof *nl + (n + 1) * sizeof *nl->offset + (size_t)s->pairs * sizeof *nl->index;
+}
