@@ -113,6 +113,27 @@ static inline size_t closer(double d2, double r2)
     return (size_t)(bits >> 63);
 }
 
+/* The neighbour test of slot q against the particle at xi with smoothing length hi (spec choice
+ * 1), shared by both passes so that they agree bit for bit. */
+static inline __attribute__((always_inline)) size_t
+pair_hit(const double *restrict X, const double *restrict Y, const double *restrict Z,
+         const double *restrict H, const double xi[3], double hi, double halfs, double r2u,
+         int dim, int varh, size_t q)
+{
+    double dx = X[q] - xi[0], dy = Y[q] - xi[1];
+    double d2 = dx * dx + dy * dy;
+    if (dim == 3) {
+        double dz = Z[q] - xi[2];
+        d2 += dz * dz;
+    }
+    double r2 = r2u;
+    if (varh) {
+        double r = halfs * (hi + H[q]);
+        r2 = r * r;
+    }
+    return closer(d2, r2);
+}
+
 /* The hot loops: slot p (at xp, smoothing length hi, cloud index self) against the slots
  * [a, b), all after p. Count: `cur` is the thread's per-slot counter. Fill: `cur` is the
  * thread's per-slot write cursor (relative to the row's offset) and `row` the next entry of
@@ -135,18 +156,7 @@ scan_range(const ctx *k, int dim, int varh, int fill, size_t a, size_t b, const 
          * each hit is credited to q here and to p by the caller */
         size_t cnt = 0;
         for (size_t q = a; q < b; ++q) {
-            double dx = X[q] - xi[0], dy = Y[q] - xi[1];
-            double d2 = dx * dx + dy * dy;
-            if (dim == 3) {
-                double dz = Z[q] - xi[2];
-                d2 += dz * dz;
-            }
-            double r2 = r2u;
-            if (varh) {
-                double r = halfs * (hi + H[q]);
-                r2 = r * r;
-            }
-            size_t hit = closer(d2, r2);
+            size_t hit = pair_hit(X, Y, Z, H, xi, hi, halfs, r2u, dim, varh, q);
             cnt += hit;
             cur[q] += (uint32_t)hit;
         }
@@ -161,19 +171,7 @@ scan_range(const ctx *k, int dim, int varh, int fill, size_t a, size_t b, const 
         size_t len = b - q0 < FILL_BLOCK ? b - q0 : FILL_BLOCK;
         /* fill, tests: the same vectorised tests as the count, into a block of 0/1 flags */
         for (size_t e = 0; e < len; ++e) {
-            size_t q = q0 + e;
-            double dx = X[q] - xi[0], dy = Y[q] - xi[1];
-            double d2 = dx * dx + dy * dy;
-            if (dim == 3) {
-                double dz = Z[q] - xi[2];
-                d2 += dz * dz;
-            }
-            double r2 = r2u;
-            if (varh) {
-                double r = halfs * (hi + H[q]);
-                r2 = r * r;
-            }
-            hit[e] = closer(d2, r2);
+            hit[e] = pair_hit(X, Y, Z, H, xi, hi, halfs, r2u, dim, varh, q0 + e);
         }
         /* fill, compaction: branch-free list of the hit slots (bound by the chain of adds on m,
          * one per flag) */
