@@ -56,6 +56,16 @@ int pst_is_reserved_column(const char *name);
  * such pair in lexicographic position order), 0 when all positions differ, PST_ENOMEM. */
 int pst_cloud_find_duplicate(const pst_cloud *c, size_t *a, size_t *b);
 
+/* inv[r] = the particle whose id is r (the inverse of the ids, to write rows in input order).
+ * PST_EINVAL (message in err) when the ids are not a permutation of 0..n-1. Free with free(). */
+int pst_cloud_input_inverse(const pst_cloud *c, size_t **inv, char *err);
+
+/* Write `path` all or nothing: write(f, job) fills a temporary file in the same directory,
+ * which is synced and renamed over `path`. PST_EIO (message in err) on any failure, and then
+ * `path` is untouched and no temporary file is left. */
+int pst_write_atomic(const char *path, void (*write)(FILE *f, const void *job), const void *job,
+                     char *err);
+
 /* h of particle i whatever the layout. */
 static inline double pst_cloud_h_at(const pst_cloud *c, size_t i)
 {

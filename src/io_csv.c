@@ -2,7 +2,7 @@
  * where it stands, so each message can name file, line and column; the writer goes through a
  * temporary file and rename() so that a destination is either the old file or the whole new
  * one. */
-#define _POSIX_C_SOURCE 200809L /* getline, mkstemp, fdopen, fchmod, fsync */
+#define _POSIX_C_SOURCE 200809L /* getline */
 
 #include "internal.h"
 
@@ -10,8 +10,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 static const char *const kind_names[] = {"interior", "dirichlet", "neumann"};
 static const char *const coord_names[] = {"x", "y", "z"};
@@ -368,31 +366,6 @@ int pst_cloud_read_csv(pst_cloud **out, const char *path, char *err)
 
 /* ---- writer ---------------------------------------------------------------------------- */
 
-/* inv[r] = the particle written on data row r, i.e. the inverse of the ids. */
-static int input_order(const pst_cloud *c, size_t **inv_out, const char *path, char *err)
-{
-    size_t n = c->n, *inv = malloc((n ? n : 1) * sizeof *inv);
-    if (!inv) {
-        pst_set_err(err, "%s: out of memory", path);
-        return PST_ENOMEM;
-    }
-    for (size_t r = 0; r < n; ++r)
-        inv[r] = SIZE_MAX;
-    for (size_t i = 0; i < n; ++i) {
-        int64_t id = c->id[i];
-        if (id < 0 || (uint64_t)id >= n || inv[id] != SIZE_MAX) {
-            pst_set_err(err, "%s: the cloud's ids are not a permutation of 0..%zu (particle %zu "
-                             "has id %lld)",
-                        path, n ? n - 1 : 0, i, (long long)id);
-            free(inv);
-            return PST_EINVAL;
-        }
-        inv[id] = i;
-    }
-    *inv_out = inv;
-    return PST_OK;
-}
-
 static void write_rows(FILE *f, const pst_cloud *c, const size_t *inv)
 {
     int dim = c->dim;
@@ -428,61 +401,26 @@ static void write_rows(FILE *f, const pst_cloud *c, const size_t *inv)
     }
 }
 
-/* Write, flush and sync the temporary file; 0 or an errno value. Closes `fd` in every case. */
-static int write_file(int fd, const pst_cloud *c, const size_t *inv)
+/* The writer callback of pst_write_atomic: the header, then the rows in input order. */
+typedef struct {
+    const pst_cloud *c;
+    const size_t *inv;
+} csv_job;
+
+static void write_csv(FILE *f, const void *job)
 {
-    FILE *f = fdopen(fd, "w");
-    if (!f) {
-        int e = errno;
-        close(fd);
-        return e;
-    }
-    write_rows(f, c, inv);
-    int e = 0;
-    if (ferror(f) || fflush(f) != 0 || fsync(fileno(f)) != 0)
-        e = errno ? errno : EIO;
-    if (fclose(f) != 0 && !e)
-        e = errno;
-    return e;
+    const csv_job *w = job;
+    write_rows(f, w->c, w->inv);
 }
 
 int pst_cloud_write_csv(const pst_cloud *c, const char *path, char *err)
 {
     size_t *inv;
-    int st = input_order(c, &inv, path, err);
+    int st = pst_cloud_input_inverse(c, &inv, err);
     if (st != PST_OK)
         return st;
-    size_t plen = strlen(path);
-    char *tmp = malloc(plen + sizeof ".tmp.XXXXXX");
-    if (!tmp) {
-        free(inv);
-        pst_set_err(err, "%s: out of memory", path);
-        return PST_ENOMEM;
-    }
-    memcpy(tmp, path, plen);
-    memcpy(tmp + plen, ".tmp.XXXXXX", sizeof ".tmp.XXXXXX");
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        pst_set_err(err, "%s: cannot create a temporary file: %s", path, strerror(errno));
-        free(tmp);
-        free(inv);
-        return PST_EIO;
-    }
-    /* mkstemp makes the file 0600; keep the mode of a file being replaced, else 0644 */
-    struct stat sb;
-    (void)fchmod(fd, stat(path, &sb) == 0 ? (sb.st_mode & 07777) : 0644);
-    errno = 0;
-    int e = write_file(fd, c, inv);
-    if (e) {
-        pst_set_err(err, "%s: cannot write %s: %s", path, tmp, strerror(e));
-        unlink(tmp);
-        st = PST_EIO;
-    } else if (rename(tmp, path) != 0) {
-        pst_set_err(err, "%s: cannot rename %s to it: %s", path, tmp, strerror(errno));
-        unlink(tmp);
-        st = PST_EIO;
-    }
-    free(tmp);
+    csv_job job = {c, inv};
+    st = pst_write_atomic(path, write_csv, &job, err);
     free(inv);
     return st;
 }
