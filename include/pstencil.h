@@ -230,6 +230,9 @@ const int64_t *pst_nlist_offsets(const pst_nlist *nl);   /* rows + 1 entries */
 const uint32_t *pst_nlist_indices(const pst_nlist *nl);
 int64_t pst_nlist_pairs(const pst_nlist *nl);            /* total entries (each pair twice) */
 
+/* The support (radius in units of h) the list was built with. */
+double pst_nlist_support(const pst_nlist *nl);
+
 /* Statistics of a list. */
 typedef struct {
     int64_t pairs;             /* stored entries                                  */
@@ -239,6 +242,125 @@ typedef struct {
     size_t bytes;              /* memory held by the list                         */
 } pst_nlist_stats;
 void pst_nlist_get_stats(const pst_nlist *nl, pst_nlist_stats *s);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Operators                                                                                  */
+/* ------------------------------------------------------------------------------------------ */
+
+/* An operator is a discretisation of +div(M grad u) on a cloud, in two-point form: row I is
+ *     (L u)_I = sum_{J in N(I)} w_IJ (u_J - u_I)
+ * for interior particles (the scheme), the same form with the flux weights of LV eq. 100 for
+ * Neumann particles (n . M_I . corrected gradient, outward normal), and (L u)_I = u_I for
+ * Dirichlet particles (their values are data). The matrix of L has the sparsity of the
+ * neighbour list plus the diagonal -sum_J w_IJ (1 on Dirichlet rows). docs/operators.md. */
+typedef struct pst_op pst_op;
+
+/* Per-particle status of an operator row (one byte per particle). */
+typedef enum {
+    PST_ROW_OK = 0,
+    PST_ROW_FALLBACK = 1,        /* a documented fallback was used (e.g. Gamma-bar = Gamma)   */
+    PST_ROW_ILL_CONDITIONED = 2, /* a moment matrix is invertible but badly conditioned      */
+    PST_ROW_RANK_DEFICIENT = 3,  /* a moment matrix is singular: the row fell back            */
+    PST_ROW_TOO_FEW = 4          /* fewer neighbours than the scheme needs: the row fell back */
+} pst_row_status;
+#define PST_ROW_NSTATUS 5
+
+/* A short name of a row status ("ok", "fallback", "ill-conditioned", "rank-deficient",
+ * "too-few-neighbours"). */
+const char *pst_row_status_name(int status);
+
+/* Kernel-gradient variants of the Lukyanov-Vuik family (LV eqs. 15-18). */
+typedef enum {
+    PST_GRAD_G1 = 1, /* grad_I W_IJ                                   (15) */
+    PST_GRAD_G2 = 2, /* full Shepard gradient, non-radial             (16) */
+    PST_GRAD_G3 = 3, /* grad_I W_IJ / nu_I                            (17) */
+    PST_GRAD_G4 = 4  /* grad_I W_IJ / nu_I (1 - W_IJ V_J / nu_I)       (18) */
+} pst_gradient;
+
+typedef struct {
+    const char *scheme;   /* "brookshaw", "cb", "schwaiger", "lv", ... (pst_scheme_name)      */
+    int kernel;           /* a pst_kernel, or -1 for the scheme's default                     */
+    int gradient;         /* pst_gradient for the LV family (default G1)                      */
+    double cond_max;      /* a moment matrix with condition estimate above this is flagged
+                             ill-conditioned (default 1e10)                                   */
+    double rank_tol;      /* ... and below 1/cond of rank_tol it is rank-deficient and the
+                             row falls back (default 1e-13)                                    */
+} pst_op_opts;
+
+/* Defaults: scheme "lv", the scheme's default kernel, G1, cond_max 1e10, rank_tol 1e-13. */
+void pst_op_defaults(pst_op_opts *o);
+
+/* The registered schemes: count, names (index < count) and a one-line description. */
+int pst_scheme_count(void);
+const char *pst_scheme_name(int index);
+const char *pst_scheme_description(int index);
+/* The kernel a scheme uses by default (a pst_kernel), or -1 for an unknown scheme name. */
+int pst_scheme_default_kernel(const char *name);
+
+/* Build an operator: validate the inputs, precompute the per-particle data (one threaded
+ * pass), classify every row. The cloud and the list must outlive the operator and must not
+ * change. The list's support must cover the kernel's (pst_kernel_support), else PST_EINVAL.
+ * No output of an operator is ever NaN: degenerate rows fall back and are counted. */
+int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o,
+                  char *err);
+void pst_op_destroy(pst_op *op);
+
+/* Matrix-free apply: y = L u, pair geometry recomputed from the positions and the per-particle
+ * data. u and y have one value per particle (cloud order) and must not alias. */
+void pst_op_apply(const pst_op *op, const double *u, double *y);
+
+/* Compute and keep the stencil weights w_IJ (CSR, the list's layout: 8 bytes per pair). */
+int pst_op_store(pst_op *op);
+/* Apply from the stored weights (same rows as pst_op_apply, to rounding). PST_EINVAL when
+ * pst_op_store has not been called. */
+int pst_op_apply_stored(const pst_op *op, const double *u, double *y);
+
+/* The diagonal of L: -sum_J w_IJ on scheme and Neumann rows, 1 on Dirichlet rows. */
+int pst_op_diagonal(const pst_op *op, double *diag);   /* PST_ENOMEM possible */
+
+/* Per-row status (n bytes, pst_row_status) and the count of each status. */
+const uint8_t *pst_op_status(const pst_op *op);
+void pst_op_status_counts(const pst_op *op, size_t counts[PST_ROW_NSTATUS]);
+
+/* The scheme's per-particle normalising factor s_I (1 where the scheme has none): tr C/n for
+ * cb, tr(Gamma^-1)/n for schwaiger, tr(Gamma-bar^-1)/n for lv. n values. */
+int pst_op_scale(const pst_op *op, double *s);
+
+/* An explicit sparse matrix in CSR form with 64-bit row offsets. */
+typedef struct {
+    size_t n;          /* rows = columns                         */
+    int64_t *rowptr;   /* n + 1                                  */
+    uint32_t *col;     /* rowptr[n], sorted by column in a row   */
+    double *val;       /* rowptr[n]                              */
+} pst_csr;
+void pst_csr_free(pst_csr *a);
+
+/* The explicit matrix of L (with the diagonal), rows and columns in cloud order. */
+int pst_op_assemble(const pst_op *op, pst_csr *a);
+
+/* Write a matrix as MatrixMarket "coordinate real general", 1-based. With `ids` (the cloud's
+ * ids, or NULL for the identity) row/column i is written as ids[i] + 1, i.e. in input order.
+ * All-or-nothing file write (PST_EIO on failure). */
+int pst_csr_write_mtx(const pst_csr *a, const int64_t *ids, const char *path, char *err);
+
+/* Monotonicity audit of an operator (LV §4.4): the discrete K = -L. */
+typedef struct {
+    size_t rows;                 /* interior rows audited                                     */
+    size_t rows_positive_offdiag;/* rows of K with a positive off-diagonal entry (w_IJ < 0)   */
+    int64_t positive_offdiag;    /* such entries                                              */
+    size_t rows_not_dominant;    /* rows of K that are not weakly diagonally dominant with a
+                                    positive diagonal                                        */
+    /* Lemma 3 diagnostics, for schemes with a bracket 1 - xi_I . x_IJ (schwaiger, lv);
+     * -1 for the others */
+    int64_t lemma3_sign_mixed;   /* rows whose brackets do not all share one sign (92)       */
+    int64_t lemma3_xi_large;     /* rows with |xi_I| * max_J d_IJ >= 1 (sufficient check)     */
+} pst_op_audit;
+int pst_op_audit_rows(const pst_op *op, pst_op_audit *a);  /* PST_ENOMEM possible */
+
+/* Corrected gradient <grad u>_I = sum_J V_J (u_J - u_I) C_I grad W_IJ (LV eq. 54) with the
+ * operator's kernel and gradient variant; exact for linear fields wherever C exists.
+ * grad has dim arrays of n values. PST_EINVAL for schemes without C (brookshaw). */
+int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3]);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Threads                                                                                    */

@@ -43,6 +43,7 @@ struct pst_cloud {
 
 struct pst_nlist {
     size_t n;
+    double support;      /* radius in units of h the list was built with */
     int64_t *offset;     /* n + 1 */
     uint32_t *index;     /* offset[n] */
 };

@@ -352,6 +352,7 @@ int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *e
         return PST_ENOMEM;
     }
     nl->n = n;
+    nl->support = support;
     if (n < 2) {
         nl->index = pst_alloc(0);
         if (!nl->index) {
@@ -536,6 +537,7 @@ void pst_nlist_destroy(pst_nlist *nl)
 }
 
 size_t pst_nlist_rows(const pst_nlist *nl) { return nl->n; }
+double pst_nlist_support(const pst_nlist *nl) { return nl->support; }
 const int64_t *pst_nlist_offsets(const pst_nlist *nl) { return nl->offset; }
 const uint32_t *pst_nlist_indices(const pst_nlist *nl) { return nl->index; }
 int64_t pst_nlist_pairs(const pst_nlist *nl) { return nl->offset[nl->n]; }

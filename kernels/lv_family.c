@@ -1,0 +1,494 @@
+/* The Lukyanov–Vuik family (spec lukyanov_vuik.md, equation numbers of the published paper):
+ * Brookshaw (27), corrected Brookshaw (51), Schwaiger (52)-(55) and the two-point scheme
+ * "M-SPH" (69)-(71) in transmissibility form (90)-(91), for scalar and diagonal-tensor mobility,
+ * with the four kernel-gradient variants G1-G4 (15)-(18) and the Neumann rows (100).
+ *
+ * Every row is two-point, (L u)_I = sum_J w_IJ (u_J - u_I), with
+ *     scalar m:  w_IJ = s_I V_J (m_I + m_J) [F_IJ - eta_I . g_IJ]
+ *     tensor M:  w_IJ = s_I V_J sum_a (M^a_I + M^a_J) [x^a g^a / d^2 - zeta^a (C_I g)^a]
+ * where g_IJ is the kernel gradient of the chosen variant, F_IJ = x_IJ . g_IJ / d^2, and
+ *     brookshaw: s = 1,                 zeta = 0
+ *     cb:        s = tr C / n,          zeta = 0
+ *     schwaiger: s = tr(Gamma^-1) / n,  zeta = N      (53), Gamma (55)
+ *     lv:        s = tr(Gamma-bar^-1)/n, zeta = N~    (65), Gamma-bar = Gamma* (71) where it is
+ *                strictly diagonally dominant with a positive diagonal, else Gamma (fallback)
+ * and eta = C^T zeta (so eta . g = zeta . C g; for radial variants F - eta.g = F (1 - eta.x),
+ * the bracket of (91)). C = (A^T)^-1, A = sum_J V_J x (x) g (23)-(25).
+ * Fallback chain (docs/schemes/): too few neighbours or a singular C / Gamma -> the Brookshaw
+ * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN. */
+#include "operator.h"
+#include "small_matrix.h"
+#include "sph_kernels.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { LV_BROOKSHAW, LV_CB, LV_SCHWAIGER, LV_MSPH };
+
+/* Pairs closer than this fraction of h~ are degenerate: their weight is 0 (spec choice 1). */
+#define LV_DEGENERATE 1e-8
+
+typedef struct {
+    int which;     /* LV_* */
+    double *nu;    /* Shepard nu_I (13)-(14), G2-G4; NULL for G1          */
+    double *gnu;   /* grad nu_I, dim per particle, G2 only               */
+    double *C;     /* dim*dim per particle, row-major                    */
+    double *zeta;  /* dim per particle: N (schwaiger), N~ (lv), else 0   */
+    double *eta;   /* dim per particle: C^T zeta                          */
+    double *s;     /* the normalising factor s_I                          */
+} lv_data;
+
+/* Everything the pair functions read, gathered once per call. */
+typedef struct {
+    int dim, variant, ncomp;
+    pst_kernel kernel;
+    const double *x[3], *V, *h, *mob[3];
+    double h_uniform;
+    const uint8_t *kind;
+    const double *nnormal[3];
+    const lv_data *d;
+} lv_ctx;
+
+static lv_ctx make_ctx(const pst_op *op)
+{
+    const pst_cloud *c = op->cloud;
+    lv_ctx k = {.dim = c->dim, .variant = op->opts.gradient, .ncomp = c->mob_ncomp,
+                .kernel = op->kernel, .V = c->V, .h = c->h, .h_uniform = c->h_uniform,
+                .kind = c->kind, .d = op->data};
+    for (int a = 0; a < 3; ++a) {
+        k.x[a] = c->x[a];
+        k.mob[a] = c->mob[a];
+        k.nnormal[a] = c->normal[a];
+    }
+    return k;
+}
+
+static inline double h_of(const lv_ctx *k, size_t i) { return k->h ? k->h[i] : k->h_uniform; }
+static inline double mob_of(const lv_ctx *k, int comp, size_t i)
+{
+    return k->ncomp ? k->mob[k->ncomp == 1 ? 0 : comp][i] : 1.0;
+}
+
+/* The pair geometry of (i, j): x = r_j - r_i, d^2, h~ = (h_i + h_j)/2 (26), the kernel value W
+ * and a = -dW/dr / d >= 0, so that the G1 gradient (15) is a x. Degenerate pairs get a = W = 0. */
+static inline double pair_geometry(const lv_ctx *k, size_t i, size_t j, double x[3],
+                                   double *W)
+{
+    double d2 = 0;
+    for (int a = 0; a < k->dim; ++a) {
+        x[a] = k->x[a][j] - k->x[a][i];
+        d2 += x[a] * x[a];
+    }
+    double ht = 0.5 * (h_of(k, i) + h_of(k, j));
+    double d = sqrt(d2);
+    int ok = d > LV_DEGENERATE * ht;
+    *W = ok ? pst_sph_w(k->kernel, k->dim, d, ht) : 0.0;
+    return ok ? -pst_sph_dw(k->kernel, k->dim, d, ht) / d : 0.0;
+}
+
+/* The kernel gradient g_IJ of the operator's variant (15)-(18) at pair (i, j), and F_IJ =
+ * x . g / d^2. Needs nu (G2-G4) and grad nu (G2) of i. Returns F. */
+static inline double pair_gradient(const lv_ctx *k, size_t i, size_t j, double x[3],
+                                   double g[3])
+{
+    double W, a = pair_geometry(k, i, j, x, &W);
+    double d2 = 0;
+    for (int c = 0; c < k->dim; ++c)
+        d2 += x[c] * x[c];
+    double f = a; /* the radial factor: g = f x (+ the G2 term) */
+    if (k->variant != PST_GRAD_G1) {
+        double inu = 1.0 / k->d->nu[i];
+        f = a * inu;
+        if (k->variant == PST_GRAD_G4)
+            f *= 1.0 - W * k->V[j] * inu;
+    }
+    for (int c = 0; c < k->dim; ++c)
+        g[c] = f * x[c];
+    if (k->variant == PST_GRAD_G2) {
+        double inu = 1.0 / k->d->nu[i], t = W * inu * inu;
+        for (int c = 0; c < k->dim; ++c)
+            g[c] -= t * k->d->gnu[(size_t)k->dim * i + c];
+    }
+    if (a == 0) /* degenerate pair: no contribution at all */
+        return 0.0;
+    double xg = 0;
+    for (int c = 0; c < k->dim; ++c)
+        xg += x[c] * g[c];
+    return xg / d2;
+}
+
+/* w_IJ of a scheme row (see the file comment). Shared by apply and emit_row so that the two
+ * apply paths use the same weights bit for bit. */
+static inline double row_weight(const lv_ctx *k, size_t i, size_t j)
+{
+    double x[3], g[3];
+    double F = pair_gradient(k, i, j, x, g);
+    if (F == 0.0)
+        return 0.0;
+    int dim = k->dim;
+    const lv_data *d = k->d;
+    double Vs = d->s[i] * k->V[j];
+    if (k->ncomp <= 1) {
+        double t = F;
+        for (int c = 0; c < dim; ++c)
+            t -= d->eta[(size_t)dim * i + c] * g[c];
+        return Vs * (mob_of(k, 0, i) + mob_of(k, 0, j)) * t;
+    }
+    double d2 = 0;
+    for (int c = 0; c < dim; ++c)
+        d2 += x[c] * x[c];
+    const double *C = d->C + (size_t)dim * dim * i, *zeta = d->zeta + (size_t)dim * i;
+    double w = 0;
+    for (int a = 0; a < dim; ++a) {
+        double Cg = 0;
+        for (int b = 0; b < dim; ++b)
+            Cg += C[a * dim + b] * g[b];
+        w += (mob_of(k, a, i) + mob_of(k, a, j)) * (x[a] * g[a] / d2 - zeta[a] * Cg);
+    }
+    return Vs * w;
+}
+
+/* w_IJ of a Neumann row (100): V_J (M_I n_I) . C_I g_IJ, the outward flux. */
+static inline double neumann_weight(const lv_ctx *k, size_t i, size_t j)
+{
+    double x[3], g[3];
+    if (pair_gradient(k, i, j, x, g) == 0.0)
+        return 0.0;
+    int dim = k->dim;
+    const double *C = k->d->C + (size_t)dim * dim * i;
+    double w = 0;
+    for (int a = 0; a < dim; ++a) {
+        double Cg = 0;
+        for (int b = 0; b < dim; ++b)
+            Cg += C[a * dim + b] * g[b];
+        w += mob_of(k, a, i) * k->nnormal[a][i] * Cg;
+    }
+    return k->V[j] * w;
+}
+
+static inline double weight(const lv_ctx *k, size_t i, size_t j)
+{
+    return k->kind[i] == PST_NEUMANN ? neumann_weight(k, i, j) : row_weight(k, i, j);
+}
+
+/* ---- precompute ------------------------------------------------------------------------ */
+
+static void lv_free(void *p)
+{
+    lv_data *d = p;
+    if (!d)
+        return;
+    pst_free(d->nu);
+    pst_free(d->gnu);
+    pst_free(d->C);
+    pst_free(d->zeta);
+    pst_free(d->eta);
+    pst_free(d->s);
+    free(d);
+}
+
+static int min_neighbours(int which, int dim)
+{
+    /* spec choice 6 */
+    return which == LV_BROOKSHAW ? 1 : which == LV_CB ? dim : dim + 1;
+}
+
+static int lv_min_brookshaw(int dim) { return min_neighbours(LV_BROOKSHAW, dim); }
+static int lv_min_cb(int dim) { return min_neighbours(LV_CB, dim); }
+static int lv_min_schwaiger(int dim) { return min_neighbours(LV_SCHWAIGER, dim); }
+static int lv_min_msph(int dim) { return min_neighbours(LV_MSPH, dim); }
+
+/* Shepard nu_I (with the self term W(0, h_I) V_I) and, for G2, grad nu_I = sum_K V_K grad W_IK
+ * (G1 gradients; the self term has none). */
+static void shepard(const lv_ctx *k, size_t i, const int64_t *off, const uint32_t *idx,
+                    double *nu, double *gnu)
+{
+    double s = pst_sph_w(k->kernel, k->dim, 0.0, h_of(k, i)) * k->V[i], gs[3] = {0, 0, 0};
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        size_t j = idx[e];
+        double x[3], W, a = pair_geometry(k, i, j, x, &W);
+        s += W * k->V[j];
+        for (int c = 0; c < k->dim; ++c)
+            gs[c] += k->V[j] * a * x[c];
+    }
+    *nu = s;
+    if (gnu)
+        for (int c = 0; c < k->dim; ++c)
+            gnu[c] = gs[c];
+}
+
+/* Worse of two statuses (the enum is ordered by severity). */
+static inline uint8_t worse(uint8_t a, uint8_t b) { return a > b ? a : b; }
+
+/* Classify an inversion by its condition number. */
+static uint8_t cond_status(const pst_op *op, double cond)
+{
+    if (!(cond * op->opts.rank_tol < 1.0))
+        return PST_ROW_RANK_DEFICIENT;
+    return cond > op->opts.cond_max ? PST_ROW_ILL_CONDITIONED : PST_ROW_OK;
+}
+
+static double trace(int dim, const double *a)
+{
+    double t = 0;
+    for (int c = 0; c < dim; ++c)
+        t += a[c * dim + c];
+    return t;
+}
+
+/* Per-particle data of row i. */
+static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64_t *off,
+                        const uint32_t *idx)
+{
+    lv_data *d = op->data;
+    int dim = k->dim, nn = dim * dim, which = d->which;
+    double *C = d->C + (size_t)nn * i, *zeta = d->zeta + (size_t)dim * i,
+           *eta = d->eta + (size_t)dim * i;
+    uint8_t st = PST_ROW_OK;
+    /* defaults: the Brookshaw row, C = I */
+    d->s[i] = 1.0;
+    for (int a = 0; a < nn; ++a)
+        C[a] = a % (dim + 1) == 0 ? 1.0 : 0.0;
+    for (int a = 0; a < dim; ++a)
+        zeta[a] = eta[a] = 0.0;
+    int64_t count = off[i + 1] - off[i];
+    if (count < min_neighbours(which, dim))
+        return PST_ROW_TOO_FEW;
+    int needs_C = which != LV_BROOKSHAW || k->kind[i] == PST_NEUMANN;
+    if (!needs_C)
+        return PST_ROW_OK;
+
+    /* A = sum V x (x) g, N = sum V g (53), N~ = sum V F x (65), Gamma = sum V F x x^T (55) */
+    double A[9] = {0}, N[3] = {0}, Nt[3] = {0}, G[9] = {0};
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        size_t j = idx[e];
+        double x[3], g[3], F = pair_gradient(k, i, j, x, g), V = k->V[j];
+        for (int a = 0; a < dim; ++a) {
+            N[a] += V * g[a];
+            Nt[a] += V * F * x[a];
+            for (int b = 0; b < dim; ++b) {
+                A[a * dim + b] += V * x[a] * g[b];
+                G[a * dim + b] += V * F * x[a] * x[b];
+            }
+        }
+    }
+    if (k->variant == PST_GRAD_G2) /* the self term of (16) in (53): makes N = 0 exactly */
+        for (int a = 0; a < dim; ++a)
+            N[a] -= k->V[i] * pst_sph_w(k->kernel, dim, 0.0, h_of(k, i)) *
+                    d->gnu[(size_t)dim * i + a] / (d->nu[i] * d->nu[i]);
+    double At[9], Cinv[9];
+    for (int a = 0; a < dim; ++a)
+        for (int b = 0; b < dim; ++b)
+            At[a * dim + b] = A[b * dim + a];
+    uint8_t cs = cond_status(op, pst_mat_inverse(dim, At, Cinv));
+    if (cs == PST_ROW_RANK_DEFICIENT)
+        return cs; /* C = I, Brookshaw row */
+    st = worse(st, cs);
+    memcpy(C, Cinv, (size_t)nn * sizeof *C);
+    if (which == LV_BROOKSHAW || k->kind[i] == PST_NEUMANN)
+        return st;
+    if (which == LV_CB) {
+        double s = trace(dim, C) / dim;
+        if (!(s > 0))
+            return worse(st, PST_ROW_FALLBACK); /* tr C <= 0 would flip the row's sign */
+        d->s[i] = s;
+        return st;
+    }
+
+    /* Schwaiger and M-SPH: the bracket vector and the normalising matrix */
+    const double *z = which == LV_SCHWAIGER ? N : Nt;
+    double xi[3];
+    for (int b = 0; b < dim; ++b) {
+        xi[b] = 0;
+        for (int a = 0; a < dim; ++a)
+            xi[b] += C[a * dim + b] * z[a];
+    }
+    double norm[9];
+    memcpy(norm, G, sizeof norm);
+    if (which == LV_MSPH) {
+        /* Gamma* (71) = sum V x (g - x (xi . g))^T, with xi = C^T N~ */
+        double Gs[9] = {0};
+        for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+            size_t j = idx[e];
+            double x[3], g[3];
+            pair_gradient(k, i, j, x, g);
+            double xg = 0;
+            for (int c = 0; c < dim; ++c)
+                xg += xi[c] * g[c];
+            for (int a = 0; a < dim; ++a)
+                for (int b = 0; b < dim; ++b)
+                    Gs[a * dim + b] += k->V[j] * x[a] * (g[b] - x[b] * xg);
+        }
+        if (pst_mat_sdd_positive(dim, Gs))
+            memcpy(norm, Gs, sizeof norm);
+        else
+            st = worse(st, PST_ROW_FALLBACK); /* Gamma-bar = Gamma (70) */
+    }
+    double inv[9];
+    uint8_t gs = cond_status(op, pst_mat_inverse(dim, norm, inv));
+    double s = gs == PST_ROW_RANK_DEFICIENT ? 0 : trace(dim, inv) / dim;
+    if (!(s > 0)) /* singular or a negative trace: keep the Brookshaw row */
+        return worse(st, gs == PST_ROW_RANK_DEFICIENT ? gs : PST_ROW_FALLBACK);
+    st = worse(st, gs);
+    d->s[i] = s;
+    for (int a = 0; a < dim; ++a) {
+        zeta[a] = z[a];
+        eta[a] = xi[a];
+    }
+    return st;
+}
+
+static int precompute(pst_op *op, int which, char *err)
+{
+    size_t n = op->n;
+    int dim = op->dim, variant = op->opts.gradient;
+    lv_data *d = calloc(1, sizeof *d);
+    if (!d)
+        return PST_ENOMEM;
+    op->data = d;
+    d->which = which;
+    d->C = pst_alloc(n * (size_t)(dim * dim) * sizeof *d->C);
+    d->zeta = pst_alloc(n * (size_t)dim * sizeof *d->zeta);
+    d->eta = pst_alloc(n * (size_t)dim * sizeof *d->eta);
+    d->s = pst_alloc(n * sizeof *d->s);
+    if (variant != PST_GRAD_G1)
+        d->nu = pst_alloc(n * sizeof *d->nu);
+    if (variant == PST_GRAD_G2)
+        d->gnu = pst_alloc(n * (size_t)dim * sizeof *d->gnu);
+    if (!d->C || !d->zeta || !d->eta || !d->s || (variant != PST_GRAD_G1 && !d->nu) ||
+        (variant == PST_GRAD_G2 && !d->gnu)) {
+        pst_set_err(err, "%s: cannot allocate the per-particle data of %zu particles",
+                    op->scheme->name, n);
+        return PST_ENOMEM;
+    }
+    lv_ctx k = make_ctx(op);
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint32_t *idx = pst_nlist_indices(op->nl);
+    /* One pass: every quantity of row i needs only row i (nu_I sums over I's neighbours). */
+#pragma omp parallel for schedule(dynamic, 512)
+    for (size_t i = 0; i < n; ++i) {
+        if (d->nu)
+            shepard(&k, i, off, idx, &d->nu[i], d->gnu ? d->gnu + (size_t)dim * i : NULL);
+        op->status[i] = particle(op, &k, i, off, idx);
+    }
+    return PST_OK;
+}
+
+static int pre_brookshaw(pst_op *op, char *err) { return precompute(op, LV_BROOKSHAW, err); }
+static int pre_cb(pst_op *op, char *err) { return precompute(op, LV_CB, err); }
+static int pre_schwaiger(pst_op *op, char *err) { return precompute(op, LV_SCHWAIGER, err); }
+static int pre_msph(pst_op *op, char *err) { return precompute(op, LV_MSPH, err); }
+
+/* ---- apply, emission and the rest of the table ------------------------------------------ */
+
+/* Matrix-free apply: recompute each pair's geometry and weight from the positions and the
+ * per-particle data. Compute-bound: a sqrt, a division and ~40 flops per pair (more for
+ * G2/G4 and tensors) against 12 bytes of list and 8 of u_J gathered. */
+static void lv_apply(const pst_op *op, const double *u, double *y)
+{
+    lv_ctx k = make_ctx(op);
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint32_t *idx = pst_nlist_indices(op->nl);
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i) {
+        if (k.kind[i] == PST_DIRICHLET)
+            continue;
+        double ui = u[i], s = 0;
+        for (int64_t e = off[i]; e < off[i + 1]; ++e)
+            s += weight(&k, i, idx[e]) * (u[idx[e]] - ui);
+        y[i] = s;
+    }
+}
+
+static void lv_emit_row(const pst_op *op, size_t i, double *w)
+{
+    lv_ctx k = make_ctx(op);
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint32_t *idx = pst_nlist_indices(op->nl);
+    for (int64_t e = off[i]; e < off[i + 1]; ++e)
+        w[e - off[i]] = weight(&k, i, idx[e]);
+}
+
+static double lv_scale(const pst_op *op, size_t i)
+{
+    const lv_data *d = op->data;
+    return d->s[i];
+}
+
+/* <grad u>_I = sum_J V_J (u_J - u_I) C_I g_IJ (54). */
+static void lv_gradient(const pst_op *op, const double *u, double *const grad[3])
+{
+    lv_ctx k = make_ctx(op);
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint32_t *idx = pst_nlist_indices(op->nl);
+    int dim = k.dim;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i) {
+        const double *C = k.d->C + (size_t)dim * dim * i;
+        double acc[3] = {0, 0, 0};
+        for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+            size_t j = idx[e];
+            double x[3], g[3];
+            pair_gradient(&k, i, j, x, g);
+            double du = k.V[j] * (u[j] - u[i]);
+            for (int c = 0; c < dim; ++c)
+                acc[c] += du * g[c];
+        }
+        for (int a = 0; a < dim; ++a) {
+            double v = 0;
+            for (int b = 0; b < dim; ++b)
+                v += C[a * dim + b] * acc[b];
+            grad[a][i] = v;
+        }
+    }
+}
+
+/* Lemma 3 diagnostics of row i: do the brackets F - eta . g (F (1 - xi . x) for radial
+ * variants) share one sign (92), and is |xi_I| max_J d_IJ < 1 (the sufficient check)? */
+static void lv_lemma3(const pst_op *op, size_t i, int *sign_mixed, int *xi_large)
+{
+    lv_ctx k = make_ctx(op);
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint32_t *idx = pst_nlist_indices(op->nl);
+    int dim = k.dim;
+    const double *eta = k.d->eta + (size_t)dim * i;
+    int pos = 0, neg = 0;
+    double dmax = 0, xi2 = 0;
+    for (int c = 0; c < dim; ++c)
+        xi2 += eta[c] * eta[c];
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        double x[3], g[3], F = pair_gradient(&k, i, idx[e], x, g), t = F, d2 = 0;
+        for (int c = 0; c < dim; ++c) {
+            t -= eta[c] * g[c];
+            d2 += x[c] * x[c];
+        }
+        pos += t > 0;
+        neg += t < 0;
+        dmax = d2 > dmax ? d2 : dmax;
+    }
+    *sign_mixed = pos > 0 && neg > 0;
+    *xi_large = xi2 * dmax >= 1.0;
+}
+
+#define LV_SCHEME(ID, NAME, DESC, PRE, MIN, GRAD, LEMMA)                                      \
+    const pst_scheme ID = {.name = NAME,                                                      \
+                           .description = DESC,                                               \
+                           .default_kernel = PST_KERNEL_CUBIC,                                \
+                           .min_neighbours = MIN,                                             \
+                           .precompute = PRE,                                                 \
+                           .apply = lv_apply,                                                 \
+                           .emit_row = lv_emit_row,                                           \
+                           .scale = lv_scale,                                                 \
+                           .gradient = GRAD,                                                  \
+                           .lemma3 = LEMMA,                                                   \
+                           .free_data = lv_free}
+
+LV_SCHEME(pst_scheme_brookshaw, "brookshaw", "Brookshaw 1985, m_I + m_J (LV eq. 27)",
+          pre_brookshaw, lv_min_brookshaw, NULL, NULL);
+LV_SCHEME(pst_scheme_cb, "cb", "corrected Brookshaw, times tr C / n (LV eq. 51)", pre_cb,
+          lv_min_cb, lv_gradient, NULL);
+LV_SCHEME(pst_scheme_schwaiger, "schwaiger", "Schwaiger 2008 (LV eqs. 52-55)", pre_schwaiger,
+          lv_min_schwaiger, lv_gradient, lv_lemma3);
+LV_SCHEME(pst_scheme_lv, "lv", "Lukyanov-Vuik two-point scheme M-SPH (LV eqs. 69-71, 90-91)",
+          pre_msph, lv_min_msph, lv_gradient, lv_lemma3);

@@ -1,0 +1,411 @@
+/* The operator object: scheme registry, creation, the stored-weight path, diagonal, assembly,
+ * status counts and the monotonicity audit. Everything here is derived from a scheme's
+ * emit_row, so a new scheme gets all of it by filling its table (operator.h). */
+#include "operator.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const pst_scheme *const registry[] = {&pst_scheme_brookshaw, &pst_scheme_cb,
+                                             &pst_scheme_schwaiger, &pst_scheme_lv};
+#define NSCHEMES ((int)(sizeof registry / sizeof *registry))
+
+int pst_scheme_count(void) { return NSCHEMES; }
+const char *pst_scheme_name(int i) { return i >= 0 && i < NSCHEMES ? registry[i]->name : NULL; }
+const char *pst_scheme_description(int i)
+{
+    return i >= 0 && i < NSCHEMES ? registry[i]->description : NULL;
+}
+
+const char *pst_row_status_name(int status)
+{
+    static const char *const names[PST_ROW_NSTATUS] = {"ok", "fallback", "ill-conditioned",
+                                                       "rank-deficient", "too-few-neighbours"};
+    return status >= 0 && status < PST_ROW_NSTATUS ? names[status] : "unknown";
+}
+
+void pst_op_defaults(pst_op_opts *o)
+{
+    o->scheme = "lv";
+    o->kernel = -1;
+    o->gradient = PST_GRAD_G1;
+    o->cond_max = 1e10;
+    o->rank_tol = 1e-13;
+}
+
+static const pst_scheme *find_scheme(const char *name)
+{
+    for (int i = 0; i < NSCHEMES && name; ++i)
+        if (strcmp(registry[i]->name, name) == 0)
+            return registry[i];
+    return NULL;
+}
+
+int pst_scheme_default_kernel(const char *name)
+{
+    const pst_scheme *s = find_scheme(name);
+    return s ? (int)s->default_kernel : -1;
+}
+
+static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist *nl,
+                      const pst_scheme **scheme, char *err)
+{
+    *scheme = find_scheme(o->scheme);
+    if (!*scheme) {
+        char names[256] = "";
+        for (int i = 0; i < NSCHEMES; ++i) {
+            strncat(names, i ? ", " : "", sizeof names - strlen(names) - 1);
+            strncat(names, registry[i]->name, sizeof names - strlen(names) - 1);
+        }
+        pst_set_err(err, "unknown scheme '%s' (known: %s)", o->scheme ? o->scheme : "(null)",
+                    names);
+        return PST_EINVAL;
+    }
+    if (o->kernel < -1 || o->kernel > PST_KERNEL_WENDLAND_C4) {
+        pst_set_err(err, "unknown kernel %d", o->kernel);
+        return PST_EINVAL;
+    }
+    if (o->gradient < PST_GRAD_G1 || o->gradient > PST_GRAD_G4) {
+        pst_set_err(err, "gradient variant must be G1..G4 (got %d)", o->gradient);
+        return PST_EINVAL;
+    }
+    if (!(o->cond_max >= 1) || !(o->rank_tol > 0 && o->rank_tol < 1)) {
+        pst_set_err(err, "cond_max must be >= 1 and rank_tol in (0, 1) (got %g, %g)",
+                    o->cond_max, o->rank_tol);
+        return PST_EINVAL;
+    }
+    if (pst_nlist_rows(nl) != c->n) {
+        pst_set_err(err, "the neighbour list has %zu rows for a cloud of %zu particles",
+                    pst_nlist_rows(nl), c->n);
+        return PST_EINVAL;
+    }
+    pst_kernel k = o->kernel < 0 ? (*scheme)->default_kernel : (pst_kernel)o->kernel;
+    if (pst_nlist_support(nl) < pst_kernel_support(k)) {
+        pst_set_err(err, "the neighbour list's radius (%g h) is smaller than the support of "
+                         "the %s kernel (%g h): rebuild it with support %g",
+                    pst_nlist_support(nl), pst_kernel_name(k), pst_kernel_support(k),
+                    pst_kernel_support(k));
+        return PST_EINVAL;
+    }
+    return PST_OK;
+}
+
+int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o,
+                  char *err)
+{
+    *out = NULL;
+    pst_op_opts defaults;
+    if (!o) {
+        pst_op_defaults(&defaults);
+        o = &defaults;
+    }
+    const pst_scheme *scheme;
+    int st = check_opts(o, c, nl, &scheme, err);
+    if (st != PST_OK)
+        return st;
+    pst_op *op = calloc(1, sizeof *op);
+    if (!op)
+        return PST_ENOMEM;
+    op->scheme = scheme;
+    op->cloud = c;
+    op->nl = nl;
+    op->opts = *o;
+    op->opts.scheme = scheme->name; /* static storage: the caller's string may go away */
+    op->kernel = o->kernel < 0 ? scheme->default_kernel : (pst_kernel)o->kernel;
+    op->dim = c->dim;
+    op->n = c->n;
+    op->status = pst_calloc(c->n, 1);
+    if (!op->status) {
+        pst_op_destroy(op);
+        pst_set_err(err, "cannot allocate the row status of %zu particles", c->n);
+        return PST_ENOMEM;
+    }
+    st = scheme->precompute(op, err);
+    if (st != PST_OK) {
+        pst_op_destroy(op);
+        return st;
+    }
+    for (size_t i = 0; i < c->n; ++i)
+        if (c->kind[i] == PST_DIRICHLET)
+            op->status[i] = PST_ROW_OK; /* identity rows need nothing */
+    for (size_t i = 0; i < c->n; ++i)
+        op->counts[op->status[i]]++;
+    *out = op;
+    return PST_OK;
+}
+
+void pst_op_destroy(pst_op *op)
+{
+    if (!op)
+        return;
+    if (op->data && op->scheme->free_data)
+        op->scheme->free_data(op->data);
+    pst_free(op->status);
+    pst_free(op->w);
+    free(op);
+}
+
+const uint8_t *pst_op_status(const pst_op *op) { return op->status; }
+void pst_op_status_counts(const pst_op *op, size_t counts[PST_ROW_NSTATUS])
+{
+    memcpy(counts, op->counts, sizeof op->counts);
+}
+
+/* Dirichlet rows are the identity: their values are data. */
+static void dirichlet_rows(const pst_op *op, const double *u, double *y)
+{
+    const uint8_t *kind = op->cloud->kind;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i)
+        if (kind[i] == PST_DIRICHLET)
+            y[i] = u[i];
+}
+
+void pst_op_apply(const pst_op *op, const double *u, double *y)
+{
+    op->scheme->apply(op, u, y);
+    dirichlet_rows(op, u, y);
+}
+
+int pst_op_store(pst_op *op)
+{
+    if (op->w)
+        return PST_OK;
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    double *w = pst_alloc((size_t)off[op->n] * sizeof *w);
+    if (!w)
+        return PST_ENOMEM;
+    const uint8_t *kind = op->cloud->kind;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < op->n; ++i) {
+        if (kind[i] == PST_DIRICHLET)
+            memset(w + off[i], 0, (size_t)(off[i + 1] - off[i]) * sizeof *w);
+        else
+            op->scheme->emit_row(op, i, w + off[i]);
+    }
+    op->w = w;
+    return PST_OK;
+}
+
+/* Stored apply, y_I = sum_J w_IJ (u_J - u_I): the same arithmetic in the same order as the
+ * matrix-free apply. Memory-bound: per pair 8 bytes of weight + 4 of index streamed, u_J
+ * gathered (Morton order keeps it in cache); about 12 bytes and 3 flops per pair. */
+int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
+{
+    if (!op->w)
+        return PST_EINVAL;
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint32_t *idx = pst_nlist_indices(op->nl);
+    const double *w = op->w;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i) {
+        double ui = u[i], s = 0;
+        for (int64_t k = off[i]; k < off[i + 1]; ++k)
+            s += w[k] * (u[idx[k]] - ui);
+        y[i] = s;
+    }
+    dirichlet_rows(op, u, y);
+    return PST_OK;
+}
+
+/* The weights of row i, from the store or emitted into `buf`. */
+static const double *row_weights(const pst_op *op, size_t i, double *buf)
+{
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    if (op->w)
+        return op->w + off[i];
+    op->scheme->emit_row(op, i, buf);
+    return buf;
+}
+
+/* Scratch for one row of weights per thread (rows are at most the longest list row). */
+static double *row_scratch(const pst_op *op, size_t *len)
+{
+    pst_nlist_stats st;
+    pst_nlist_get_stats(op->nl, &st);
+    *len = (size_t)st.max + 1;
+    return op->w ? NULL : pst_alloc((size_t)omp_get_max_threads() * *len * sizeof(double));
+}
+
+int pst_op_diagonal(const pst_op *op, double *diag)
+{
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint8_t *kind = op->cloud->kind;
+    size_t L;
+    double *scratch = row_scratch(op, &L);
+    if (!op->w && !scratch)
+        return PST_ENOMEM;
+#pragma omp parallel
+    {
+        double *buf = scratch ? scratch + (size_t)omp_get_thread_num() * L : NULL;
+#pragma omp for schedule(dynamic, 256)
+        for (size_t i = 0; i < op->n; ++i) {
+            if (kind[i] == PST_DIRICHLET) {
+                diag[i] = 1.0;
+                continue;
+            }
+            const double *w = row_weights(op, i, buf);
+            double s = 0;
+            for (int64_t k = 0; k < off[i + 1] - off[i]; ++k)
+                s += w[k];
+            diag[i] = -s;
+        }
+    }
+    pst_free(scratch);
+    return PST_OK;
+}
+
+int pst_op_scale(const pst_op *op, double *s)
+{
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i)
+        s[i] = op->scheme->scale ? op->scheme->scale(op, i) : 1.0;
+    return PST_OK;
+}
+
+void pst_csr_free(pst_csr *a)
+{
+    if (!a)
+        return;
+    pst_free(a->rowptr);
+    pst_free(a->col);
+    pst_free(a->val);
+    memset(a, 0, sizeof *a);
+}
+
+/* Row i of the explicit matrix: the off-diagonal weights and the diagonal merged in column
+ * order (list rows are sorted; the diagonal is inserted where it belongs). */
+int pst_op_assemble(const pst_op *op, pst_csr *a)
+{
+    memset(a, 0, sizeof *a);
+    size_t n = op->n;
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint32_t *idx = pst_nlist_indices(op->nl);
+    const uint8_t *kind = op->cloud->kind;
+    a->n = n;
+    a->rowptr = pst_alloc((n + 1) * sizeof *a->rowptr);
+    a->col = pst_alloc(((size_t)off[n] + n) * sizeof *a->col);
+    a->val = pst_alloc(((size_t)off[n] + n) * sizeof *a->val);
+    size_t L;
+    double *scratch = row_scratch(op, &L);
+    if (!a->rowptr || !a->col || !a->val || (!op->w && !scratch)) {
+        pst_csr_free(a);
+        pst_free(scratch);
+        return PST_ENOMEM;
+    }
+    for (size_t i = 0; i <= n; ++i)
+        a->rowptr[i] = off[i] + (int64_t)i;
+#pragma omp parallel
+    {
+        double *buf = scratch ? scratch + (size_t)omp_get_thread_num() * L : NULL;
+#pragma omp for schedule(dynamic, 256)
+        for (size_t i = 0; i < n; ++i) {
+            int64_t len = off[i + 1] - off[i], o = a->rowptr[i];
+            int dirichlet = kind[i] == PST_DIRICHLET;
+            const double *w = dirichlet ? NULL : row_weights(op, i, buf);
+            double diag = 0;
+            for (int64_t k = 0; k < len; ++k)
+                diag -= dirichlet ? 0 : w[k];
+            int64_t k = 0, p = o;
+            for (; k < len && idx[off[i] + k] < i; ++k, ++p) {
+                a->col[p] = idx[off[i] + k];
+                a->val[p] = dirichlet ? 0 : w[k];
+            }
+            a->col[p] = (uint32_t)i;
+            a->val[p++] = dirichlet ? 1.0 : diag;
+            for (; k < len; ++k, ++p) {
+                a->col[p] = idx[off[i] + k];
+                a->val[p] = dirichlet ? 0 : w[k];
+            }
+        }
+    }
+    pst_free(scratch);
+    return PST_OK;
+}
+
+typedef struct {
+    const pst_csr *a;
+    const int64_t *ids;
+} mtx_job;
+
+static void write_mtx(FILE *f, const void *job)
+{
+    const mtx_job *m = job;
+    const pst_csr *a = m->a;
+    fprintf(f, "%%%%MatrixMarket matrix coordinate real general\n");
+    fprintf(f, "%% written by pstencil %s; rows and columns in input order\n", pst_version());
+    fprintf(f, "%zu %zu %lld\n", a->n, a->n, (long long)a->rowptr[a->n]);
+    for (size_t i = 0; i < a->n && !ferror(f); ++i) {
+        long long r = m->ids ? m->ids[i] + 1 : (long long)i + 1;
+        for (int64_t k = a->rowptr[i]; k < a->rowptr[i + 1]; ++k) {
+            long long c = m->ids ? m->ids[a->col[k]] + 1 : (long long)a->col[k] + 1;
+            fprintf(f, "%lld %lld %.17g\n", r, c, a->val[k]);
+        }
+    }
+}
+
+int pst_csr_write_mtx(const pst_csr *a, const int64_t *ids, const char *path, char *err)
+{
+    mtx_job job = {a, ids};
+    return pst_write_atomic(path, write_mtx, &job, err);
+}
+
+int pst_op_audit_rows(const pst_op *op, pst_op_audit *a)
+{
+    memset(a, 0, sizeof *a);
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint8_t *kind = op->cloud->kind;
+    int has_lemma3 = op->scheme->lemma3 != NULL;
+    size_t L;
+    double *scratch = row_scratch(op, &L);
+    size_t rows = 0, rows_pos = 0, rows_nd = 0;
+    int64_t pos = 0, mixed = 0, large = 0;
+    if (!op->w && !scratch)
+        return PST_ENOMEM;
+#pragma omp parallel reduction(+ : rows, rows_pos, rows_nd, pos, mixed, large)
+    {
+        double *buf = scratch ? scratch + (size_t)omp_get_thread_num() * L : NULL;
+#pragma omp for schedule(dynamic, 256)
+        for (size_t i = 0; i < op->n; ++i) {
+            if (kind[i] != PST_INTERIOR) /* boundary rows are data or fluxes, not div(M grad) */
+                continue;
+            const double *w = row_weights(op, i, buf);
+            int64_t npos = 0;
+            double sum = 0, abs_sum = 0;
+            for (int64_t k = 0; k < off[i + 1] - off[i]; ++k) {
+                npos += w[k] < 0; /* K = -L: K_IJ = -w_IJ > 0 */
+                sum += w[k];
+                abs_sum += fabs(w[k]);
+            }
+            rows++;
+            pos += npos;
+            rows_pos += npos > 0;
+            /* K_II = sum w >= sum |w| (to rounding) and > 0 */
+            rows_nd += !(sum > 0 && sum >= abs_sum * (1 - 1e-12));
+            if (has_lemma3) {
+                int sm = 0, xl = 0;
+                op->scheme->lemma3(op, i, &sm, &xl);
+                mixed += sm;
+                large += xl;
+            }
+        }
+    }
+    pst_free(scratch);
+    a->rows = rows;
+    a->rows_positive_offdiag = rows_pos;
+    a->positive_offdiag = pos;
+    a->rows_not_dominant = rows_nd;
+    a->lemma3_sign_mixed = has_lemma3 ? mixed : -1;
+    a->lemma3_xi_large = has_lemma3 ? large : -1;
+    return PST_OK;
+}
+
+int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
+{
+    if (!op->scheme->gradient)
+        return PST_EINVAL;
+    op->scheme->gradient(op, u, grad);
+    return PST_OK;
+}

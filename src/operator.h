@@ -1,0 +1,52 @@
+/* The operator object and the scheme table every discretisation plugs into. Internal. */
+#ifndef PSTENCIL_OPERATOR_H
+#define PSTENCIL_OPERATOR_H
+
+#include "internal.h"
+
+/* One scheme: a kernel file in kernels/ fills this table and operator.c registers it.
+ *
+ * A scheme owns the interior and Neumann rows; operator.c owns the Dirichlet rows (identity),
+ * the stored weights, the stored apply, the diagonal, assembly, audit and status counts, all
+ * derived from `emit_row`. `apply` and `emit_row` must produce the same weights bit for bit
+ * (share one inline function for w_IJ), so the two apply paths agree to rounding. */
+typedef struct pst_scheme {
+    const char *name;
+    const char *description;
+    pst_kernel default_kernel;
+    /* minimum neighbours (j != i) of a row in dimension dim (spec choice 6) */
+    int (*min_neighbours)(int dim);
+    /* Precompute the per-particle data into op->data (op->status is zeroed, fill it); one
+     * threaded pass over particles. Returns PST_OK or an error with a message in err. */
+    int (*precompute)(pst_op *op, char *err);
+    /* y_I = sum_J w_IJ (u_J - u_I) for every non-Dirichlet row I (threaded). */
+    void (*apply)(const pst_op *op, const double *u, double *y);
+    /* The weights w_IJ of non-Dirichlet row i, in neighbour-list order. */
+    void (*emit_row)(const pst_op *op, size_t i, double *w);
+    /* s_I of the scheme (NULL: 1 everywhere). */
+    double (*scale)(const pst_op *op, size_t i);
+    /* Corrected gradient, or NULL when the scheme has no C. */
+    void (*gradient)(const pst_op *op, const double *u, double *const grad[3]);
+    /* Lemma 3 diagnostics of row i into the two counters, or NULL (not applicable). */
+    void (*lemma3)(const pst_op *op, size_t i, int *sign_mixed, int *xi_large);
+    void (*free_data)(void *data);
+} pst_scheme;
+
+struct pst_op {
+    const pst_scheme *scheme;
+    const pst_cloud *cloud;
+    const pst_nlist *nl;
+    pst_op_opts opts;
+    pst_kernel kernel;
+    int dim;
+    size_t n;
+    void *data;            /* the scheme's per-particle data                         */
+    uint8_t *status;       /* pst_row_status per particle                            */
+    size_t counts[PST_ROW_NSTATUS];
+    double *w;             /* stored weights (nl layout) or NULL                     */
+};
+
+/* The registered schemes (one file each under kernels/). */
+extern const pst_scheme pst_scheme_brookshaw, pst_scheme_cb, pst_scheme_schwaiger, pst_scheme_lv;
+
+#endif

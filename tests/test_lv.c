@@ -1,0 +1,534 @@
+/* The Lukyanov–Vuik family on the operator object: patch tests (spec §7.2-7.3), linear
+ * exactness on jittered clouds, the corrected gradient, symmetry facts (§4.5), Neumann rows
+ * (100), diagonal tensors, the two apply paths, assembly, thread independence, degenerate
+ * rows and bad input. */
+#include "check.h"
+#include "pstencil.h"
+
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const schemes[] = {"brookshaw", "cb", "schwaiger", "lv"};
+#define NSCHEMES 4
+
+/* A lattice on [2,3]^dim with 21 points per side (s0 = 0.05), h = f s0, jitter K. */
+static pst_cloud *patch(int dim, double f, double K, int boundary_layer)
+{
+    pst_lattice_opts o;
+    pst_lattice_defaults(&o);
+    o.dim = dim;
+    for (int d = 0; d < 3; ++d) {
+        o.lo[d] = 2.0;
+        o.hi[d] = 3.0;
+    }
+    o.s0 = 0.05;
+    o.h_ratio = f;
+    o.jitter = K;
+    o.seed = 7;
+    o.boundary_layer = boundary_layer;
+    pst_cloud *c = NULL;
+    char err[PST_ERRLEN];
+    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
+        fprintf(stderr, "lattice: %s\n", err);
+        exit(1);
+    }
+    return c;
+}
+
+static pst_nlist *neighbours(const pst_cloud *c, double support)
+{
+    pst_nlist *nl = NULL;
+    char err[PST_ERRLEN];
+    if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
+        fprintf(stderr, "nlist: %s\n", err);
+        exit(1);
+    }
+    return nl;
+}
+
+static pst_op *make_op(const pst_cloud *c, const pst_nlist *nl, const char *scheme, int grad)
+{
+    pst_op_opts o;
+    pst_op_defaults(&o);
+    o.scheme = scheme;
+    o.gradient = grad;
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    int st = pst_op_create(&op, c, nl, &o, err);
+    if (st != PST_OK) {
+        fprintf(stderr, "op %s: %s\n", scheme, err);
+        exit(1);
+    }
+    return op;
+}
+
+/* Full support: every coordinate at least `margin` inside [2,3]. */
+static int inner(const pst_cloud *c, size_t i, double margin)
+{
+    for (int d = 0; d < pst_cloud_dim(c); ++d) {
+        double x = pst_cloud_coord_const(c, d)[i];
+        if (x < 2.0 + margin || x > 3.0 - margin)
+            return 0;
+    }
+    return 1;
+}
+
+static double *field(const pst_cloud *c, double (*f)(const double *))
+{
+    size_t n = pst_cloud_size(c);
+    double *u = malloc(n * sizeof *u);
+    for (size_t i = 0; i < n; ++i) {
+        double x[3] = {0, 0, 0};
+        for (int d = 0; d < pst_cloud_dim(c); ++d)
+            x[d] = pst_cloud_coord_const(c, d)[i];
+        u[i] = f(x);
+    }
+    return u;
+}
+
+static double cubic_sum(const double *x) { return x[0] * x[0] * x[0] + x[1] * x[1] * x[1] + x[2] * x[2] * x[2]; }
+static double lap_cubic_sum(const double *x) { return 6 * (x[0] + x[1] + x[2]); }
+static double plain_sum(const double *x) { return x[0] + x[1] + x[2]; }
+static double linear(const double *x) { return 1.0 + 2.0 * x[0] - 3.0 * x[1] + 0.5 * x[2]; }
+static double squares(const double *x) { return x[0] * x[0] + x[1] * x[1] + x[2] * x[2]; }
+
+/* Largest relative interior error of L u against `exact` (a function or a constant). */
+static double patch_error(const pst_cloud *c, const pst_op *op, const double *u,
+                          double (*exact)(const double *), double constant, double margin)
+{
+    size_t n = pst_cloud_size(c);
+    double *y = malloc(n * sizeof *y), worst = 0;
+    pst_op_apply(op, u, y);
+    for (size_t i = 0; i < n; ++i) {
+        if (!inner(c, i, margin))
+            continue;
+        double x[3] = {0, 0, 0};
+        for (int d = 0; d < pst_cloud_dim(c); ++d)
+            x[d] = pst_cloud_coord_const(c, d)[i];
+        double e = exact ? exact(x) : constant;
+        double r = fabs(y[i] - e) / fabs(e);
+        worst = r > worst ? r : worst;
+    }
+    free(y);
+    return worst;
+}
+
+/* §7.2-7.3: machine precision in the interior for lv (G1-G4), schwaiger and cb. */
+static void test_patch(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        pst_cloud *c = patch(dim, 1.2, 0.0, 0);
+        pst_nlist *nl = neighbours(c, 2.0);
+        double margin = 2.0 * 1.2 * 0.05 + 1e-9; /* the support radius 2h */
+        double *u3 = field(c, cubic_sum), *u1 = field(c, plain_sum);
+        for (int s = 0; s < NSCHEMES; ++s)
+            for (int g = PST_GRAD_G1; g <= PST_GRAD_G4; ++g) {
+                if (strcmp(schemes[s], "lv") != 0 && g != PST_GRAD_G1)
+                    continue;
+                pst_op *op = make_op(c, nl, schemes[s], g);
+                double e3 = patch_error(c, op, u3, lap_cubic_sum, 0, margin);
+                pst_op_destroy(op);
+                /* div((x+y[+z]) grad(x+y[+z])) = dim, with the scalar mobility m = sum x */
+                pst_cloud_set_mobility(c, 1);
+                double *m = pst_cloud_mobility(c, 0);
+                for (size_t i = 0; i < pst_cloud_size(c); ++i)
+                    m[i] = u1[i];
+                op = make_op(c, nl, schemes[s], g);
+                double e1 = patch_error(c, op, u1, NULL, (double)dim, margin);
+                pst_op_destroy(op);
+                pst_cloud_set_mobility(c, 0);
+                printf("patch %dD %-9s G%d: lap(x^3+..) rel err %.2e, div((x+..)grad(x+..)) "
+                       "rel err %.2e\n",
+                       dim, schemes[s], g, e3, e1);
+                if (strcmp(schemes[s], "brookshaw") != 0) {
+                    CHECK(e3 <= 1e-10);
+                    CHECK(e1 <= 1e-10);
+                } else {
+                    CHECK(e3 > 1e-6); /* Brookshaw is not exact: Gamma != I on a lattice */
+                }
+            }
+        free(u3);
+        free(u1);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* Linear fields: L u = 0 at every row with a valid C (spec §3.4 [derived]), and the corrected
+ * gradient (54) reproduces the gradient, on jittered clouds (K = 0.4). */
+static void test_linear_exactness(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        pst_cloud *c = patch(dim, 1.2, 0.4, 0);
+        pst_nlist *nl = neighbours(c, 2.0);
+        size_t n = pst_cloud_size(c);
+        double *u = field(c, linear), *y = malloc(n * sizeof *y);
+        double *gx = malloc(n * sizeof *gx), *gy = malloc(n * sizeof *gy),
+               *gz = malloc(n * sizeof *gz);
+        double *const grad[3] = {gx, gy, gz};
+        double slope[3] = {2.0, -3.0, 0.5};
+        const char *exact_schemes[] = {"schwaiger", "lv"};
+        for (int s = 0; s < 2; ++s)
+            for (int g = PST_GRAD_G1; g <= PST_GRAD_G4; ++g) {
+                pst_op *op = make_op(c, nl, exact_schemes[s], g);
+                pst_op_apply(op, u, y);
+                const uint8_t *st = pst_op_status(op);
+                double worst = 0, gworst = 0;
+                size_t used = 0;
+                CHECK_INT(pst_op_gradient(op, u, grad), PST_OK);
+                for (size_t i = 0; i < n; ++i) {
+                    if (st[i] >= PST_ROW_RANK_DEFICIENT)
+                        continue;
+                    ++used;
+                    worst = fabs(y[i]) > worst ? fabs(y[i]) : worst;
+                    for (int d = 0; d < dim; ++d)
+                        gworst = fmax(gworst, fabs(grad[d][i] - slope[d]));
+                }
+                /* |L u| against the scale of its terms: w ~ 1/s0^2, |u_J - u_I| ~ 3 s0 */
+                printf("linear %dD %-9s G%d: max |L u| %.2e over %zu rows, max grad err %.2e\n",
+                       dim, exact_schemes[s], g, worst, used, gworst);
+                CHECK(used > n / 2);
+                CHECK(gworst <= 1e-10);
+                if (s == 0 && g == PST_GRAD_G2)
+                    CHECK(worst >= 1.0); /* trap 6: N = 0 for G2, so (53) corrects nothing */
+                else
+                    CHECK(worst <= 1e-9);
+                pst_op_destroy(op);
+            }
+        free(u);
+        free(y);
+        free(gx);
+        free(gy);
+        free(gz);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* Weight w_IJ of the assembled matrix, or 0 when absent. */
+static double entry(const pst_csr *a, size_t i, size_t j)
+{
+    for (int64_t k = a->rowptr[i]; k < a->rowptr[i + 1]; ++k)
+        if (a->col[k] == j)
+            return a->val[k];
+    return 0.0;
+}
+
+/* Largest |S_IJ - S_JI| / max|S| of S = diag(d) A over the off-diagonal entries. */
+static double asymmetry(const pst_csr *a, const double *d)
+{
+    double worst = 0, scale = 0;
+    for (size_t i = 0; i < a->n; ++i)
+        for (int64_t k = a->rowptr[i]; k < a->rowptr[i + 1]; ++k) {
+            size_t j = a->col[k];
+            if (j == i)
+                continue;
+            double sij = d[i] * a->val[k], sji = d[j] * entry(a, j, i);
+            worst = fmax(worst, fabs(sij - sji));
+            scale = fmax(scale, fabs(sij));
+        }
+    return worst / scale;
+}
+
+/* §4.5: diag(V) K symmetric for brookshaw, diag(V/s) K for cb; lv not symmetric. */
+static void test_symmetry(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        pst_cloud *c = patch(dim, 1.2, 0.4, 0);
+        pst_cloud_set_mobility(c, 1);
+        double *m = pst_cloud_mobility(c, 0);
+        for (size_t i = 0; i < pst_cloud_size(c); ++i)
+            m[i] = 1.0 + (double)(i % 7); /* heterogeneous */
+        pst_nlist *nl = neighbours(c, 2.0);
+        size_t n = pst_cloud_size(c);
+        double *d = malloc(n * sizeof *d), *s = malloc(n * sizeof *s);
+        const double *V = pst_cloud_volume_const(c);
+        for (int k = 0; k < NSCHEMES; ++k) {
+            pst_op *op = make_op(c, nl, schemes[k], PST_GRAD_G1);
+            pst_csr a;
+            CHECK_INT(pst_op_assemble(op, &a), PST_OK);
+            pst_op_scale(op, s);
+            for (size_t i = 0; i < n; ++i)
+                d[i] = V[i] / s[i];
+            double asym = asymmetry(&a, d);
+            printf("symmetry %dD %-9s: |diag(V/s) K - (..)^T| / max = %.2e\n", dim, schemes[k],
+                   asym);
+            if (k < 2)
+                CHECK(asym <= 1e-13);
+            else
+                CHECK(asym >= 1e-3);
+            pst_csr_free(&a);
+            pst_op_destroy(op);
+        }
+        free(d);
+        free(s);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* Both apply paths, the assembled matrix and the diagonal, on a cloud with all three kinds,
+ * scalar and tensor mobility, every scheme and variant; 1 and 2 threads bit for bit. */
+static void test_paths_and_threads(void)
+{
+    for (int dim = 2; dim <= 3; ++dim)
+        for (int ncomp = 0; ncomp <= dim; ncomp += (ncomp == 1 ? dim - 1 : 1)) {
+            pst_cloud *c = patch(dim, 1.2, 0.3, 1);
+            uint8_t *kind = pst_cloud_kinds(c);
+            size_t n = pst_cloud_size(c);
+            for (size_t i = 0; i < n; i += 3) /* every third boundary particle Neumann */
+                if (kind[i] == PST_DIRICHLET)
+                    kind[i] = PST_NEUMANN;
+            pst_cloud_set_mobility(c, ncomp);
+            for (int k = 0; k < ncomp; ++k) {
+                double *m = pst_cloud_mobility(c, k);
+                for (size_t i = 0; i < n; ++i)
+                    m[i] = 1.0 + 0.5 * k + 1e3 * ((i * 2654435761u) % 5 == 0);
+            }
+            pst_nlist *nl = neighbours(c, 2.0);
+            double *u = field(c, cubic_sum), *y1 = malloc(n * sizeof *y1),
+                   *y2 = malloc(n * sizeof *y2), *y3 = malloc(n * sizeof *y3),
+                   *dg = malloc(n * sizeof *dg), *scale = malloc(n * sizeof *scale);
+            for (int s = 0; s < NSCHEMES; ++s)
+                for (int g = PST_GRAD_G1; g <= PST_GRAD_G4; ++g) {
+                    omp_set_num_threads(1);
+                    pst_op *op1 = make_op(c, nl, schemes[s], g);
+                    pst_op_apply(op1, u, y3);
+                    omp_set_num_threads(2);
+                    pst_op *op = make_op(c, nl, schemes[s], g);
+                    pst_op_apply(op, u, y1);
+                    CHECK(memcmp(y1, y3, n * sizeof *y1) == 0);
+                    CHECK(memcmp(pst_op_status(op), pst_op_status(op1), n) == 0);
+                    CHECK_INT(pst_op_apply_stored(op, u, y2), PST_EINVAL);
+                    CHECK_INT(pst_op_store(op), PST_OK);
+                    CHECK_INT(pst_op_apply_stored(op, u, y2), PST_OK);
+                    pst_csr a;
+                    CHECK_INT(pst_op_assemble(op, &a), PST_OK);
+                    CHECK_INT(pst_op_diagonal(op, dg), PST_OK);
+                    double worst = 0, worst_csr = 0, worst_diag = 0;
+                    int finite = 1;
+                    for (size_t i = 0; i < n; ++i) {
+                        double sum = 0, mag = 0;
+                        for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
+                            sum += a.val[e] * u[a.col[e]];
+                            mag += fabs(a.val[e] * u[a.col[e]]);
+                            if (a.col[e] == i)
+                                worst_diag = fmax(worst_diag, fabs(a.val[e] - dg[i]));
+                        }
+                        scale[i] = mag;
+                        finite = finite && isfinite(y1[i]) && isfinite(y2[i]);
+                        worst = fmax(worst, fabs(y1[i] - y2[i]) / (mag > 0 ? mag : 1));
+                        worst_csr = fmax(worst_csr, fabs(sum - y1[i]) / (mag > 0 ? mag : 1));
+                    }
+                    CHECK(finite);
+                    CHECK(worst <= 1e-13);     /* matrix-free vs stored */
+                    CHECK(worst_csr <= 1e-13); /* assembled matvec vs apply */
+                    CHECK(worst_diag == 0.0);
+                    pst_csr_free(&a);
+                    pst_op_destroy(op);
+                    pst_op_destroy(op1);
+                }
+            free(u);
+            free(y1);
+            free(y2);
+            free(y3);
+            free(dg);
+            free(scale);
+            pst_nlist_destroy(nl);
+            pst_cloud_destroy(c);
+        }
+}
+
+/* Neumann rows (100) give n . M grad u exactly for linear u; a diagonal tensor with equal
+ * components equals the scalar mobility; div(M grad(x^2+y^2)) = 2 (mx + my) inside. */
+static void test_neumann_and_tensor(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        pst_cloud *c = patch(dim, 1.2, 0.0, 1);
+        uint8_t *kind = pst_cloud_kinds(c);
+        size_t n = pst_cloud_size(c);
+        for (size_t i = 0; i < n; ++i)
+            if (kind[i] == PST_DIRICHLET)
+                kind[i] = PST_NEUMANN;
+        pst_cloud_set_mobility(c, dim);
+        double mdiag[3] = {2.0, 5.0, 0.5};
+        for (int k = 0; k < dim; ++k)
+            for (size_t i = 0; i < n; ++i)
+                pst_cloud_mobility(c, k)[i] = mdiag[k];
+        pst_nlist *nl = neighbours(c, 2.0);
+        double *u = field(c, linear), *y = malloc(n * sizeof *y);
+        double slope[3] = {2.0, -3.0, 0.5};
+        pst_op *op = make_op(c, nl, "lv", PST_GRAD_G1);
+        pst_op_apply(op, u, y);
+        double worst = 0;
+        for (size_t i = 0; i < n; ++i) {
+            if (kind[i] != PST_NEUMANN)
+                continue;
+            double flux = 0;
+            for (int d = 0; d < dim; ++d)
+                flux += pst_cloud_normal(c, d)[i] * mdiag[d] * slope[d];
+            worst = fmax(worst, fabs(y[i] - flux));
+        }
+        printf("neumann %dD: max |row(100) - n.M.grad u| = %.2e\n", dim, worst);
+        CHECK(worst <= 1e-10);
+        pst_op_destroy(op);
+
+        double *u2 = field(c, squares);
+        for (size_t i = 0; i < n; ++i)
+            kind[i] = PST_INTERIOR;
+        op = make_op(c, nl, "lv", PST_GRAD_G1);
+        double target = 0;
+        for (int d = 0; d < dim; ++d)
+            target += 2 * mdiag[d];
+        double e = patch_error(c, op, u2, NULL, target, 2.4 * 0.05 + 1e-9);
+        printf("tensor %dD lv: div(M grad |x|^2) rel err %.2e\n", dim, e);
+        CHECK(e <= 1e-10);
+        pst_op_destroy(op);
+
+        /* equal components: the tensor path equals the scalar path */
+        for (int k = 0; k < dim; ++k)
+            for (size_t i = 0; i < n; ++i)
+                pst_cloud_mobility(c, k)[i] = 3.0;
+        op = make_op(c, nl, "lv", PST_GRAD_G2);
+        double *yt = malloc(n * sizeof *yt);
+        pst_op_apply(op, u2, yt);
+        pst_op_destroy(op);
+        pst_cloud_set_mobility(c, 1);
+        for (size_t i = 0; i < n; ++i)
+            pst_cloud_mobility(c, 0)[i] = 3.0;
+        op = make_op(c, nl, "lv", PST_GRAD_G2);
+        pst_op_apply(op, u2, y);
+        double diff = 0, mag = 0;
+        for (size_t i = 0; i < n; ++i) {
+            diff = fmax(diff, fabs(y[i] - yt[i]));
+            mag = fmax(mag, fabs(y[i]));
+        }
+        CHECK(diff <= 1e-12 * mag);
+        pst_op_destroy(op);
+        free(yt);
+        free(u);
+        free(u2);
+        free(y);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* Monotonicity audit (LV §4.4). */
+static void test_audit(void)
+{
+    double fs[3] = {1.2, 0.6006, 1.2012};
+    double Ks[3] = {0.0, 0.1, 0.1};
+    for (int t = 0; t < 3; ++t) {
+        pst_cloud *c = patch(2, fs[t], Ks[t], 1);
+        pst_nlist *nl = neighbours(c, 2.0);
+        for (int s = 0; s < NSCHEMES; ++s) {
+            pst_op *op = make_op(c, nl, schemes[s], PST_GRAD_G1);
+            pst_op_audit a;
+            CHECK_INT(pst_op_audit_rows(op, &a), PST_OK);
+            printf("audit f=%.4f K=%.1f %-9s: %zu rows, %zu with positive off-diagonals "
+                   "(%lld entries), %zu not dominant, lemma3 mixed %lld, |xi| d >= 1: %lld\n",
+                   fs[t], Ks[t], schemes[s], a.rows, a.rows_positive_offdiag,
+                   (long long)a.positive_offdiag, a.rows_not_dominant,
+                   (long long)a.lemma3_sign_mixed, (long long)a.lemma3_xi_large);
+            CHECK_INT(a.rows, 19 * 19);
+            if (s < 2) { /* F >= 0: always M-matrix rows */
+                CHECK_INT(a.rows_positive_offdiag, 0);
+                CHECK_INT(a.lemma3_sign_mixed, -1);
+            }
+            if (t == 0) { /* regular lattice, f >= 1 */
+                CHECK_INT(a.rows_positive_offdiag, 0);
+                CHECK_INT(a.rows_not_dominant, 0);
+                if (s >= 2) {
+                    CHECK_INT(a.lemma3_sign_mixed, 0);
+                    CHECK_INT(a.lemma3_xi_large, 0);
+                }
+            }
+            pst_op_destroy(op);
+        }
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* Degenerate rows are flagged, fall back and never give NaN. */
+static void test_degenerate(void)
+{
+    /* 2D: particles on a line (collinear: C singular) plus one far away (isolated) */
+    pst_cloud *c;
+    CHECK_INT(pst_cloud_create(&c, 2, 12), PST_OK);
+    for (size_t i = 0; i < 11; ++i) {
+        pst_cloud_coord(c, 0)[i] = 0.1 * (double)i;
+        pst_cloud_coord(c, 1)[i] = 0.0;
+    }
+    pst_cloud_coord(c, 0)[11] = 10.0;
+    pst_cloud_coord(c, 1)[11] = 10.0;
+    pst_cloud_set_h_uniform(c, 0.12);
+    pst_nlist *nl = neighbours(c, 2.0);
+    double u[12], y[12];
+    for (int i = 0; i < 12; ++i)
+        u[i] = (double)(i * i);
+    for (int s = 0; s < NSCHEMES; ++s) {
+        pst_op *op = make_op(c, nl, schemes[s], PST_GRAD_G2);
+        size_t counts[PST_ROW_NSTATUS];
+        pst_op_status_counts(op, counts);
+        pst_op_apply(op, u, y);
+        int finite = 1;
+        for (int i = 0; i < 12; ++i)
+            finite = finite && isfinite(y[i]);
+        CHECK(finite);
+        CHECK_INT(pst_op_status(op)[11], PST_ROW_TOO_FEW);
+        CHECK(y[11] == 0.0);
+        if (s > 0)
+            CHECK(counts[PST_ROW_RANK_DEFICIENT] + counts[PST_ROW_TOO_FEW] == 12);
+        printf("degenerate %-9s: ok %zu, fallback %zu, ill %zu, rank-deficient %zu, too few "
+               "%zu\n",
+               schemes[s], counts[0], counts[1], counts[2], counts[3], counts[4]);
+        pst_op_destroy(op);
+    }
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
+static void test_errors(void)
+{
+    pst_cloud *c = patch(2, 1.2, 0.0, 0);
+    pst_nlist *nl = neighbours(c, 1.5);
+    pst_op_opts o;
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    pst_op_defaults(&o);
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL); /* list radius < 2h */
+    CHECK(strstr(err, "support") != NULL);
+    CHECK(op == NULL);
+    pst_nlist_destroy(nl);
+    nl = neighbours(c, 2.0);
+    o.scheme = "nonesuch";
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "known: brookshaw") != NULL);
+    pst_op_defaults(&o);
+    o.gradient = 5;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    pst_op_defaults(&o);
+    o.scheme = "brookshaw";
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_OK);
+    double *g[3] = {NULL, NULL, NULL};
+    CHECK_INT(pst_op_gradient(op, NULL, g), PST_EINVAL); /* brookshaw has no C */
+    pst_op_destroy(op);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
+int main(void)
+{
+    test_patch();
+    test_linear_exactness();
+    test_symmetry();
+    test_paths_and_threads();
+    test_neumann_and_tensor();
+    test_audit();
+    test_degenerate();
+    test_errors();
+    return check_summary("test_lv");
+}
