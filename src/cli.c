@@ -48,6 +48,10 @@ static void print_help(void)
            "                      statistics and timings\n"
            "  cloud [OPTIONS]     generate a particle cloud and write it as CSV\n"
            "  neighbours FILE     read a CSV cloud, build its neighbour list, print statistics\n"
+           "  apply [OPTIONS]     apply a scheme's operator to a field of a CSV cloud, write\n"
+           "                      L u and the row status per particle as CSV\n"
+           "  stencil [OPTIONS]   assemble a scheme's operator on a CSV cloud, write it as\n"
+           "                      MatrixMarket\n"
            "  sysinfo             cores, caches and NUMA nodes (hwloc), threads, BLAS, flags\n\n"
            "global options:\n"
            "  --threads N         OpenMP threads (default: OMP_NUM_THREADS or all cores)\n"
@@ -143,6 +147,10 @@ int main(int argc, char **argv)
         rc = cli_neighbours(&ctx, nargs - 1, args + 1);
     } else if (strcmp(args[0], "sysinfo") == 0) {
         rc = cli_sysinfo(&ctx, nargs - 1, args + 1);
+    } else if (strcmp(args[0], "apply") == 0) {
+        rc = cli_apply(&ctx, nargs - 1, args + 1);
+    } else if (strcmp(args[0], "stencil") == 0) {
+        rc = cli_stencil(&ctx, nargs - 1, args + 1);
     } else {
         rc = usage_error("unknown command '%s'", args[0]);
     }

@@ -49,5 +49,7 @@ int cli_run(const cli_ctx *ctx, int argc, char **argv);
 int cli_cloud(const cli_ctx *ctx, int argc, char **argv);
 int cli_neighbours(const cli_ctx *ctx, int argc, char **argv);
 int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv);
+int cli_apply(const cli_ctx *ctx, int argc, char **argv);
+int cli_stencil(const cli_ctx *ctx, int argc, char **argv);
 
 #endif

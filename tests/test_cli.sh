@@ -86,5 +86,89 @@ contains out "particles            9261 (3D)" "run particle count (21^3)"
 contains out "time neighbours" "run prints timings"
 expect 0 "run --help" -- "$exe" run --help
 
+# apply and stencil on a 21x21 lattice on [0,2]^2 (s0 = 0.1, h = 1.2 s0, all interior) with a
+# field u = x^2 + y^2, so that Lu = 4 away from the boundary, and a mobility column k = 1 + x. The centre particle (1,1) is id 220
+# (x runs fastest), a whole 1.0 from the box: beyond any kernel's reach (3h = 0.36).
+# check NAME CONDITION: count a shell test.
+check() {
+  if eval "$2"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAIL: $1"; fi
+}
+expect 0 "cloud for apply" -- "$exe" cloud --dim 2 --lo 0,0 --hi 2,2 --s0 0.1 -o "$work/a.csv"
+awk -F, 'NR == 1 { print $0 ",u,k"; next }
+  { printf "%s,%.17g,%.17g\n", $0, $1 * $1 + $2 * $2, 1 + $1 }' \
+  "$work/a.csv" > "$work/au.csv"
+expect 0 "apply lv" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u --out "$work/lu.csv"
+contains out "particles            441 (2D)" "apply particle count"
+contains out "row status           ok" "apply prints status counts"
+contains out "time apply" "apply prints timings"
+check "apply writes particles + 1 rows" '[ "$(wc -l < "$work/lu.csv")" -eq 442 ]'
+check "apply header" '[ "$(head -n 1 "$work/lu.csv")" = "id,Lu,status" ]'
+check "apply rows in input order" \
+  '[ "$(awk -F, "NR > 1 && \$1 != NR - 2" "$work/lu.csv" | wc -l)" -eq 0 ]'
+check "apply status names known" '[ "$(awk -F, "NR > 1" "$work/lu.csv" | cut -d, -f3 |
+  grep -cvxE "ok|fallback|ill-conditioned|rank-deficient|too-few-neighbours")" -eq 0 ]'
+centre=$(awk -F, '$1 == 220 { print $2 }' "$work/lu.csv")
+check "lv: Lu = 4 at the centre (got $centre)" \
+  "awk -v v='$centre' 'BEGIN { d = v - 4; exit !(v != \"\" && d < 1e-8 && d > -1e-8) }'"
+expect 0 "apply --stored" -- "$exe" --quiet apply --scheme lv --in "$work/au.csv" --field u \
+  --stored --out "$work/lu_stored.csv"
+check "--quiet apply prints nothing" '[ ! -s "$work/out" ]'
+check "stored Lu = matrix-free Lu at the centre" \
+  '[ "$(awk -F, "\$1 == 220 { print \$2 }" "$work/lu_stored.csv")" = "$centre" ]'
+# div((1 + x) grad u) = 4 + 6x: 10 at the centre, to the scheme's O(h^2) for a varying mobility
+expect 0 "apply with a mobility column" -- "$exe" apply --scheme lv --in "$work/au.csv" \
+  --field u --mobility k --h 0.12 --kernel cubic --out "$work/lu_m.csv"
+centre_m=$(awk -F, '$1 == 220 { print $2 }' "$work/lu_m.csv")
+check "lv with mobility 1 + x: Lu ~ 10 at the centre (got $centre_m)" \
+  "awk -v v='$centre_m' 'BEGIN { d = v - 10; exit !(v != \"\" && d < 0.5 && d > -0.5) }'"
+expect 0 "apply --gradient G4" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
+  --gradient G4 --out "$work/lu_g4.csv"
+expect 2 "mobility column with a zero" -- "$exe" apply --scheme lv --in "$work/au.csv" \
+  --field u --mobility u --out "$work/lu_m.csv"
+contains err "line 2" "zero mobility located at its line"
+
+# stencil: the assembled matrix of the same operator. Without --kernel the list has the
+# support of the scheme's default kernel (lv: cubic, 2h), so its pairs are those of
+# `neighbours --kernel cubic`.
+expect 0 "neighbours cubic" -- "$exe" neighbours "$work/au.csv" --kernel cubic
+pairs=$(awk '/^pairs stored/ { print $3 }' "$work/out")
+expect 0 "stencil lv" -- "$exe" stencil --scheme lv --in "$work/au.csv" --out "$work/A.mtx"
+check "stencil MatrixMarket banner" \
+  '[ "$(head -n 1 "$work/A.mtx")" = "%%MatrixMarket matrix coordinate real general" ]'
+check "stencil size and nnz = pairs + n ($pairs + 441)" \
+  '[ "$(grep -v "^%" "$work/A.mtx" | head -n 1)" = "441 441 $((pairs + 441))" ]'
+check "stencil entry count" \
+  '[ "$(grep -v "^%" "$work/A.mtx" | tail -n +2 | wc -l)" -eq $((pairs + 441)) ]'
+check "stencil row sum of the centre (row 221) is 0" \
+  "awk '!/^%/ && ++k > 1 && \$1 == 221 { s += \$3; a += (\$3 < 0 ? -\$3 : \$3) }
+        END { exit !(a > 0 && s < 1e-10 * a && s > -1e-10 * a) }' '$work/A.mtx'"
+expect 0 "apply --help" -- "$exe" apply --help
+contains out "--stored" "apply help lists --stored"
+expect 0 "stencil --help" -- "$exe" stencil --help
+
+# errors of apply and stencil
+expect 1 "apply unknown scheme" -- "$exe" apply --scheme frob --in "$work/au.csv" --field u \
+  --out "$work/e.csv"
+contains err "known: " "unknown scheme lists the schemes"
+expect 2 "apply missing field" -- "$exe" apply --scheme lv --in "$work/au.csv" --field v \
+  --out "$work/e.csv"
+contains err "'v'" "missing field named"
+contains err "fields: u, k" "missing field lists the fields"
+expect 1 "apply bad --gradient" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
+  --gradient G5 --out "$work/e.csv"
+expect 1 "apply bad --h" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u --h 0 \
+  --out "$work/e.csv"
+expect 1 "apply without --out" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u
+expect 2 "apply missing input" -- "$exe" apply --scheme lv --in "$work/none.csv" --field u \
+  --out "$work/e.csv"
+check "failed apply left no file" '[ ! -e "$work/e.csv" ]'
+expect 2 "apply into a missing directory" -- "$exe" apply --scheme lv --in "$work/au.csv" \
+  --field u --out "$work/nodir2/lu.csv"
+expect 2 "stencil into a missing directory" -- "$exe" stencil --scheme lv --in "$work/au.csv" \
+  --out "$work/nodir2/A.mtx"
+check "no partial output in a missing directory" '[ ! -e "$work/nodir2" ]'
+expect 1 "stencil unknown scheme" -- "$exe" stencil --scheme frob --in "$work/au.csv" \
+  --out "$work/e.mtx"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
