@@ -17,6 +17,11 @@ typedef void (*pstb_fn)(pstb_state *s);
 /* Register `fn` under `name` once per argument in args[0..nargs) (read with pstb_arg); timed
  * in wall-clock time (OpenMP bodies), reported in milliseconds. */
 void pstb_register(const char *name, pstb_fn fn, const int64_t *args, int nargs);
+/* As pstb_register, with a fixed number of timed iterations (iterations <= 0: Google Benchmark
+ * picks the count from --benchmark_min_time). A fixed count also runs the body only once, so
+ * its untimed setup is paid once per argument. */
+void pstb_register_iters(const char *name, pstb_fn fn, const int64_t *args, int nargs,
+                         int64_t iterations);
 
 int pstb_keep_running(pstb_state *s);
 int64_t pstb_arg(const pstb_state *s);

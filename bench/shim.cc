@@ -7,7 +7,8 @@ struct pstb_state {
     benchmark::State *st;
 };
 
-extern "C" void pstb_register(const char *name, pstb_fn fn, const int64_t *args, int nargs)
+extern "C" void pstb_register_iters(const char *name, pstb_fn fn, const int64_t *args,
+                                    int nargs, int64_t iterations)
 {
     auto *b = benchmark::RegisterBenchmark(name, [fn](benchmark::State &st) {
         pstb_state s{&st};
@@ -16,6 +17,13 @@ extern "C" void pstb_register(const char *name, pstb_fn fn, const int64_t *args,
     for (int i = 0; i < nargs; ++i)
         b->Arg(args[i]);
     b->UseRealTime()->Unit(benchmark::kMillisecond);
+    if (iterations > 0)
+        b->Iterations(iterations);
+}
+
+extern "C" void pstb_register(const char *name, pstb_fn fn, const int64_t *args, int nargs)
+{
+    pstb_register_iters(name, fn, args, nargs, 0);
 }
 
 extern "C" int pstb_keep_running(pstb_state *s) { return s->st->KeepRunning(); }

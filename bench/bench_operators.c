@@ -1,0 +1,422 @@
+/* Benchmarks of the Lukyanov-Vuik operators (brookshaw, cb, schwaiger, lv; gradient G1, cubic
+ * spline) on 10^6-particle jittered lattices in 2D (1000^2) and 3D (100^3), K = 0.5,
+ * h = 1.2 s0, neighbour support 2h, Morton-sorted, with 1 and 2 OpenMP threads (the argument):
+ *   op_precompute_<scheme>_<dim>d   pst_op_create (per-particle data, one threaded pass)
+ *   op_apply_<scheme>_<dim>d        pst_op_apply (matrix-free: pair weights recomputed)
+ *   op_stored_<scheme>_<dim>d       pst_op_apply_stored (weights stored once, untimed)
+ *   csr_{1sum,4sums}_lv_<dim>d      the assembled lv matrix times a vector, one or four partial
+ *                                   sums per row (is the stored apply memory- or latency-bound?)
+ * plus a STREAM-like triad a = b + s c (3 x 80 MB and 3 x 400 MB arrays) and a read-only
+ * dot product (2 x 400 MB) as the bandwidth references of the stored apply. bench/README.md explains the counters and the byte model. */
+#include "bench_shim.h"
+#include "pstencil.h"
+
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define H_RATIO 1.2
+#define JITTER 0.5
+#define SUPPORT 2.0 /* cubic spline: R = 2h */
+
+/* Fixed iteration counts: each benchmark a few iterations (override needs a code change; the
+ * counts keep a full run at about two minutes on a 2-core machine). */
+#define ITERS_PRECOMPUTE 3
+#define ITERS_APPLY 5
+#define ITERS_STORED 20
+#define ITERS_TRIAD 20
+
+/* ---- clouds and lists, built once per process ------------------------------------------- */
+
+static uint64_t rng_state;
+static double rnd(void) /* splitmix64 -> [0, 1) */
+{
+    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return (double)(z >> 11) * 0x1p-53;
+}
+
+/* 10^6 particles (1000^2 or 100^3), s0 = 1, V = 1 (the lattice cell), all interior. */
+static pst_cloud *lattice(int dim)
+{
+    int side = dim == 2 ? 1000 : 100;
+    size_t n = 1000000;
+    pst_cloud *c;
+    if (pst_cloud_create(&c, dim, n) != PST_OK)
+        return NULL;
+    rng_state = 2024;
+    double *V = pst_cloud_volume(c);
+    for (size_t i = 0; i < n; ++i) {
+        size_t s = i;
+        for (int d = 0; d < dim; ++d) {
+            pst_cloud_coord(c, d)[i] = (double)(s % (size_t)side) + JITTER * (2 * rnd() - 1);
+            s /= (size_t)side;
+        }
+        V[i] = 1.0;
+    }
+    pst_cloud_set_h_uniform(c, H_RATIO);
+    return c;
+}
+
+typedef struct {
+    pst_cloud *cloud;
+    pst_nlist *nl;
+    pst_nlist_stats st;
+    double *u, *y;
+} setup;
+
+static setup setups[4];
+
+static setup *get_setup(int dim)
+{
+    setup *s = &setups[dim];
+    if (s->nl)
+        return s;
+    char err[PST_ERRLEN] = "";
+    s->cloud = lattice(dim);
+    if (!s->cloud)
+        return NULL;
+    pst_cloud_morton_sort(s->cloud, SUPPORT * H_RATIO);
+    if (pst_nlist_build(&s->nl, s->cloud, SUPPORT, err) != PST_OK) {
+        fprintf(stderr, "bench_operators: neighbour list: %s\n", err);
+        return NULL;
+    }
+    pst_nlist_get_stats(s->nl, &s->st);
+    size_t n = pst_cloud_size(s->cloud);
+    s->u = malloc(n * sizeof *s->u);
+    s->y = malloc(n * sizeof *s->y);
+    if (!s->u || !s->y)
+        return NULL;
+    for (size_t i = 0; i < n; ++i) { /* a smooth field; the values do not affect the timing */
+        double x = pst_cloud_coord_const(s->cloud, 0)[i];
+        s->u[i] = 1.0 + 1e-3 * x * x;
+        s->y[i] = 0.0;
+    }
+    return s;
+}
+
+/* ---- one cached operator: the last one built (keeps memory to one operator) -------------- */
+
+static struct {
+    pst_op *op;
+    int scheme, dim;
+} cached = {NULL, -1, 0};
+
+static void release_op(void)
+{
+    pst_op_destroy(cached.op);
+    cached.op = NULL;
+    cached.scheme = -1;
+}
+
+static const char *const scheme_names[4] = {"brookshaw", "cb", "schwaiger", "lv"};
+
+static int create_op(pst_op **op, const setup *s, int scheme, char *err)
+{
+    pst_op_opts o;
+    pst_op_defaults(&o);
+    o.scheme = scheme_names[scheme];
+    o.gradient = PST_GRAD_G1;
+    return pst_op_create(op, s->cloud, s->nl, &o, err);
+}
+
+/* The operator of (scheme, dim), built if it is not the cached one. */
+static pst_op *get_op(const setup *s, int scheme, int dim, char *err)
+{
+    if (cached.op && cached.scheme == scheme && cached.dim == dim)
+        return cached.op;
+    release_op();
+    if (create_op(&cached.op, s, scheme, err) != PST_OK)
+        return NULL;
+    cached.scheme = scheme;
+    cached.dim = dim;
+    return cached.op;
+}
+
+static void common_counters(pstb_state *st, const setup *s)
+{
+    pstb_counter(st, "particles/s", (double)pst_cloud_size(s->cloud), 1);
+    pstb_counter(st, "neighbours/particle", s->st.mean, 0);
+}
+
+/* ---- the three benchmarks ---------------------------------------------------------------- */
+
+enum { MODE_PRECOMPUTE, MODE_APPLY, MODE_STORED };
+
+/* Bytes moved by one stored apply (the model of bench/README.md): per pair 8 (weight) + 4
+ * (index); per row 8 (offset) + 8 (u_I) + 8 (y_I written); u_J gathers counted once per
+ * particle (8), i.e. perfect cache reuse of u under Morton order. */
+static double stored_bytes(const setup *s)
+{
+    double n = (double)pst_cloud_size(s->cloud), pairs = (double)s->st.pairs;
+    return 12.0 * pairs + 32.0 * n;
+}
+
+static void run(pstb_state *st, int scheme, int dim, int mode)
+{
+    int saved = omp_get_max_threads();
+    omp_set_num_threads((int)pstb_arg(st));
+    char err[PST_ERRLEN] = "";
+    setup *s = get_setup(dim);
+    if (!s) {
+        pstb_skip(st, "cannot build the cloud or its neighbour list");
+        omp_set_num_threads(saved);
+        return;
+    }
+    if (mode == MODE_PRECOMPUTE) {
+        int status = PST_OK;
+        release_op();
+        while (status == PST_OK && pstb_keep_running(st)) {
+            pstb_pause(st);
+            release_op();
+            pstb_resume(st);
+            status = create_op(&cached.op, s, scheme, err);
+        }
+        if (status != PST_OK || !cached.op) {
+            cached.op = NULL;
+            pstb_skip(st, err[0] ? err : "pst_op_create failed");
+        } else {
+            cached.scheme = scheme; /* the last one built serves the apply benchmarks */
+            cached.dim = dim;
+            size_t counts[PST_ROW_NSTATUS];
+            pst_op_status_counts(cached.op, counts);
+            common_counters(st, s);
+            /* rows that are not "ok" (lattice-boundary rows: one-sided support) */
+            pstb_counter(st, "rows_fallback", (double)counts[PST_ROW_FALLBACK], 0);
+            pstb_counter(st, "rows_ill_cond", (double)counts[PST_ROW_ILL_CONDITIONED], 0);
+            pstb_counter(st, "rows_rank_def", (double)counts[PST_ROW_RANK_DEFICIENT], 0);
+            pstb_counter(st, "rows_too_few", (double)counts[PST_ROW_TOO_FEW], 0);
+        }
+        omp_set_num_threads(saved);
+        return;
+    }
+    pst_op *op = get_op(s, scheme, dim, err);
+    if (!op) {
+        pstb_skip(st, err[0] ? err : "pst_op_create failed");
+        omp_set_num_threads(saved);
+        return;
+    }
+    double pairs = (double)s->st.pairs;
+    if (mode == MODE_APPLY) {
+        while (pstb_keep_running(st))
+            pst_op_apply(op, s->u, s->y);
+        common_counters(st, s);
+        pstb_counter(st, "pairs/s", pairs, 1);
+    } else {
+        if (pst_op_store(op) != PST_OK) {
+            pstb_skip(st, "pst_op_store: out of memory");
+            omp_set_num_threads(saved);
+            return;
+        }
+        pst_op_apply_stored(op, s->u, s->y); /* warm: first touch of y done, caches primed */
+        while (pstb_keep_running(st))
+            pst_op_apply_stored(op, s->u, s->y);
+        common_counters(st, s);
+        pstb_counter(st, "pairs/s", pairs, 1);
+        pstb_counter(st, "bytes/apply", stored_bytes(s), 0);
+        pstb_counter(st, "bytes/s", stored_bytes(s), 1);
+    }
+    omp_set_num_threads(saved);
+}
+
+#define OP_BENCH(S, SI, D)                                                                    \
+    static void pre_##S##_##D(pstb_state *st) { run(st, SI, D, MODE_PRECOMPUTE); }           \
+    static void app_##S##_##D(pstb_state *st) { run(st, SI, D, MODE_APPLY); }                \
+    static void sto_##S##_##D(pstb_state *st) { run(st, SI, D, MODE_STORED); }
+
+OP_BENCH(brookshaw, 0, 2)
+OP_BENCH(brookshaw, 0, 3)
+OP_BENCH(cb, 1, 2)
+OP_BENCH(cb, 1, 3)
+OP_BENCH(schwaiger, 2, 2)
+OP_BENCH(schwaiger, 2, 3)
+OP_BENCH(lv, 3, 2)
+OP_BENCH(lv, 3, 3)
+
+/* ---- the assembled matrix with 1 and 4 partial sums per row -------------------------------- */
+
+/* y = A x over the explicit CSR matrix of the cached operator (pst_op_assemble: the list's
+ * pairs plus the diagonal, 12 bytes per entry). With one partial sum per row this is the same
+ * dependency chain as pst_op_apply_stored (one add per entry in sequence); with four the chain
+ * is broken. The difference tells whether the stored apply is bound by memory or by the add
+ * latency. Bytes per product: 12 per entry + 24 per row (row offset, y, x counted once). */
+static void csr_spmv(pstb_state *st, int dim, int accumulators)
+{
+    int saved = omp_get_max_threads();
+    omp_set_num_threads((int)pstb_arg(st));
+    char err[PST_ERRLEN] = "";
+    setup *s = get_setup(dim);
+    pst_op *op = s ? get_op(s, 3, dim, err) : NULL;
+    pst_csr a;
+    if (!op || pst_op_assemble(op, &a) != PST_OK) {
+        pstb_skip(st, err[0] ? err : "cannot assemble the lv matrix");
+        omp_set_num_threads(saved);
+        return;
+    }
+    const int64_t *rp = a.rowptr;
+    const uint32_t *col = a.col;
+    const double *val = a.val, *x = s->u;
+    double *y = s->y;
+    size_t n = a.n;
+    while (pstb_keep_running(st)) {
+        if (accumulators == 1) {
+#pragma omp parallel for schedule(static)
+            for (size_t i = 0; i < n; ++i) {
+                double acc = 0;
+                for (int64_t k = rp[i]; k < rp[i + 1]; ++k)
+                    acc += val[k] * x[col[k]];
+                y[i] = acc;
+            }
+        } else {
+#pragma omp parallel for schedule(static)
+            for (size_t i = 0; i < n; ++i) {
+                double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+                int64_t k = rp[i], end = rp[i + 1];
+                for (; k + 4 <= end; k += 4) {
+                    a0 += val[k] * x[col[k]];
+                    a1 += val[k + 1] * x[col[k + 1]];
+                    a2 += val[k + 2] * x[col[k + 2]];
+                    a3 += val[k + 3] * x[col[k + 3]];
+                }
+                for (; k < end; ++k)
+                    a0 += val[k] * x[col[k]];
+                y[i] = (a0 + a1) + (a2 + a3);
+            }
+        }
+    }
+    double nnz = (double)rp[n], bytes = 12.0 * nnz + 24.0 * (double)n;
+    pstb_counter(st, "particles/s", (double)n, 1);
+    pstb_counter(st, "entries/s", nnz, 1);
+    pstb_counter(st, "bytes/apply", bytes, 0);
+    pstb_counter(st, "bytes/s", bytes, 1);
+    pst_csr_free(&a);
+    omp_set_num_threads(saved);
+}
+
+static void csr1_2(pstb_state *st) { csr_spmv(st, 2, 1); }
+static void csr4_2(pstb_state *st) { csr_spmv(st, 2, 4); }
+static void csr1_3(pstb_state *st) { csr_spmv(st, 3, 1); }
+static void csr4_3(pstb_state *st) { csr_spmv(st, 3, 4); }
+
+/* ---- STREAM-like triad ------------------------------------------------------------------- */
+
+static void triad(pstb_state *st, size_t n)
+{
+    int saved = omp_get_max_threads();
+    omp_set_num_threads((int)pstb_arg(st));
+    release_op(); /* the triad runs first, but keep its memory to its own arrays anyway */
+    double *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b), *c = malloc(n * sizeof *c);
+    if (!a || !b || !c) {
+        pstb_skip(st, "out of memory");
+    } else {
+        /* first touch with the same static schedule as the timed loop */
+#pragma omp parallel for schedule(static)
+        for (size_t i = 0; i < n; ++i) {
+            a[i] = 0.0;
+            b[i] = 1.0;
+            c[i] = 2.0;
+        }
+        const double scalar = 3.0;
+        while (pstb_keep_running(st)) {
+#pragma omp parallel for schedule(static)
+            for (size_t i = 0; i < n; ++i)
+                a[i] = b[i] + scalar * c[i];
+        }
+        double check = 0;
+        for (size_t i = 0; i < n; i += 4096)
+            check += a[i];
+        if (check != 7.0 * (double)((n + 4095) / 4096))
+            pstb_skip(st, "triad: wrong result");
+        double bytes = 3.0 * (double)n * sizeof(double); /* 2 reads + 1 write, no write-allocate */
+        pstb_counter(st, "bytes/iteration", bytes, 0);
+        pstb_counter(st, "bytes/s", bytes, 1);
+    }
+    free(a);
+    free(b);
+    free(c);
+    omp_set_num_threads(saved);
+}
+
+static void triad_80mb(pstb_state *st) { triad(st, 10000000); }  /* 3 x 80 MB  */
+static void triad_400mb(pstb_state *st) { triad(st, 50000000); } /* 3 x 400 MB */
+
+/* A read-only probe, s = sum b[i] c[i] over 2 x 400 MB: the stored apply is read-mostly (its
+ * only write stream is y, 8 of ~700 bytes per row in 3D), the triad writes a third of its
+ * bytes (plus the write-allocate reads its byte count leaves out). */
+static void read_dot(pstb_state *st)
+{
+    int saved = omp_get_max_threads();
+    omp_set_num_threads((int)pstb_arg(st));
+    release_op();
+    size_t n = 50000000; /* a multiple of 8 */
+    double *b = malloc(n * sizeof *b), *c = malloc(n * sizeof *c);
+    if (!b || !c) {
+        pstb_skip(st, "out of memory");
+    } else {
+#pragma omp parallel for schedule(static)
+        for (size_t i = 0; i < n; ++i) {
+            b[i] = 1.0;
+            c[i] = 0.5;
+        }
+        double sum = 0;
+        while (pstb_keep_running(st)) {
+            /* eight partial sums: one sum would be bound by the add latency, not memory */
+            double s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, s5 = 0, s6 = 0, s7 = 0;
+#pragma omp parallel for schedule(static) reduction(+ : s0, s1, s2, s3, s4, s5, s6, s7)
+            for (size_t i = 0; i < n; i += 8) {
+                s0 += b[i] * c[i];
+                s1 += b[i + 1] * c[i + 1];
+                s2 += b[i + 2] * c[i + 2];
+                s3 += b[i + 3] * c[i + 3];
+                s4 += b[i + 4] * c[i + 4];
+                s5 += b[i + 5] * c[i + 5];
+                s6 += b[i + 6] * c[i + 6];
+                s7 += b[i + 7] * c[i + 7];
+            }
+            sum = ((s0 + s1) + (s2 + s3)) + ((s4 + s5) + (s6 + s7));
+        }
+        if (sum != 0.5 * (double)n)
+            pstb_skip(st, "read probe: wrong result");
+        double bytes = 2.0 * (double)n * sizeof(double);
+        pstb_counter(st, "bytes/iteration", bytes, 0);
+        pstb_counter(st, "bytes/s", bytes, 1);
+    }
+    free(b);
+    free(c);
+    omp_set_num_threads(saved);
+}
+
+void pstb_register_all(void)
+{
+    static const int64_t threads[2] = {1, 2};
+    pstb_register_iters("triad_3x80MB", triad_80mb, threads, 2, ITERS_TRIAD);
+    pstb_register_iters("triad_3x400MB", triad_400mb, threads, 2, ITERS_TRIAD);
+    pstb_register_iters("read_dot_2x400MB", read_dot, threads, 2, ITERS_TRIAD);
+    /* per (scheme, dim): precompute (which leaves its operator cached), matrix-free apply,
+     * stored apply, so every operator is built by the timed precompute only */
+    static const struct {
+        const char *name[3];
+        pstb_fn fn[3];
+    } table[] = {
+#define ROW(S, D)                                                                             \
+    {{"op_precompute_" #S "_" #D "d", "op_apply_" #S "_" #D "d", "op_stored_" #S "_" #D "d"},    \
+     {pre_##S##_##D, app_##S##_##D, sto_##S##_##D}}
+        ROW(brookshaw, 2), ROW(cb, 2), ROW(schwaiger, 2), ROW(lv, 2),
+        ROW(brookshaw, 3), ROW(cb, 3), ROW(schwaiger, 3), ROW(lv, 3),
+#undef ROW
+    };
+    static const int iters[3] = {ITERS_PRECOMPUTE, ITERS_APPLY, ITERS_STORED};
+    for (size_t r = 0; r < sizeof table / sizeof *table; ++r) {
+        for (int m = 0; m < 3; ++m)
+            pstb_register_iters(table[r].name[m], table[r].fn[m], threads, 2, iters[m]);
+        if (r == 3) { /* after lv 2D, while its operator is cached */
+            pstb_register_iters("csr_1sum_lv_2d", csr1_2, threads, 2, ITERS_STORED);
+            pstb_register_iters("csr_4sums_lv_2d", csr4_2, threads, 2, ITERS_STORED);
+        }
+    }
+    pstb_register_iters("csr_1sum_lv_3d", csr1_3, threads, 2, ITERS_STORED);
+    pstb_register_iters("csr_4sums_lv_3d", csr4_3, threads, 2, ITERS_STORED);
+}
