@@ -70,106 +70,143 @@ static inline double mob_of(const lv_ctx *k, int comp, size_t i)
     return k->ncomp ? k->mob[k->ncomp == 1 ? 0 : comp][i] : 1.0;
 }
 
+/* The hot pair functions take the dimension D, the gradient variant G and the tensor flag T
+ * as arguments; the applies call them with constants (one instantiation per combination), so
+ * the loops carry no per-pair branches on them. Other callers pass runtime values. */
+#define LV_HOT static inline __attribute__((always_inline))
+
 /* The pair geometry of (i, j): x = r_j - r_i, d^2, h~ = (h_i + h_j)/2 (26), the kernel value W
- * and a = -dW/dr / d >= 0, so that the G1 gradient (15) is a x. Degenerate pairs get a = W = 0. */
-static inline double pair_geometry(const lv_ctx *k, size_t i, size_t j, double x[3],
-                                   double *W)
+ * (only when needW) and a = -dW/dr / d >= 0, so that the G1 gradient (15) is a x. Degenerate
+ * pairs get a = W = 0. */
+LV_HOT double pair_geometry(const lv_ctx *k, int D, int needW, size_t i, size_t j, double x[3],
+                            double *d2out, double *W)
 {
     double d2 = 0;
-    for (int a = 0; a < k->dim; ++a) {
+    for (int a = 0; a < D; ++a) {
         x[a] = k->x[a][j] - k->x[a][i];
         d2 += x[a] * x[a];
     }
     double ht = 0.5 * (h_of(k, i) + h_of(k, j));
     double d = sqrt(d2);
     int ok = d > LV_DEGENERATE * ht;
-    *W = ok ? pst_sph_w(k->kernel, k->dim, d, ht) : 0.0;
-    return ok ? -pst_sph_dw(k->kernel, k->dim, d, ht) / d : 0.0;
+    *d2out = d2;
+    *W = ok && needW ? pst_sph_w(k->kernel, D, d, ht) : 0.0;
+    return ok ? -pst_sph_dw(k->kernel, D, d, ht) / d : 0.0;
 }
 
-/* The kernel gradient g_IJ of the operator's variant (15)-(18) at pair (i, j), and F_IJ =
- * x . g / d^2. Needs nu (G2-G4) and grad nu (G2) of i. Returns F. */
-static inline double pair_gradient(const lv_ctx *k, size_t i, size_t j, double x[3],
-                                   double g[3])
+/* The kernel gradient g_IJ of variant G (15)-(18) at pair (i, j), and F_IJ = x . g / d^2
+ * (returned; 0 for a degenerate pair). For the radial variants g = f x and F = f exactly. Needs
+ * nu (G2-G4) and grad nu (G2) of i. */
+LV_HOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j, double x[3],
+                            double g[3], double *d2)
 {
-    double W, a = pair_geometry(k, i, j, x, &W);
-    double d2 = 0;
-    for (int c = 0; c < k->dim; ++c)
-        d2 += x[c] * x[c];
-    double f = a; /* the radial factor: g = f x (+ the G2 term) */
-    if (k->variant != PST_GRAD_G1) {
+    double W, a = pair_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, j, x, d2, &W);
+    double f = a; /* the radial factor */
+    if (G != PST_GRAD_G1) {
         double inu = 1.0 / k->d->nu[i];
         f = a * inu;
-        if (k->variant == PST_GRAD_G4)
+        if (G == PST_GRAD_G4)
             f *= 1.0 - W * k->V[j] * inu;
     }
-    for (int c = 0; c < k->dim; ++c)
+    for (int c = 0; c < D; ++c)
         g[c] = f * x[c];
-    if (k->variant == PST_GRAD_G2) {
-        double inu = 1.0 / k->d->nu[i], t = W * inu * inu;
-        for (int c = 0; c < k->dim; ++c)
-            g[c] -= t * k->d->gnu[(size_t)k->dim * i + c];
-    }
-    if (a == 0) /* degenerate pair: no contribution at all */
-        return 0.0;
-    double xg = 0;
-    for (int c = 0; c < k->dim; ++c)
+    if (G != PST_GRAD_G2 || a == 0)
+        return f;
+    /* G2 (16): minus W grad nu / nu^2, not along x */
+    double inu = 1.0 / k->d->nu[i], t = W * inu * inu, xg = 0;
+    for (int c = 0; c < D; ++c) {
+        g[c] -= t * k->d->gnu[(size_t)D * i + c];
         xg += x[c] * g[c];
-    return xg / d2;
+    }
+    return xg / *d2;
 }
 
 /* w_IJ of a scheme row (see the file comment). Shared by apply and emit_row so that the two
  * apply paths use the same weights bit for bit. */
-static inline double row_weight(const lv_ctx *k, size_t i, size_t j)
+LV_HOT double row_weight(const lv_ctx *k, int D, int G, int T, size_t i, size_t j)
 {
-    double x[3], g[3];
-    double F = pair_gradient(k, i, j, x, g);
+    double x[3], g[3], d2;
+    double F = pair_gradient(k, D, G, i, j, x, g, &d2);
     if (F == 0.0)
         return 0.0;
-    int dim = k->dim;
     const lv_data *d = k->d;
     double Vs = d->s[i] * k->V[j];
-    if (k->ncomp <= 1) {
+    if (!T) {
         double t = F;
-        for (int c = 0; c < dim; ++c)
-            t -= d->eta[(size_t)dim * i + c] * g[c];
+        for (int c = 0; c < D; ++c)
+            t -= d->eta[(size_t)D * i + c] * g[c];
         return Vs * (mob_of(k, 0, i) + mob_of(k, 0, j)) * t;
     }
-    double d2 = 0;
-    for (int c = 0; c < dim; ++c)
-        d2 += x[c] * x[c];
-    const double *C = d->C + (size_t)dim * dim * i, *zeta = d->zeta + (size_t)dim * i;
+    const double *C = d->C + (size_t)D * D * i, *zeta = d->zeta + (size_t)D * i;
     double w = 0;
-    for (int a = 0; a < dim; ++a) {
+    for (int a = 0; a < D; ++a) {
         double Cg = 0;
-        for (int b = 0; b < dim; ++b)
-            Cg += C[a * dim + b] * g[b];
-        w += (mob_of(k, a, i) + mob_of(k, a, j)) * (x[a] * g[a] / d2 - zeta[a] * Cg);
+        for (int b = 0; b < D; ++b)
+            Cg += C[a * D + b] * g[b];
+        w += (k->mob[a][i] + k->mob[a][j]) * (x[a] * g[a] / d2 - zeta[a] * Cg);
     }
     return Vs * w;
 }
 
 /* w_IJ of a Neumann row (100): V_J (M_I n_I) . C_I g_IJ, the outward flux. */
-static inline double neumann_weight(const lv_ctx *k, size_t i, size_t j)
+LV_HOT double neumann_weight(const lv_ctx *k, int D, int G, size_t i, size_t j)
 {
-    double x[3], g[3];
-    if (pair_gradient(k, i, j, x, g) == 0.0)
+    double x[3], g[3], d2;
+    if (pair_gradient(k, D, G, i, j, x, g, &d2) == 0.0)
         return 0.0;
-    int dim = k->dim;
-    const double *C = k->d->C + (size_t)dim * dim * i;
+    const double *C = k->d->C + (size_t)D * D * i;
     double w = 0;
-    for (int a = 0; a < dim; ++a) {
+    for (int a = 0; a < D; ++a) {
         double Cg = 0;
-        for (int b = 0; b < dim; ++b)
-            Cg += C[a * dim + b] * g[b];
+        for (int b = 0; b < D; ++b)
+            Cg += C[a * D + b] * g[b];
         w += mob_of(k, a, i) * k->nnormal[a][i] * Cg;
     }
     return k->V[j] * w;
 }
 
-static inline double weight(const lv_ctx *k, size_t i, size_t j)
+/* Row i into y (apply) or its weights into w (emission), for constant D, G, T. */
+LV_HOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
+                  const double *u, double *y, double *w, int D, int G, int T)
 {
-    return k->kind[i] == PST_NEUMANN ? neumann_weight(k, i, j) : row_weight(k, i, j);
+    int neumann = k->kind[i] == PST_NEUMANN;
+    double ui = u ? u[i] : 0, s = 0;
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        size_t j = idx[e];
+        double wij = neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, i, j);
+        if (w)
+            w[e - off[i]] = wij;
+        else
+            s += wij * (u[j] - ui);
+    }
+    if (!w)
+        y[i] = s;
+}
+
+typedef void (*row_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t,
+                       const double *, double *, double *);
+#define LV_ROW(D, G, T)                                                                        \
+    static void row_##D##_##G##_##T(const lv_ctx *k, const int64_t *off, const uint32_t *idx,   \
+                                    size_t i, const double *u, double *y, double *w)            \
+    {                                                                                          \
+        row_t(k, off, idx, i, u, y, w, D, G, T);                                               \
+    }
+#define LV_ROWS_G(D, T) LV_ROW(D, 1, T) LV_ROW(D, 2, T) LV_ROW(D, 3, T) LV_ROW(D, 4, T)
+LV_ROWS_G(2, 0)
+LV_ROWS_G(2, 1)
+LV_ROWS_G(3, 0)
+LV_ROWS_G(3, 1)
+static const row_fn row_table[2][4][2] = {
+    {{row_2_1_0, row_2_1_1}, {row_2_2_0, row_2_2_1}, {row_2_3_0, row_2_3_1},
+     {row_2_4_0, row_2_4_1}},
+    {{row_3_1_0, row_3_1_1}, {row_3_2_0, row_3_2_1}, {row_3_3_0, row_3_3_1},
+     {row_3_4_0, row_3_4_1}}};
+
+/* The instantiation for this operator: a diagonal tensor (T) when the mobility has dim > 1
+ * components. */
+static row_fn row_for(const lv_ctx *k)
+{
+    return row_table[k->dim - 2][k->variant - 1][k->ncomp > 1];
 }
 
 /* ---- precompute ------------------------------------------------------------------------ */
@@ -207,7 +244,7 @@ static void shepard(const lv_ctx *k, size_t i, const int64_t *off, const uint32_
     double s = pst_sph_w(k->kernel, k->dim, 0.0, h_of(k, i)) * k->V[i], gs[3] = {0, 0, 0};
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
-        double x[3], W, a = pair_geometry(k, i, j, x, &W);
+        double x[3], d2, W, a = pair_geometry(k, k->dim, 1, i, j, x, &d2, &W);
         s += W * k->V[j];
         for (int c = 0; c < k->dim; ++c)
             gs[c] += k->V[j] * a * x[c];
@@ -263,7 +300,8 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
     double A[9] = {0}, N[3] = {0}, Nt[3] = {0}, G[9] = {0};
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
-        double x[3], g[3], F = pair_gradient(k, i, j, x, g), V = k->V[j];
+        double x[3], g[3], d2, F = pair_gradient(k, dim, k->variant, i, j, x, g, &d2);
+        double V = k->V[j];
         for (int a = 0; a < dim; ++a) {
             N[a] += V * g[a];
             Nt[a] += V * F * x[a];
@@ -311,8 +349,8 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
         double Gs[9] = {0};
         for (int64_t e = off[i]; e < off[i + 1]; ++e) {
             size_t j = idx[e];
-            double x[3], g[3];
-            pair_gradient(k, i, j, x, g);
+            double x[3], g[3], d2;
+            pair_gradient(k, dim, k->variant, i, j, x, g, &d2);
             double xg = 0;
             for (int c = 0; c < dim; ++c)
                 xg += xi[c] * g[c];
@@ -383,31 +421,25 @@ static int pre_msph(pst_op *op, char *err) { return precompute(op, LV_MSPH, err)
 /* ---- apply, emission and the rest of the table ------------------------------------------ */
 
 /* Matrix-free apply: recompute each pair's geometry and weight from the positions and the
- * per-particle data. Compute-bound: a sqrt, a division and ~40 flops per pair (more for
- * G2/G4 and tensors) against 12 bytes of list and 8 of u_J gathered. */
+ * per-particle data. Compute-bound: a sqrt, two divisions and ~40 flops per pair (more for
+ * G2/G4 and tensors) against 4 bytes of list and 8 of u_J gathered; ~105 M pairs/s per thread
+ * here, against ~0.7 G for the stored apply (bench/README.md). */
 static void lv_apply(const pst_op *op, const double *u, double *y)
 {
     lv_ctx k = make_ctx(op);
+    row_fn row = row_for(&k);
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i) {
-        if (k.kind[i] == PST_DIRICHLET)
-            continue;
-        double ui = u[i], s = 0;
-        for (int64_t e = off[i]; e < off[i + 1]; ++e)
-            s += weight(&k, i, idx[e]) * (u[idx[e]] - ui);
-        y[i] = s;
-    }
+    for (size_t i = 0; i < op->n; ++i)
+        if (k.kind[i] != PST_DIRICHLET)
+            row(&k, off, idx, i, u, y, NULL);
 }
 
 static void lv_emit_row(const pst_op *op, size_t i, double *w)
 {
     lv_ctx k = make_ctx(op);
-    const int64_t *off = pst_nlist_offsets(op->nl);
-    const uint32_t *idx = pst_nlist_indices(op->nl);
-    for (int64_t e = off[i]; e < off[i + 1]; ++e)
-        w[e - off[i]] = weight(&k, i, idx[e]);
+    row_for(&k)(&k, pst_nlist_offsets(op->nl), pst_nlist_indices(op->nl), i, NULL, NULL, w);
 }
 
 static double lv_scale(const pst_op *op, size_t i)
@@ -429,8 +461,8 @@ static void lv_gradient(const pst_op *op, const double *u, double *const grad[3]
         double acc[3] = {0, 0, 0};
         for (int64_t e = off[i]; e < off[i + 1]; ++e) {
             size_t j = idx[e];
-            double x[3], g[3];
-            pair_gradient(&k, i, j, x, g);
+            double x[3], g[3], d2;
+            pair_gradient(&k, dim, k.variant, i, j, x, g, &d2);
             double du = k.V[j] * (u[j] - u[i]);
             for (int c = 0; c < dim; ++c)
                 acc[c] += du * g[c];
@@ -458,11 +490,10 @@ static void lv_lemma3(const pst_op *op, size_t i, int *sign_mixed, int *xi_large
     for (int c = 0; c < dim; ++c)
         xi2 += eta[c] * eta[c];
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-        double x[3], g[3], F = pair_gradient(&k, i, idx[e], x, g), t = F, d2 = 0;
-        for (int c = 0; c < dim; ++c) {
+        double x[3], g[3], d2, F = pair_gradient(&k, dim, k.variant, i, idx[e], x, g, &d2);
+        double t = F;
+        for (int c = 0; c < dim; ++c)
             t -= eta[c] * g[c];
-            d2 += x[c] * x[c];
-        }
         pos += t > 0;
         neg += t < 0;
         dmax = d2 > dmax ? d2 : dmax;
