@@ -322,6 +322,21 @@ int pst_op_diagonal(const pst_op *op, double *diag);   /* PST_ENOMEM possible */
 const uint8_t *pst_op_status(const pst_op *op);
 void pst_op_status_counts(const pst_op *op, size_t counts[PST_ROW_NSTATUS]);
 
+/* Per-phase wall-clock timers of an operator, in seconds. Schemes that run their precompute as
+ * separate passes fill the first four; fused single-pass schemes (the LV family) fill only
+ * PST_PHASE_PRECOMPUTE. PST_PHASE_APPLY is the time of the latest apply (either path). */
+enum {
+    PST_PHASE_GEOMETRY = 0,   /* neighbour geometry and kernel weights (incl. volume pre-passes) */
+    PST_PHASE_MOMENTS = 1,    /* moment accumulation                                            */
+    PST_PHASE_INVERSION = 2,  /* the per-particle inversions                                    */
+    PST_PHASE_WEIGHTS = 3,    /* formation of stencil weights or coefficients (kappa)           */
+    PST_PHASE_PRECOMPUTE = 4, /* the whole of pst_op_create                                     */
+    PST_PHASE_APPLY = 5
+};
+#define PST_NPHASES 6
+const char *pst_phase_name(int phase);
+void pst_op_phase_times(const pst_op *op, double t[PST_NPHASES]);
+
 /* The scheme's per-particle normalising factor s_I (1 where the scheme has none): tr C/n for
  * cb, tr(Gamma^-1)/n for schwaiger, tr(Gamma-bar^-1)/n for lv. n values. */
 int pst_op_scale(const pst_op *op, double *s);

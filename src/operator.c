@@ -19,6 +19,18 @@ const char *pst_scheme_description(int i)
     return i >= 0 && i < NSCHEMES ? registry[i]->description : NULL;
 }
 
+const char *pst_phase_name(int phase)
+{
+    static const char *const names[PST_NPHASES] = {"geometry", "moments",    "inversion",
+                                                   "weights",  "precompute", "apply"};
+    return phase >= 0 && phase < PST_NPHASES ? names[phase] : "unknown";
+}
+
+void pst_op_phase_times(const pst_op *op, double t[PST_NPHASES])
+{
+    memcpy(t, op->phase, sizeof op->phase);
+}
+
 const char *pst_row_status_name(int status)
 {
     static const char *const names[PST_ROW_NSTATUS] = {"ok", "fallback", "ill-conditioned",
@@ -122,7 +134,11 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
         pst_set_err(err, "cannot allocate the row status of %zu particles", c->n);
         return PST_ENOMEM;
     }
+    op->poff = pst_nlist_offsets(nl);
+    op->pidx = pst_nlist_indices(nl);
+    double t0 = omp_get_wtime();
     st = scheme->precompute(op, err);
+    op->phase[PST_PHASE_PRECOMPUTE] = omp_get_wtime() - t0;
     if (st != PST_OK) {
         pst_op_destroy(op);
         return st;
@@ -163,17 +179,26 @@ static void dirichlet_rows(const pst_op *op, const double *u, double *y)
             y[i] = u[i];
 }
 
+/* The apply timer is the one field an apply writes; applies of one operator are not meant to
+ * run concurrently (they are parallel inside). */
+static void record_apply(const pst_op *op, double t0)
+{
+    ((pst_op *)op)->phase[PST_PHASE_APPLY] = omp_get_wtime() - t0;
+}
+
 void pst_op_apply(const pst_op *op, const double *u, double *y)
 {
+    double t0 = omp_get_wtime();
     op->scheme->apply(op, u, y);
     dirichlet_rows(op, u, y);
+    record_apply(op, t0);
 }
 
 int pst_op_store(pst_op *op)
 {
     if (op->w)
         return PST_OK;
-    const int64_t *off = pst_nlist_offsets(op->nl);
+    const int64_t *off = op->poff;
     double *w = pst_alloc((size_t)off[op->n] * sizeof *w);
     if (!w)
         return PST_ENOMEM;
@@ -196,8 +221,9 @@ int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
 {
     if (!op->w)
         return PST_EINVAL;
-    const int64_t *off = pst_nlist_offsets(op->nl);
-    const uint32_t *idx = pst_nlist_indices(op->nl);
+    double t0 = omp_get_wtime();
+    const int64_t *off = op->poff;
+    const uint32_t *idx = op->pidx;
     const double *w = op->w;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < op->n; ++i) {
@@ -207,31 +233,33 @@ int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
         y[i] = s;
     }
     dirichlet_rows(op, u, y);
+    record_apply(op, t0);
     return PST_OK;
 }
 
 /* The weights of row i, from the store or emitted into `buf`. */
 static const double *row_weights(const pst_op *op, size_t i, double *buf)
 {
-    const int64_t *off = pst_nlist_offsets(op->nl);
+    const int64_t *off = op->poff;
     if (op->w)
         return op->w + off[i];
     op->scheme->emit_row(op, i, buf);
     return buf;
 }
 
-/* Scratch for one row of weights per thread (rows are at most the longest list row). */
+/* Scratch for one row of weights per thread (rows are at most the pattern's longest row). */
 static double *row_scratch(const pst_op *op, size_t *len)
 {
-    pst_nlist_stats st;
-    pst_nlist_get_stats(op->nl, &st);
-    *len = (size_t)st.max + 1;
+    int64_t longest = 0;
+    for (size_t i = 0; i < op->n; ++i)
+        longest = op->poff[i + 1] - op->poff[i] > longest ? op->poff[i + 1] - op->poff[i] : longest;
+    *len = (size_t)longest + 1;
     return op->w ? NULL : pst_alloc((size_t)omp_get_max_threads() * *len * sizeof(double));
 }
 
 int pst_op_diagonal(const pst_op *op, double *diag)
 {
-    const int64_t *off = pst_nlist_offsets(op->nl);
+    const int64_t *off = op->poff;
     const uint8_t *kind = op->cloud->kind;
     size_t L;
     double *scratch = row_scratch(op, &L);
@@ -281,8 +309,8 @@ int pst_op_assemble(const pst_op *op, pst_csr *a)
 {
     memset(a, 0, sizeof *a);
     size_t n = op->n;
-    const int64_t *off = pst_nlist_offsets(op->nl);
-    const uint32_t *idx = pst_nlist_indices(op->nl);
+    const int64_t *off = op->poff;
+    const uint32_t *idx = op->pidx;
     const uint8_t *kind = op->cloud->kind;
     a->n = n;
     a->rowptr = pst_alloc((n + 1) * sizeof *a->rowptr);
@@ -355,7 +383,7 @@ int pst_csr_write_mtx(const pst_csr *a, const int64_t *ids, const char *path, ch
 int pst_op_audit_rows(const pst_op *op, pst_op_audit *a)
 {
     memset(a, 0, sizeof *a);
-    const int64_t *off = pst_nlist_offsets(op->nl);
+    const int64_t *off = op->poff;
     const uint8_t *kind = op->cloud->kind;
     int has_lemma3 = op->scheme->lemma3 != NULL;
     size_t L;

@@ -21,7 +21,7 @@ typedef struct pst_scheme {
     int (*precompute)(pst_op *op, char *err);
     /* y_I = sum_J w_IJ (u_J - u_I) for every non-Dirichlet row I (threaded). */
     void (*apply)(const pst_op *op, const double *u, double *y);
-    /* The weights w_IJ of non-Dirichlet row i, in neighbour-list order. */
+    /* The weights w_IJ of non-Dirichlet row i, in the order of the row's pattern. */
     void (*emit_row)(const pst_op *op, size_t i, double *w);
     /* s_I of the scheme (NULL: 1 everywhere). */
     double (*scale)(const pst_op *op, size_t i);
@@ -43,7 +43,13 @@ struct pst_op {
     void *data;            /* the scheme's per-particle data                         */
     uint8_t *status;       /* pst_row_status per particle                            */
     size_t counts[PST_ROW_NSTATUS];
-    double *w;             /* stored weights (nl layout) or NULL                     */
+    double *w;             /* stored weights (pattern layout) or NULL                */
+    /* The sparsity pattern of the rows (without the diagonal), sorted by column in a row: the
+     * neighbour list by default; a scheme with a wider stencil (e.g. the mixed schemes'
+     * neighbours of neighbours) points these at its own arrays in precompute. */
+    const int64_t *poff;
+    const uint32_t *pidx;
+    double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
 };
 
 /* The registered schemes (one file each under kernels/). */

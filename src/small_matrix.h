@@ -1,6 +1,7 @@
-/* Closed-form inverses of the 2x2 and 3x3 per-particle matrices, with a 1-norm condition
- * number, inline so that precompute loops keep them in registers (no LAPACK call per particle:
- * its overhead alone is 100-300 ns). Row-major storage. */
+/* Small dense algebra for the per-particle matrices, inline so that precompute loops keep them
+ * in registers (no LAPACK call per particle: its overhead alone is 100-300 ns): closed-form
+ * 2x2/3x3 inverses with a 1-norm condition number, LDL^T for SPD moment matrices and LU with
+ * partial pivoting for general ones up to 10x10. Row-major storage. */
 #ifndef PSTENCIL_SMALL_MATRIX_H
 #define PSTENCIL_SMALL_MATRIX_H
 
@@ -66,6 +67,96 @@ static inline int pst_mat_sdd_positive(int dim, const double *a)
             return 0;
     }
     return 1;
+}
+
+/* In-place LDL^T of a symmetric n x n matrix (n <= 10; only the lower triangle is read):
+ * on return a[r*n + c] (c < r) holds L and a[r*n + r] holds D. No pivoting: the matrices
+ * factored this way are weighted moment (Gram) matrices, SPD when the neighbourhood is not
+ * degenerate. Returns the pivot ratio min D / max D, a cheap conditioning proxy: <= 0 (or
+ * tiny) means singular or indefinite, and the caller falls back. */
+static inline double pst_ldlt_factor(int n, double *a)
+{
+    double dmin = INFINITY, dmax = 0;
+    for (int j = 0; j < n; ++j) {
+        double d = a[j * n + j];
+        for (int k = 0; k < j; ++k)
+            d -= a[j * n + k] * a[j * n + k] * a[k * n + k];
+        a[j * n + j] = d;
+        dmin = d < dmin ? d : dmin;
+        dmax = d > dmax ? d : dmax;
+        if (!(d > 0))
+            return d == 0 ? 0.0 : -1.0;
+        for (int i = j + 1; i < n; ++i) {
+            double v = a[i * n + j];
+            for (int k = 0; k < j; ++k)
+                v -= a[i * n + k] * a[j * n + k] * a[k * n + k];
+            a[i * n + j] = v / d;
+        }
+    }
+    return dmax > 0 ? dmin / dmax : 0.0;
+}
+
+/* Solve (L D L^T) x = b in place with the factor of pst_ldlt_factor. */
+static inline void pst_ldlt_solve(int n, const double *f, double *b)
+{
+    for (int i = 0; i < n; ++i)
+        for (int k = 0; k < i; ++k)
+            b[i] -= f[i * n + k] * b[k];
+    for (int i = 0; i < n; ++i)
+        b[i] /= f[i * n + i];
+    for (int i = n - 1; i >= 0; --i)
+        for (int k = i + 1; k < n; ++k)
+            b[i] -= f[k * n + i] * b[k];
+}
+
+/* In-place LU with partial pivoting of a general n x n matrix (n <= 10): piv[i] is the row
+ * swapped into position i. Returns the pivot ratio min |U_ii| / max |U_ii| (0 when singular). */
+static inline double pst_lu_factor(int n, double *a, int *piv)
+{
+    double umin = INFINITY, umax = 0;
+    for (int j = 0; j < n; ++j) {
+        int p = j;
+        for (int i = j + 1; i < n; ++i)
+            if (fabs(a[i * n + j]) > fabs(a[p * n + j]))
+                p = i;
+        piv[j] = p;
+        if (p != j)
+            for (int c = 0; c < n; ++c) {
+                double t = a[j * n + c];
+                a[j * n + c] = a[p * n + c];
+                a[p * n + c] = t;
+            }
+        double d = a[j * n + j], ad = fabs(d);
+        umin = ad < umin ? ad : umin;
+        umax = ad > umax ? ad : umax;
+        if (d == 0 || !isfinite(d))
+            return 0.0;
+        for (int i = j + 1; i < n; ++i) {
+            double l = a[i * n + j] / d;
+            a[i * n + j] = l;
+            for (int c = j + 1; c < n; ++c)
+                a[i * n + c] -= l * a[j * n + c];
+        }
+    }
+    return umax > 0 ? umin / umax : 0.0;
+}
+
+/* Solve A x = b in place with the factor and pivots of pst_lu_factor. */
+static inline void pst_lu_solve(int n, const double *f, const int *piv, double *b)
+{
+    for (int i = 0; i < n; ++i) {
+        double t = b[i];
+        b[i] = b[piv[i]];
+        b[piv[i]] = t;
+    }
+    for (int i = 0; i < n; ++i)
+        for (int k = 0; k < i; ++k)
+            b[i] -= f[i * n + k] * b[k];
+    for (int i = n - 1; i >= 0; --i) {
+        for (int k = i + 1; k < n; ++k)
+            b[i] -= f[i * n + k] * b[k];
+        b[i] /= f[i * n + i];
+    }
 }
 
 #endif
