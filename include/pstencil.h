@@ -281,13 +281,16 @@ typedef struct {
     const char *scheme;   /* "brookshaw", "cb", "schwaiger", "lv", ... (pst_scheme_name)      */
     int kernel;           /* a pst_kernel, or -1 for the scheme's default                     */
     int gradient;         /* pst_gradient for the LV family (default G1)                      */
+    int variant;          /* scheme-specific variant: lsmps 0 = type B (default), 1 = type A;
+                             0 for every other scheme                                         */
     double cond_max;      /* a moment matrix with condition estimate above this is flagged
                              ill-conditioned (default 1e10)                                   */
     double rank_tol;      /* ... and below 1/cond of rank_tol it is rank-deficient and the
                              row falls back (default 1e-13)                                    */
 } pst_op_opts;
 
-/* Defaults: scheme "lv", the scheme's default kernel, G1, cond_max 1e10, rank_tol 1e-13. */
+/* Defaults: scheme "lv", the scheme's default kernel, G1, variant 0, cond_max 1e10,
+ * rank_tol 1e-13. */
 void pst_op_defaults(pst_op_opts *o);
 
 /* The registered schemes: count, names (index < count) and a one-line description. */
@@ -376,6 +379,19 @@ int pst_op_audit_rows(const pst_op *op, pst_op_audit *a);  /* PST_ENOMEM possibl
  * operator's kernel and gradient variant; exact for linear fields wherever C exists.
  * grad has dim arrays of n values. PST_EINVAL for schemes without C (brookshaw). */
 int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3]);
+
+/* Second derivatives of u at the particles from the scheme's fit: hess[0..2] = u_xx, u_yy, u_xy
+ * in 2D; u_xx, u_yy, u_zz, u_xy, u_xz, u_yz in 3D (n values each). PST_EINVAL for schemes
+ * without a quadratic fit. */
+int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6]);
+
+/* Interpolate u, and its Laplacian, at m points that need not be particles (QSFDI eqs. 32-35
+ * and the schemes' own fits): pts[d][k] is coordinate d of point k; value and lap (either may
+ * be NULL) receive m values each. The smoothing length at a point is the largest h of the
+ * cloud. Points with too few neighbours get the nearest particle's value and a Laplacian of 0,
+ * and are counted in *fallbacks (may be NULL). PST_EINVAL for schemes without interpolation. */
+int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, const double *u,
+                       double *value, double *lap, size_t *fallbacks, char *err);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Permeability grids (SPE10)                                                                 */

@@ -8,8 +8,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const pst_scheme *const registry[] = {&pst_scheme_brookshaw, &pst_scheme_cb,
-                                             &pst_scheme_schwaiger, &pst_scheme_lv};
+/* One entry per line; the order is the order of listings. */
+static const pst_scheme *const registry[] = {
+    &pst_scheme_brookshaw,
+    &pst_scheme_cb,
+    &pst_scheme_schwaiger,
+    &pst_scheme_lv,
+};
 #define NSCHEMES ((int)(sizeof registry / sizeof *registry))
 
 int pst_scheme_count(void) { return NSCHEMES; }
@@ -43,6 +48,7 @@ void pst_op_defaults(pst_op_opts *o)
     o->scheme = "lv";
     o->kernel = -1;
     o->gradient = PST_GRAD_G1;
+    o->variant = 0;
     o->cond_max = 1e10;
     o->rank_tol = 1e-13;
 }
@@ -436,4 +442,24 @@ int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
         return PST_EINVAL;
     op->scheme->gradient(op, u, grad);
     return PST_OK;
+}
+
+int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6])
+{
+    if (!op->scheme->hessian)
+        return PST_EINVAL;
+    op->scheme->hessian(op, u, hess);
+    return PST_OK;
+}
+
+int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, const double *u,
+                       double *value, double *lap, size_t *fallbacks, char *err)
+{
+    if (!op->scheme->interpolate) {
+        pst_set_err(err, "scheme %s has no interpolation", op->scheme->name);
+        return PST_EINVAL;
+    }
+    size_t none = 0;
+    return op->scheme->interpolate(op, pts, m, u, value, lap, fallbacks ? fallbacks : &none,
+                                   err);
 }

@@ -25,8 +25,13 @@ typedef struct pst_scheme {
     void (*emit_row)(const pst_op *op, size_t i, double *w);
     /* s_I of the scheme (NULL: 1 everywhere). */
     double (*scale)(const pst_op *op, size_t i);
-    /* Corrected gradient, or NULL when the scheme has no C. */
+    /* Gradient of u at the particles, or NULL when the scheme has none. */
     void (*gradient)(const pst_op *op, const double *u, double *const grad[3]);
+    /* Second derivatives (pst_op_hessian's layout), or NULL. */
+    void (*hessian)(const pst_op *op, const double *u, double *const hess[6]);
+    /* Value and Laplacian at arbitrary points (pst_op_interpolate), or NULL. */
+    int (*interpolate)(const pst_op *op, const double *const pts[3], size_t m, const double *u,
+                       double *value, double *lap, size_t *fallbacks, char *err);
     /* Lemma 3 diagnostics of row i into the two counters, or NULL (not applicable). */
     void (*lemma3)(const pst_op *op, size_t i, int *sign_mixed, int *xi_large);
     void (*free_data)(void *data);
@@ -52,7 +57,10 @@ struct pst_op {
     double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
 };
 
-/* The registered schemes (one file each under kernels/). */
-extern const pst_scheme pst_scheme_brookshaw, pst_scheme_cb, pst_scheme_schwaiger, pst_scheme_lv;
+/* The registered schemes (one file each under kernels/), one declaration per line. */
+extern const pst_scheme pst_scheme_brookshaw;
+extern const pst_scheme pst_scheme_cb;
+extern const pst_scheme pst_scheme_schwaiger;
+extern const pst_scheme pst_scheme_lv;
 
 #endif
