@@ -15,6 +15,7 @@ typedef struct {
     const char *field;    /* apply only */
     const char *mobility; /* field column copied into the scalar mobility, or NULL */
     int stored;           /* apply: pst_op_store + pst_op_apply_stored */
+    const char *timers;   /* --timers FILE.json: the run's timers and counts as JSON, or NULL */
     double h;             /* > 0: uniform h overriding the file's column */
     pst_op_opts opts;
 } apply_args;
@@ -95,7 +96,9 @@ static void print_help(const char *cmd)
            "  --kernel NAME       cubic | quintic | wendland_c2 | wendland_c4 (default: the\n"
            "                      scheme's own)\n"
            "  --h VALUE           uniform smoothing length; default: the file's h column\n"
-           "  --gradient G1..G4   kernel-gradient variant of the LV family (default G1)\n");
+           "  --gradient G1..G4   kernel-gradient variant of the LV family (default G1)\n"
+           "  --variant N         scheme variant (lsmps: 0 type B, 1 type A; default 0)\n"
+           "  --timers FILE.json  write the counts and per-phase timers as JSON\n");
     if (strcmp(cmd, "apply") == 0)
         printf("  --stored            store the weights and apply from them (default:\n"
                "                      matrix-free)\n");
@@ -148,6 +151,15 @@ static int parse_args(apply_args *a, int argc, char **argv)
             if (g < 0)
                 return bad_option(a->cmd, "--gradient", v, "G1, G2, G3 or G4");
             a->opts.gradient = g;
+        } else if (cli_option(argc, argv, &i, "--variant", &v)) {
+            long var;
+            if (!v || cli_parse_long(v, &var) != 0 || var < 0 || var > 9)
+                return bad_option(a->cmd, "--variant", v, "a scheme variant number (0-9)");
+            a->opts.variant = (int)var;
+        } else if (cli_option(argc, argv, &i, "--timers", &v)) {
+            if (!v || !*v)
+                return bad_option(a->cmd, "--timers", v, "a file name");
+            a->timers = v;
         } else if (is_apply && strcmp(argv[i], "--stored") == 0) {
             a->stored = 1;
         } else {
@@ -268,6 +280,63 @@ static void print_summary(const apply_args *a, const apply_setup *s)
     printf("time Morton sort     %.3f s\n", s->t_sort);
     printf("time neighbours      %.3f s\n", s->t_nlist);
     printf("time precompute      %.3f s\n", s->t_pre);
+    double ph[PST_NPHASES];
+    pst_op_phase_times(s->op, ph);
+    for (int k = PST_PHASE_GEOMETRY; k <= PST_PHASE_WEIGHTS; ++k)
+        if (ph[k] > 0)
+            printf("  phase %-12s %.3f s\n", pst_phase_name(k), ph[k]);
+}
+
+/* The --timers report: everything print_summary shows, as one JSON object. */
+typedef struct {
+    const apply_args *a;
+    const apply_setup *s;
+    double t_apply, t_store;
+} timers_job;
+
+static void write_timers(FILE *f, const void *job)
+{
+    const timers_job *t = job;
+    const pst_op *op = t->s->op;
+    size_t counts[PST_ROW_NSTATUS];
+    double ph[PST_NPHASES];
+    pst_op_status_counts(op, counts);
+    pst_op_phase_times(op, ph);
+    int kernel = t->a->opts.kernel >= 0 ? t->a->opts.kernel
+                                        : pst_scheme_default_kernel(t->a->opts.scheme);
+    fprintf(f, "{\n  \"pstencil\": \"%s\",\n  \"command\": \"%s\",\n", pst_version(), t->a->cmd);
+    fprintf(f, "  \"scheme\": \"%s\",\n  \"variant\": %d,\n  \"gradient\": %d,\n",
+            t->a->opts.scheme, t->a->opts.variant, t->a->opts.gradient);
+    fprintf(f, "  \"kernel\": \"%s\",\n  \"dim\": %d,\n  \"particles\": %zu,\n",
+            pst_kernel_name((pst_kernel)kernel), pst_cloud_dim(t->s->c), pst_cloud_size(t->s->c));
+    fprintf(f, "  \"pairs\": %lld,\n  \"threads\": %d,\n", (long long)pst_nlist_pairs(t->s->nl),
+            pst_threads());
+    fputs("  \"status\": {", f);
+    for (int k = 0; k < PST_ROW_NSTATUS; ++k)
+        fprintf(f, "%s\"%s\": %zu", k ? ", " : "", pst_row_status_name(k), counts[k]);
+    fputs("},\n  \"seconds\": {", f);
+    fprintf(f, "\"read\": %.6g, \"sort\": %.6g, \"neighbours\": %.6g", t->s->t_read,
+            t->s->t_sort, t->s->t_nlist);
+    for (int k = 0; k < PST_NPHASES; ++k)
+        if (k != PST_PHASE_APPLY)
+            fprintf(f, ", \"%s\": %.6g", pst_phase_name(k), ph[k]);
+    if (t->t_store > 0)
+        fprintf(f, ", \"store\": %.6g", t->t_store);
+    if (t->t_apply > 0)
+        fprintf(f, ", \"apply\": %.6g", t->t_apply);
+    fputs("}\n}\n", f);
+}
+
+/* Write the --timers file when asked; an exit code. */
+static int report_timers(const apply_args *a, const apply_setup *s, double t_apply,
+                         double t_store)
+{
+    if (!a->timers)
+        return CLI_OK;
+    char err[PST_ERRLEN] = "";
+    timers_job job = {a, s, t_apply, t_store};
+    int st = pst_write_atomic(a->timers, write_timers, &job, err);
+    return st == PST_OK ? CLI_OK : cli_fail(st, "cannot write the timers", err);
 }
 
 /* The writer of `apply`: rows in input order, row r from particle inv[r]. */
@@ -340,6 +409,9 @@ int cli_apply(const cli_ctx *ctx, int argc, char **argv)
         rc = cli_fail(st, "cannot write the result", err);
         goto done;
     }
+    rc = report_timers(&a, &s, t_apply, t_store);
+    if (rc != CLI_OK)
+        goto done;
     if (!ctx->quiet) {
         print_summary(&a, &s);
         if (a.stored)
@@ -384,6 +456,9 @@ int cli_stencil(const cli_ctx *ctx, int argc, char **argv)
         goto done;
     }
     double t_write = omp_get_wtime() - t0;
+    rc = report_timers(&a, &s, 0, 0);
+    if (rc != CLI_OK)
+        goto done;
     if (!ctx->quiet) {
         print_summary(&a, &s);
         printf("time assemble        %.3f s\n", t_asm);

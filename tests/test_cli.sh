@@ -170,5 +170,16 @@ check "no partial output in a missing directory" '[ ! -e "$work/nodir2" ]'
 expect 1 "stencil unknown scheme" -- "$exe" stencil --scheme frob --in "$work/au.csv" \
   --out "$work/e.mtx"
 
+# --timers: the counts and per-phase timers as JSON, all or nothing
+expect 0 "apply --timers" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
+  --out "$work/lu_t.csv" --timers "$work/t.json"
+contains t.json '"scheme": "lv"' "timers name the scheme"
+contains t.json '"status": {"ok": ' "timers carry the status counts"
+contains t.json '"precompute": ' "timers carry the precompute phase"
+expect 1 "bad --variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
+  --out "$work/lu_v.csv" --variant x
+expect 1 "lv rejects a variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
+  --out "$work/lu_v.csv" --variant 1
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
