@@ -73,4 +73,10 @@ static inline double pst_cloud_h_at(const pst_cloud *c, size_t i)
     return c->h ? c->h[i] : c->h_uniform;
 }
 
+/* Neighbours of arbitrary points (src/points.c, for interpolation): for each of the m points
+ * (pts[d][k], d < dim) the particles of c with |x - p| < radius, as CSR: off (m + 1 entries)
+ * and idx, each row increasing. Free both with pst_free. PST_ENOMEM (message in err). */
+int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t m,
+                          double radius, int64_t **off, uint32_t **idx, char *err);
+
 #endif

@@ -14,6 +14,15 @@ static const pst_scheme *const registry[] = {
     &pst_scheme_cb,
     &pst_scheme_schwaiger,
     &pst_scheme_lv,
+    &pst_scheme_cspm,
+    &pst_scheme_icspm,
+    &pst_scheme_csph2g,
+    &pst_scheme_mixed0,
+    &pst_scheme_mixed1,
+    &pst_scheme_mixed2,
+    &pst_scheme_qsfdi,
+    &pst_scheme_lsmps,
+    &pst_scheme_lpmps,
 };
 #define NSCHEMES ((int)(sizeof registry / sizeof *registry))
 

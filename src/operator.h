@@ -62,5 +62,14 @@ extern const pst_scheme pst_scheme_brookshaw;
 extern const pst_scheme pst_scheme_cb;
 extern const pst_scheme pst_scheme_schwaiger;
 extern const pst_scheme pst_scheme_lv;
+extern const pst_scheme pst_scheme_cspm;
+extern const pst_scheme pst_scheme_icspm;
+extern const pst_scheme pst_scheme_csph2g;
+extern const pst_scheme pst_scheme_mixed0;
+extern const pst_scheme pst_scheme_mixed1;
+extern const pst_scheme pst_scheme_mixed2;
+extern const pst_scheme pst_scheme_qsfdi;
+extern const pst_scheme pst_scheme_lsmps;
+extern const pst_scheme pst_scheme_lpmps;
 
 #endif

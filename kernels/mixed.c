@@ -1,0 +1,799 @@
+/* The least-squares mixed schemes of seed 003 (spec lsq_mixed.md): the mixed ordinary method
+ * (Model 3, `mixed0`), the mixed first-order least squares (Model 4, `mixed1`) and the mixed
+ * second-order least squares (Model 5, `mixed2`).
+ *
+ * The paper solves the first-order system for F = (f, f_x, f_y[, f_z]) by collocation; with the
+ * gradient rows kept at every node it is the nested operator on u alone (spec §6, "Analysis for
+ * the engine"):
+ *     (L u)_I = sum_a D_a (M^a D_a u)_I,   (D_a u)_I = sum_{j in N(I)} phi^a_Ij (u_j - u_I)
+ * with M^a the mobility (1, a scalar m, or a diagonal tensor component). D is the derivative row
+ * of a weighted least-squares Taylor fit about I that includes I itself (spec §4-5, eqs. 15-24):
+ *     M_I = sum_{j in N(I) + I} w_j p_j p_j^T,   phi^a_Ij = w_j (M_I^-1 p_j)_{1+a}
+ *     mixed0: p = (1, x),               w_j = W(d_Ij, h_I) V~_j, V~_j = 1 / sum_k W_jk (eq. 4)
+ *     mixed1: p = (1, x),               w_j = W(d_Ij, h_I)
+ *     mixed2: p = (1, x, x^2/2, x y ...) w_j = W(d_Ij, h_I)
+ * The derivative rows sum to zero (constants are reproduced), so the difference form is exact.
+ * Per particle only Q_I = rows 1..D of M_I^-1 (basis unscaled, see inversion()) is stored; the
+ * pair weight phi is recomputed from positions and Q by one inline function that the matrix-free
+ * apply, emit_row and the gradient share. The stencil is the neighbours of neighbours: the
+ * precompute builds that pattern and emit_row writes the composed weights in it.
+ *
+ * Fallback chain (docs/schemes/mixed.md): quadratic fit (mixed2) -> linear fit -> "no fit": the
+ * particle's gradient is the uncorrected kernel gradient sum_J V_J (u_J - u_I) grad W_IJ (cloud
+ * volumes) and its interior row is the Brookshaw row V_J sum_a (M^a_I + M^a_J) a_IJ x_a^2 / d^2.
+ * Neumann rows are n . M_I . (D u)_I with the particle's gradient. Never NaN. */
+#include "operator.h"
+#include "small_matrix.h"
+#include "sph_kernels.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { MX_ORDINARY, MX_LINEAR, MX_QUADRATIC };
+
+/* Per-particle fit actually used: the scheme's, the linear one (mixed2 fallback), none. */
+enum { MX_FIT = 0, MX_LINEAR_FIT = 1, MX_NOFIT = 2 };
+
+/* Pairs closer than this fraction of h_I are degenerate: weight 0 (spec choice 1). */
+#define MX_DEGENERATE 1e-8
+
+/* Particles per block of the moment/inversion passes: bounds the moment scratch (55 doubles
+ * per particle in 3D quadratic, 3.6 MB per block) while keeping the two passes separate. */
+#define MX_BLOCK 8192
+
+typedef struct {
+    int which; /* MX_* */
+    int m;     /* basis size: D+1 (linear) or (D+1)(D+2)/2 (quadratic) */
+    double *Q; /* D*m per particle: d/dx_a weights in the unscaled basis, 1/h folded in  */
+    uint8_t *mode;   /* MX_FIT / MX_LINEAR_FIT / MX_NOFIT                               */
+    double *Vn;      /* mixed0: number-density volumes 1/sum W (eq. 4), else NULL        */
+    int64_t *poff;   /* the neighbours-of-neighbours pattern (op->poff / op->pidx)       */
+    uint32_t *pidx;
+} mx_data;
+
+typedef struct {
+    int dim, ncomp;
+    pst_kernel kernel;
+    const double *x[3], *V, *h, *mob[3], *normal[3];
+    double h_uniform;
+    const uint8_t *kind;
+    const int64_t *off; /* the neighbour list */
+    const uint32_t *idx;
+    const mx_data *d;
+} mx_ctx;
+
+static mx_ctx make_ctx(const pst_op *op)
+{
+    const pst_cloud *c = op->cloud;
+    mx_ctx k = {.dim = c->dim, .ncomp = c->mob_ncomp, .kernel = op->kernel, .V = c->V,
+                .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind,
+                .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
+                .d = op->data};
+    for (int a = 0; a < 3; ++a) {
+        k.x[a] = c->x[a];
+        k.mob[a] = c->mob[a];
+        k.normal[a] = c->normal[a];
+    }
+    return k;
+}
+
+static inline double h_of(const mx_ctx *k, size_t i) { return k->h ? k->h[i] : k->h_uniform; }
+static inline double mob_of(const mx_ctx *k, int comp, size_t i)
+{
+    return k->ncomp ? k->mob[k->ncomp == 1 ? 0 : comp][i] : 1.0;
+}
+
+/* The hot functions take the dimension D and the scheme S as arguments; the applies call them
+ * with constants (one instantiation per combination), so pair loops carry no branch on them. */
+#define MX_HOT static inline __attribute__((always_inline))
+
+static inline int basis_size(int D, int S) { return S == MX_QUADRATIC ? (D + 1) * (D + 2) / 2 : D + 1; }
+
+/* Taylor basis at offset x: 1, x_a, then (quadratic) x_a^2/2 and the cross products in the
+ * order of pst_op_hessian (2D: xx, yy, xy; 3D: xx, yy, zz, xy, xz, yz). */
+MX_HOT void basis(int D, int S, const double x[3], double *p)
+{
+    p[0] = 1.0;
+    for (int a = 0; a < D; ++a)
+        p[1 + a] = x[a];
+    if (S != MX_QUADRATIC)
+        return;
+    for (int a = 0; a < D; ++a)
+        p[1 + D + a] = 0.5 * x[a] * x[a];
+    p[1 + 2 * D] = x[0] * x[1];
+    if (D == 3) {
+        p[8] = x[0] * x[2];
+        p[9] = x[1] * x[2];
+    }
+}
+
+/* Offset x = r_j - r_i, its length, and whether the pair is non-degenerate. */
+MX_HOT int pair_offset(const mx_ctx *k, int D, size_t i, size_t j, double x[3], double *d)
+{
+    double d2 = 0;
+    for (int a = 0; a < D; ++a) {
+        x[a] = k->x[a][j] - k->x[a][i];
+        d2 += x[a] * x[a];
+    }
+    *d = sqrt(d2);
+    return *d > MX_DEGENERATE * h_of(k, i);
+}
+
+/* The LS fit weight w_j of pair (i, j) (the head comment), 0 when degenerate. */
+MX_HOT double fit_weight(const mx_ctx *k, int D, int S, size_t i, size_t j, double x[3])
+{
+    double d;
+    if (!pair_offset(k, D, i, j, x, &d))
+        return 0.0;
+    double W = pst_sph_w(k->kernel, D, d, h_of(k, i));
+    return S == MX_ORDINARY ? W * k->d->Vn[j] : W;
+}
+
+/* a_ij = -dW/dr / d >= 0 with h_I: the uncorrected kernel gradient is a x. */
+MX_HOT double radial_factor(const mx_ctx *k, int D, size_t i, size_t j, double x[3], double *d2)
+{
+    double d;
+    int ok = pair_offset(k, D, i, j, x, &d);
+    *d2 = d * d;
+    return ok ? -pst_sph_dw(k->kernel, D, d, h_of(k, i)) / d : 0.0;
+}
+
+/* phi^a_ij, the derivative weights of pair (i, j) with i's fit (or its fallback gradient).
+ * Shared by the applies, emit_row and the gradient, so all of them use the same numbers. */
+MX_HOT void deriv_weights(const mx_ctx *k, int D, int S, size_t i, size_t j, double phi[3])
+{
+    double x[3];
+    if (k->d->mode[i] == MX_NOFIT) {
+        double d2, a = radial_factor(k, D, i, j, x, &d2) * k->V[j];
+        for (int c = 0; c < D; ++c)
+            phi[c] = a * x[c];
+        return;
+    }
+    double w = fit_weight(k, D, S, i, j, x), p[10];
+    int m = basis_size(D, S);
+    basis(D, S, x, p);
+    const double *Q = k->d->Q + (size_t)D * m * i;
+    for (int a = 0; a < D; ++a) {
+        double s = 0;
+        for (int c = 0; c < m; ++c)
+            s += Q[a * m + c] * p[c];
+        phi[a] = w * s;
+    }
+}
+
+/* The Brookshaw weight of the fallback row: V_J a sum_a (M^a_I + M^a_J) x_a^2 / d^2. */
+MX_HOT double brookshaw_weight(const mx_ctx *k, int D, size_t i, size_t j)
+{
+    double x[3], d2, a = radial_factor(k, D, i, j, x, &d2);
+    if (a == 0.0)
+        return 0.0;
+    double s = 0;
+    for (int c = 0; c < D; ++c)
+        s += (mob_of(k, c, i) + mob_of(k, c, j)) * x[c] * x[c];
+    return k->V[j] * a * s / d2;
+}
+
+/* (D u)_i into g. */
+MX_HOT void grad_row(const mx_ctx *k, int D, int S, size_t i, const double *u, double g[3])
+{
+    const int64_t *off = k->off;
+    const uint32_t *idx = k->idx;
+    double ui = u[i];
+    for (int a = 0; a < D; ++a)
+        g[a] = 0;
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        size_t j = idx[e];
+        double phi[3], du = u[j] - ui;
+        deriv_weights(k, D, S, i, j, phi);
+        for (int a = 0; a < D; ++a)
+            g[a] += phi[a] * du;
+    }
+}
+
+/* Sweep 1: G[a][i] = M^a_i (D_a u)_i for every particle (Dirichlet ones too: interior rows
+ * use their one-sided gradients). Compute-bound like sweep 2: one sqrt, the kernel and D*m
+ * multiply-adds per pair. */
+MX_HOT void sweep_gradient(const mx_ctx *k, int D, int S, size_t n, const double *u,
+                           double *const G[3])
+{
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; ++i) {
+        double g[3];
+        grad_row(k, D, S, i, u, g);
+        for (int a = 0; a < D; ++a)
+            G[a][i] = mob_of(k, a, i) * g[a];
+    }
+}
+
+/* Sweep 2, row i of L from G (not Dirichlet). */
+MX_HOT double divergence_row(const mx_ctx *k, int D, int S, size_t i, const double *u,
+                             double *const G[3])
+{
+    const int64_t *off = k->off;
+    const uint32_t *idx = k->idx;
+    double y = 0;
+    if (k->kind[i] == PST_NEUMANN) {
+        for (int a = 0; a < D; ++a)
+            y += k->normal[a][i] * G[a][i];
+        return y;
+    }
+    if (k->d->mode[i] == MX_NOFIT) {
+        for (int64_t e = off[i]; e < off[i + 1]; ++e)
+            y += brookshaw_weight(k, D, i, idx[e]) * (u[idx[e]] - u[i]);
+        return y;
+    }
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        size_t j = idx[e];
+        double phi[3];
+        deriv_weights(k, D, S, i, j, phi);
+        for (int a = 0; a < D; ++a)
+            y += phi[a] * (G[a][j] - G[a][i]);
+    }
+    return y;
+}
+
+/* Row i without the sweep-1 buffer (used only when it cannot be allocated): every neighbour's
+ * gradient is recomputed, |N|^2 pair evaluations per row. */
+MX_HOT double divergence_row_direct(const mx_ctx *k, int D, int S, size_t i, const double *u)
+{
+    const int64_t *off = k->off;
+    const uint32_t *idx = k->idx;
+    double gi[3], y = 0;
+    grad_row(k, D, S, i, u, gi);
+    for (int a = 0; a < D; ++a)
+        gi[a] *= mob_of(k, a, i);
+    if (k->kind[i] == PST_NEUMANN) {
+        for (int a = 0; a < D; ++a)
+            y += k->normal[a][i] * gi[a];
+        return y;
+    }
+    if (k->d->mode[i] == MX_NOFIT) {
+        for (int64_t e = off[i]; e < off[i + 1]; ++e)
+            y += brookshaw_weight(k, D, i, idx[e]) * (u[idx[e]] - u[i]);
+        return y;
+    }
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        size_t j = idx[e];
+        double phi[3], gj[3];
+        deriv_weights(k, D, S, i, j, phi);
+        grad_row(k, D, S, j, u, gj);
+        for (int a = 0; a < D; ++a)
+            y += phi[a] * (mob_of(k, a, j) * gj[a] - gi[a]);
+    }
+    return y;
+}
+
+/* Position of column j in pattern row [lo, hi) (sorted; j is always present). */
+static inline int64_t pattern_pos(const uint32_t *pidx, int64_t lo, int64_t hi, uint32_t j)
+{
+    while (hi - lo > 1) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (pidx[mid] <= j)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The weights of row i in the pattern's order: the composition of the two sweeps with the
+ * diagonal dropped (rows sum to zero, so it is minus the sum of the others). |N|^2 pair
+ * evaluations and binary searches per row. */
+MX_HOT void emit_t(const mx_ctx *k, int D, int S, const int64_t *poff, const uint32_t *pidx,
+                   size_t i, double *w)
+{
+    const int64_t *off = k->off;
+    const uint32_t *idx = k->idx;
+    int64_t lo = poff[i], hi = poff[i + 1];
+    memset(w, 0, (size_t)(hi - lo) * sizeof *w);
+    if (k->kind[i] == PST_NEUMANN || k->d->mode[i] == MX_NOFIT) {
+        for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+            size_t j = idx[e];
+            double v = 0, phi[3];
+            if (k->kind[i] == PST_NEUMANN) {
+                deriv_weights(k, D, S, i, j, phi);
+                for (int a = 0; a < D; ++a)
+                    v += k->normal[a][i] * mob_of(k, a, i) * phi[a];
+            } else {
+                v = brookshaw_weight(k, D, i, j);
+            }
+            w[pattern_pos(pidx, lo, hi, (uint32_t)j) - lo] += v;
+        }
+        return;
+    }
+    double S_i[3] = {0, 0, 0};
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        size_t j = idx[e];
+        double phi[3], mphi[3], cj = 0;
+        deriv_weights(k, D, S, i, j, phi);
+        for (int a = 0; a < D; ++a) {
+            S_i[a] += phi[a];
+            mphi[a] = phi[a] * mob_of(k, a, j);
+        }
+        for (int64_t f = off[j]; f < off[j + 1]; ++f) {
+            size_t l = idx[f];
+            double psi[3], c = 0;
+            deriv_weights(k, D, S, j, l, psi);
+            for (int a = 0; a < D; ++a)
+                c += mphi[a] * psi[a];
+            cj += c;
+            if (l != i)
+                w[pattern_pos(pidx, lo, hi, (uint32_t)l) - lo] += c;
+        }
+        w[pattern_pos(pidx, lo, hi, (uint32_t)j) - lo] -= cj; /* the -u_j of (D u)_j */
+    }
+    for (int a = 0; a < D; ++a)
+        S_i[a] *= mob_of(k, a, i);
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) { /* the -(D u)_i term */
+        size_t j = idx[e];
+        double phi[3], c = 0;
+        deriv_weights(k, D, S, i, j, phi);
+        for (int a = 0; a < D; ++a)
+            c += S_i[a] * phi[a];
+        w[pattern_pos(pidx, lo, hi, (uint32_t)j) - lo] -= c;
+    }
+}
+
+/* ---- instantiation per (D, S) ------------------------------------------------------------ */
+
+typedef struct {
+    void (*sweep)(const mx_ctx *, size_t, const double *, double *const[3]);
+    double (*row)(const mx_ctx *, size_t, const double *, double *const[3]);
+    double (*row_direct)(const mx_ctx *, size_t, const double *);
+    void (*grad)(const mx_ctx *, size_t, const double *, double[3]);
+    void (*emit)(const mx_ctx *, const int64_t *, const uint32_t *, size_t, double *);
+} mx_fns;
+
+#define MX_INST(D, S)                                                                          \
+    static void sweep_##D##_##S(const mx_ctx *k, size_t n, const double *u, double *const G[3]) \
+    {                                                                                          \
+        sweep_gradient(k, D, S, n, u, G);                                                      \
+    }                                                                                          \
+    static double row_##D##_##S(const mx_ctx *k, size_t i, const double *u, double *const G[3]) \
+    {                                                                                          \
+        return divergence_row(k, D, S, i, u, G);                                               \
+    }                                                                                          \
+    static double direct_##D##_##S(const mx_ctx *k, size_t i, const double *u)                 \
+    {                                                                                          \
+        return divergence_row_direct(k, D, S, i, u);                                           \
+    }                                                                                          \
+    static void grad_##D##_##S(const mx_ctx *k, size_t i, const double *u, double g[3])        \
+    {                                                                                          \
+        grad_row(k, D, S, i, u, g);                                                            \
+    }                                                                                          \
+    static void emit_##D##_##S(const mx_ctx *k, const int64_t *po, const uint32_t *pi,         \
+                               size_t i, double *w)                                            \
+    {                                                                                          \
+        emit_t(k, D, S, po, pi, i, w);                                                         \
+    }
+MX_INST(2, 0)
+MX_INST(2, 1)
+MX_INST(2, 2)
+MX_INST(3, 0)
+MX_INST(3, 1)
+MX_INST(3, 2)
+#define MX_FNS(D, S) {sweep_##D##_##S, row_##D##_##S, direct_##D##_##S, grad_##D##_##S, emit_##D##_##S}
+static const mx_fns fns_table[2][3] = {{MX_FNS(2, 0), MX_FNS(2, 1), MX_FNS(2, 2)},
+                                       {MX_FNS(3, 0), MX_FNS(3, 1), MX_FNS(3, 2)}};
+
+static const mx_fns *fns_for(const mx_ctx *k) { return &fns_table[k->dim - 2][k->d->which]; }
+
+/* ---- precompute ------------------------------------------------------------------------ */
+
+static void mx_free(void *p)
+{
+    mx_data *d = p;
+    if (!d)
+        return;
+    pst_free(d->Q);
+    pst_free(d->mode);
+    pst_free(d->Vn);
+    pst_free(d->poff);
+    pst_free(d->pidx);
+    free(d);
+}
+
+/* Spec choice 6 by analogy: the fit of m unknowns includes I, so it needs m - 1 neighbours:
+ * D for the linear fits (the cspm-like count), 5 / 9 for the quadratic one (as lsmps). */
+static int mx_min_linear(int dim) { return dim; }
+static int mx_min_quadratic(int dim) { return dim == 2 ? 5 : 9; }
+
+static inline uint8_t worse(uint8_t a, uint8_t b) { return a > b ? a : b; }
+
+/* GEOMETRY (mixed0 only): V~_i = 1 / (W(0) + sum_j W_ij), h_i (eq. 4, pinned choice 3). */
+static void volumes(const mx_ctx *k, size_t n, double *Vn)
+{
+    int D = k->dim;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; ++i) {
+        double s = pst_sph_w(k->kernel, D, 0.0, h_of(k, i));
+        for (int64_t e = k->off[i]; e < k->off[i + 1]; ++e) {
+            double x[3], d;
+            if (pair_offset(k, D, i, k->idx[e], x, &d))
+                s += pst_sph_w(k->kernel, D, d, h_of(k, i));
+        }
+        Vn[i] = s > 0 ? 1.0 / s : 0.0;
+    }
+}
+
+/* MOMENTS of particle i: the packed lower triangle of M_I in the basis scaled by h_I (x/h), so
+ * that its condition number does not depend on the units. Bound by the D*m^2/2 multiply-adds
+ * per neighbour (55 in 3D quadratic), not memory. */
+static void moments(const mx_ctx *k, int S, size_t i, double *tri)
+{
+    int D = k->dim, m = basis_size(D, S), nt = m * (m + 1) / 2;
+    double ih = 1.0 / h_of(k, i);
+    for (int t = 0; t < nt; ++t)
+        tri[t] = 0;
+    double w0 = pst_sph_w(k->kernel, D, 0.0, h_of(k, i));
+    tri[0] = S == MX_ORDINARY ? w0 * k->d->Vn[i] : w0; /* the self term, p = e_0 */
+    for (int64_t e = k->off[i]; e < k->off[i + 1]; ++e) {
+        double x[3], p[10];
+        double w = fit_weight(k, D, S, i, k->idx[e], x);
+        if (w == 0.0)
+            continue;
+        for (int a = 0; a < D; ++a)
+            x[a] *= ih;
+        basis(D, S, x, p);
+        for (int r = 0, t = 0; r < m; ++r) {
+            double wr = w * p[r];
+            for (int c = 0; c <= r; ++c, ++t)
+                tri[t] += wr * p[c];
+        }
+    }
+}
+
+/* Invert the leading m x m block of the scaled moments (packed triangle of size mt): LDL^T,
+ * the full inverse and its 1-norm condition number. Fills Q (row length qm) with rows 1..D of
+ * the inverse in the unscaled basis: Q[a][c] = inv[1+a][c] / h^(1 + deg c). Returns the status
+ * of the inversion. */
+static uint8_t invert(const pst_op *op, int D, const double *tri, int m, double h, double *Q,
+                      int qm)
+{
+    double a[100], f[100], inv[100];
+    for (int r = 0, t = 0; r < m; ++r)
+        for (int c = 0; c <= r; ++c, ++t)
+            a[r * m + c] = a[c * m + r] = tri[t];
+    memcpy(f, a, (size_t)(m * m) * sizeof *f);
+    if (!(pst_ldlt_factor(m, f) > 0))
+        return PST_ROW_RANK_DEFICIENT;
+    for (int c = 0; c < m; ++c) {
+        double b[10] = {0};
+        b[c] = 1.0;
+        pst_ldlt_solve(m, f, b);
+        for (int r = 0; r < m; ++r)
+            inv[r * m + c] = b[r];
+    }
+    double cond = pst_mat_norm1(m, a) * pst_mat_norm1(m, inv);
+    if (!(cond * op->opts.rank_tol < 1.0)) /* also catches NaN and inf */
+        return PST_ROW_RANK_DEFICIENT;
+    double ih = 1.0 / h;
+    for (int r = 0; r < D; ++r)
+        for (int c = 0; c < qm; ++c) {
+            int deg = c == 0 ? 0 : c <= D ? 1 : 2;
+            double s = ih;
+            for (int e = 0; e < deg; ++e)
+                s *= ih;
+            Q[r * qm + c] = c < m ? inv[(1 + r) * m + c] * s : 0.0;
+        }
+    return cond > op->opts.cond_max ? PST_ROW_ILL_CONDITIONED : PST_ROW_OK;
+}
+
+/* INVERSION of particle i: the scheme's fit, else the linear fit (mixed2), else no fit. */
+static uint8_t inversion(const pst_op *op, const mx_ctx *k, size_t i, const double *tri)
+{
+    mx_data *d = op->data;
+    int D = k->dim, S = d->which, m = d->m;
+    double *Q = d->Q + (size_t)D * m * i;
+    int64_t count = k->off[i + 1] - k->off[i];
+    uint8_t st = PST_ROW_OK;
+    d->mode[i] = MX_FIT;
+    if (S == MX_QUADRATIC) {
+        if (count < mx_min_quadratic(D))
+            st = PST_ROW_TOO_FEW;
+        else {
+            uint8_t s = invert(op, D, tri, m, h_of(k, i), Q, m);
+            if (s != PST_ROW_RANK_DEFICIENT)
+                return s;
+            st = s;
+        }
+        d->mode[i] = MX_LINEAR_FIT;
+    }
+    /* the linear fit; for mixed2 its moments are the leading block of the packed triangle */
+    if (count < mx_min_linear(D)) {
+        st = worse(st, PST_ROW_TOO_FEW);
+    } else {
+        uint8_t s = invert(op, D, tri, D + 1, h_of(k, i), Q, m);
+        if (s != PST_ROW_RANK_DEFICIENT)
+            return worse(st, s);
+        st = worse(st, s);
+    }
+    d->mode[i] = MX_NOFIT;
+    memset(Q, 0, (size_t)(D * m) * sizeof *Q);
+    return st;
+}
+
+/* In-place sort of a short row of column indices: insertion sort below 16, else quicksort on
+ * the median of three. Bound by the comparisons, ~log2(len) per entry. */
+static void sort_u32(uint32_t *a, int64_t n)
+{
+    while (n > 16) {
+        uint32_t x = a[0], y = a[n / 2], z = a[n - 1];
+        uint32_t piv = x < y ? (y < z ? y : (x < z ? z : x)) : (x < z ? x : (y < z ? z : y));
+        int64_t lo = 0, hi = n - 1;
+        while (lo <= hi) {
+            while (a[lo] < piv)
+                ++lo;
+            while (a[hi] > piv)
+                --hi;
+            if (lo <= hi) {
+                uint32_t t = a[lo];
+                a[lo++] = a[hi];
+                a[hi--] = t;
+            }
+        }
+        if (hi + 1 < n - lo) { /* recurse on the smaller part, loop on the larger */
+            sort_u32(a, hi + 1);
+            a += lo;
+            n -= lo;
+        } else {
+            sort_u32(a + lo, n - lo);
+            n = hi + 1;
+        }
+    }
+    for (int64_t r = 1; r < n; ++r) {
+        uint32_t v = a[r];
+        int64_t s = r;
+        for (; s > 0 && a[s - 1] > v; --s)
+            a[s] = a[s - 1];
+        a[s] = v;
+    }
+}
+
+/* The columns of row i of the pattern, N(i) and N(j) for j in N(i), without i, unsorted; with
+ * out == NULL only counted. mark[] (one per thread) holds the last row that took a column. */
+static int64_t ring2(const mx_ctx *k, size_t i, uint32_t *mark, uint32_t *out)
+{
+    const int64_t *off = k->off;
+    const uint32_t *idx = k->idx;
+    int64_t c = 0;
+    mark[i] = (uint32_t)i;
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        uint32_t j = idx[e];
+        if (mark[j] != i) {
+            mark[j] = (uint32_t)i;
+            if (out)
+                out[c] = j;
+            ++c;
+        }
+        for (int64_t f = off[j]; f < off[j + 1]; ++f) {
+            uint32_t l = idx[f];
+            if (mark[l] != i) {
+                mark[l] = (uint32_t)i;
+                if (out)
+                    out[c] = l;
+                ++c;
+            }
+        }
+    }
+    return c;
+}
+
+/* WEIGHTS: the neighbours-of-neighbours pattern, a counting pass and a filling pass (memory
+ * stays one copy of the pattern). Bound by the |N|^2 gathers of mark[] per row, then the sort. */
+static int build_pattern(pst_op *op, const mx_ctx *k, char *err)
+{
+    mx_data *d = op->data;
+    size_t n = op->n;
+    int nt = omp_get_max_threads();
+    uint32_t *marks = pst_alloc((size_t)nt * (n ? n : 1) * sizeof *marks);
+    d->poff = pst_alloc((n + 1) * sizeof *d->poff);
+    if (!marks || !d->poff) {
+        pst_free(marks);
+        pst_set_err(err, "%s: cannot allocate the stencil pattern of %zu particles",
+                    op->scheme->name, n);
+        return PST_ENOMEM;
+    }
+    for (size_t t = 0; t < (size_t)nt * n; ++t)
+        marks[t] = UINT32_MAX; /* i < n <= UINT32_MAX never equals it */
+    d->poff[0] = 0;
+#pragma omp parallel
+    {
+        uint32_t *mark = marks + (size_t)omp_get_thread_num() * n;
+#pragma omp for schedule(dynamic, 256)
+        for (size_t i = 0; i < n; ++i)
+            d->poff[i + 1] = ring2(k, i, mark, NULL);
+    }
+    for (size_t i = 0; i < n; ++i)
+        d->poff[i + 1] += d->poff[i];
+    d->pidx = pst_alloc((size_t)d->poff[n] * sizeof *d->pidx);
+    if (!d->pidx) {
+        pst_free(marks);
+        pst_set_err(err, "%s: cannot allocate the stencil pattern (%lld entries)",
+                    op->scheme->name, (long long)d->poff[n]);
+        return PST_ENOMEM;
+    }
+    for (size_t t = 0; t < (size_t)nt * n; ++t)
+        marks[t] = UINT32_MAX;
+#pragma omp parallel
+    {
+        uint32_t *mark = marks + (size_t)omp_get_thread_num() * n;
+#pragma omp for schedule(dynamic, 256)
+        for (size_t i = 0; i < n; ++i) {
+            ring2(k, i, mark, d->pidx + d->poff[i]);
+            sort_u32(d->pidx + d->poff[i], d->poff[i + 1] - d->poff[i]);
+        }
+    }
+    pst_free(marks);
+    op->poff = d->poff;
+    op->pidx = d->pidx;
+    return PST_OK;
+}
+
+static int precompute(pst_op *op, int which, char *err)
+{
+    size_t n = op->n;
+    int dim = op->dim;
+    if (op->opts.variant != 0) {
+        pst_set_err(err, "%s has no variants (got variant %d)", op->scheme->name,
+                    op->opts.variant);
+        return PST_EINVAL;
+    }
+    mx_data *d = calloc(1, sizeof *d);
+    if (!d)
+        return PST_ENOMEM;
+    op->data = d;
+    d->which = which;
+    d->m = basis_size(dim, which);
+    int m = d->m, ntri = m * (m + 1) / 2;
+    d->Q = pst_alloc(n * (size_t)(dim * m) * sizeof *d->Q);
+    d->mode = pst_alloc(n);
+    if (which == MX_ORDINARY)
+        d->Vn = pst_alloc(n * sizeof *d->Vn);
+    double *tri = pst_alloc((size_t)MX_BLOCK * ntri * sizeof *tri);
+    if (!d->Q || !d->mode || !tri || (which == MX_ORDINARY && !d->Vn)) {
+        pst_free(tri);
+        pst_set_err(err, "%s: cannot allocate the per-particle data of %zu particles",
+                    op->scheme->name, n);
+        return PST_ENOMEM;
+    }
+    mx_ctx k = make_ctx(op);
+    double t0 = omp_get_wtime();
+    if (which == MX_ORDINARY)
+        volumes(&k, n, d->Vn);
+    op->phase[PST_PHASE_GEOMETRY] += omp_get_wtime() - t0;
+    /* Moments and inversions as separate passes, block by block (the moment scratch is one
+     * block): each row reads only its own neighbours, so any thread count gives the same. */
+    for (size_t b = 0; b < n; b += MX_BLOCK) {
+        size_t e = b + MX_BLOCK < n ? b + MX_BLOCK : n;
+        t0 = omp_get_wtime();
+#pragma omp parallel for schedule(dynamic, 64)
+        for (size_t i = b; i < e; ++i)
+            moments(&k, which, i, tri + (i - b) * (size_t)ntri);
+        double t1 = omp_get_wtime();
+        op->phase[PST_PHASE_MOMENTS] += t1 - t0;
+#pragma omp parallel for schedule(dynamic, 64)
+        for (size_t i = b; i < e; ++i)
+            op->status[i] = inversion(op, &k, i, tri + (i - b) * (size_t)ntri);
+        op->phase[PST_PHASE_INVERSION] += omp_get_wtime() - t1;
+    }
+    pst_free(tri);
+    t0 = omp_get_wtime();
+    int st = build_pattern(op, &k, err);
+    op->phase[PST_PHASE_WEIGHTS] += omp_get_wtime() - t0;
+    return st;
+}
+
+static int pre_ordinary(pst_op *op, char *err) { return precompute(op, MX_ORDINARY, err); }
+static int pre_linear(pst_op *op, char *err) { return precompute(op, MX_LINEAR, err); }
+static int pre_quadratic(pst_op *op, char *err) { return precompute(op, MX_QUADRATIC, err); }
+
+/* ---- apply, emission and the rest of the table ------------------------------------------ */
+
+/* Matrix-free apply: sweep 1 (G = M D u) into a buffer of D*n doubles, then sweep 2 (the
+ * divergence). The buffer is this apply's one allocation: sweep 2 reads G of every neighbour,
+ * so all of G must exist before any row, and it depends on u while the operator stays
+ * read-only. If it cannot be allocated, each row recomputes its neighbours' gradients (|N|
+ * times the work, the same result to rounding), so an apply never fails. */
+static void mx_apply(const pst_op *op, const double *u, double *y)
+{
+    mx_ctx k = make_ctx(op);
+    const mx_fns *f = fns_for(&k);
+    size_t n = op->n;
+    double *buf = pst_alloc((size_t)k.dim * (n ? n : 1) * sizeof *buf);
+    if (!buf) {
+#pragma omp parallel for schedule(dynamic, 256)
+        for (size_t i = 0; i < n; ++i)
+            if (k.kind[i] != PST_DIRICHLET)
+                y[i] = f->row_direct(&k, i, u);
+        return;
+    }
+    double *const G[3] = {buf, buf + n, k.dim == 3 ? buf + 2 * n : buf};
+    f->sweep(&k, n, u, G);
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; ++i)
+        if (k.kind[i] != PST_DIRICHLET)
+            y[i] = f->row(&k, i, u, G);
+    pst_free(buf);
+}
+
+static void mx_emit_row(const pst_op *op, size_t i, double *w)
+{
+    mx_ctx k = make_ctx(op);
+    fns_for(&k)->emit(&k, op->poff, op->pidx, i, w);
+}
+
+/* The LS gradient (D u)_I (the fallback gradient on rows without a fit). */
+static void mx_gradient(const pst_op *op, const double *u, double *const grad[3])
+{
+    mx_ctx k = make_ctx(op);
+    const mx_fns *f = fns_for(&k);
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i) {
+        double g[3];
+        f->grad(&k, i, u, g);
+        for (int a = 0; a < k.dim; ++a)
+            grad[a][i] = g[a];
+    }
+}
+
+/* mixed2: the second-derivative coefficients of the quadratic fit, refitted here in
+ * difference form a = M^-1 sum_j w_j p_j (u_j - u_I) (not stored: 18 / 60 more doubles per
+ * particle for a diagnostic). 0 where the quadratic fit was not used. */
+static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
+{
+    mx_ctx k = make_ctx(op);
+    int D = k.dim, m = basis_size(D, MX_QUADRATIC), nh = m - 1 - D;
+    const mx_data *d = op->data;
+#pragma omp parallel for schedule(dynamic, 64)
+    for (size_t i = 0; i < op->n; ++i) {
+        double tri[55], a[100], r[10] = {0};
+        for (int c = 0; c < nh; ++c)
+            hess[c][i] = 0.0;
+        if (d->mode[i] != MX_FIT)
+            continue;
+        moments(&k, MX_QUADRATIC, i, tri);
+        double ih = 1.0 / h_of(&k, i);
+        for (int64_t e = k.off[i]; e < k.off[i + 1]; ++e) {
+            size_t j = k.idx[e];
+            double x[3] = {0, 0, 0}, p[10], w = fit_weight(&k, D, MX_QUADRATIC, i, j, x);
+            for (int c = 0; c < D; ++c)
+                x[c] *= ih;
+            basis(D, MX_QUADRATIC, x, p);
+            for (int c = 0; c < m; ++c)
+                r[c] += w * p[c] * (u[j] - u[i]);
+        }
+        for (int q = 0, t = 0; q < m; ++q)
+            for (int c = 0; c <= q; ++c, ++t)
+                a[q * m + c] = a[c * m + q] = tri[t];
+        if (!(pst_ldlt_factor(m, a) > 0))
+            continue;
+        pst_ldlt_solve(m, a, r);
+        for (int c = 0; c < nh; ++c)
+            hess[c][i] = isfinite(r[1 + D + c]) ? r[1 + D + c] * ih * ih : 0.0;
+    }
+}
+
+#define MX_SCHEME(ID, NAME, DESC, PRE, MIN, HESS)                                              \
+    const pst_scheme ID = {.name = NAME,                                                       \
+                           .description = DESC,                                                \
+                           .default_kernel = PST_KERNEL_QUINTIC,                               \
+                           .min_neighbours = MIN,                                              \
+                           .precompute = PRE,                                                  \
+                           .apply = mx_apply,                                                  \
+                           .emit_row = mx_emit_row,                                            \
+                           .gradient = mx_gradient,                                            \
+                           .hessian = HESS,                                                    \
+                           .free_data = mx_free}
+
+MX_SCHEME(pst_scheme_mixed0, "mixed0",
+          "mixed ordinary method, nested LS gradient with W V weights (seed 003 Model 3)",
+          pre_ordinary, mx_min_linear, NULL);
+MX_SCHEME(pst_scheme_mixed1, "mixed1",
+          "mixed least squares 1st order, nested linear LS gradient (seed 003 Model 4)",
+          pre_linear, mx_min_linear, NULL);
+MX_SCHEME(pst_scheme_mixed2, "mixed2",
+          "mixed least squares 2nd order, nested quadratic LS gradient (seed 003 Model 5)",
+          pre_quadratic, mx_min_quadratic, mx_hessian);

@@ -1,0 +1,533 @@
+/* Quadric LSMPS (types B and A) and LP-MPS on the operator object: quadratic exactness of the
+ * Laplacian, gradient, Hessian and interpolation on jittered clouds (K = 0.8), LP-MPS == LSMPS
+ * type A, Neumann rows, the two apply paths and assembly, thread independence, degenerate rows
+ * and the fallback chain, bad options. */
+#include "check.h"
+#include "pstencil.h"
+
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The three configurations: scheme and variant. */
+static const char *const cfg_scheme[3] = {"lsmps", "lsmps", "lpmps"};
+static const int cfg_variant[3] = {0, 1, 0};
+static const char *const cfg_name[3] = {"lsmps-B", "lsmps-A", "lpmps"};
+
+/* A lattice on [2,3]^dim with spacing s0, h = 1.2 s0, jitter K. */
+static pst_cloud *patch(int dim, double s0, double K, int boundary_layer)
+{
+    pst_lattice_opts o;
+    pst_lattice_defaults(&o);
+    o.dim = dim;
+    for (int d = 0; d < 3; ++d) {
+        o.lo[d] = 2.0;
+        o.hi[d] = 3.0;
+    }
+    o.s0 = s0;
+    o.h_ratio = 1.2;
+    o.jitter = K;
+    o.seed = 11;
+    o.boundary_layer = boundary_layer;
+    pst_cloud *c = NULL;
+    char err[PST_ERRLEN];
+    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
+        fprintf(stderr, "lattice: %s\n", err);
+        exit(1);
+    }
+    return c;
+}
+
+static pst_nlist *neighbours(const pst_cloud *c, double support)
+{
+    pst_nlist *nl = NULL;
+    char err[PST_ERRLEN];
+    if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
+        fprintf(stderr, "nlist: %s\n", err);
+        exit(1);
+    }
+    return nl;
+}
+
+static pst_op *make_op(const pst_cloud *c, const pst_nlist *nl, int cfg)
+{
+    pst_op_opts o;
+    pst_op_defaults(&o);
+    o.scheme = cfg_scheme[cfg];
+    o.variant = cfg_variant[cfg];
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    if (pst_op_create(&op, c, nl, &o, err) != PST_OK) {
+        fprintf(stderr, "op %s: %s\n", cfg_name[cfg], err);
+        exit(1);
+    }
+    return op;
+}
+
+/* Full support: every coordinate at least `margin` inside [2,3]. */
+static int inner(const pst_cloud *c, size_t i, double margin)
+{
+    for (int d = 0; d < pst_cloud_dim(c); ++d) {
+        double x = pst_cloud_coord_const(c, d)[i];
+        if (x < 2.0 + margin || x > 3.0 - margin)
+            return 0;
+    }
+    return 1;
+}
+
+/* The quadratic p = c0 + g . x + x^T H x / 2 with a Laplacian of O(1). */
+static const double Q_g[3] = {0.5, -1.2, 0.8};
+static const double Q_H[3][3] = {{1.3, 0.4, -0.25}, {0.4, -0.7, 0.6}, {-0.25, 0.6, 0.9}};
+
+static double quad(int dim, const double *x)
+{
+    double v = 0.3;
+    for (int a = 0; a < dim; ++a) {
+        v += Q_g[a] * x[a];
+        for (int b = 0; b < dim; ++b)
+            v += 0.5 * Q_H[a][b] * x[a] * x[b];
+    }
+    return v;
+}
+
+static double quad_grad(int dim, const double *x, int a)
+{
+    double v = Q_g[a];
+    for (int b = 0; b < dim; ++b)
+        v += Q_H[a][b] * x[b];
+    return v;
+}
+
+static double quad_lap(int dim)
+{
+    double t = 0;
+    for (int a = 0; a < dim; ++a)
+        t += Q_H[a][a];
+    return t;
+}
+
+/* Entry e of pst_op_hessian's layout: 2D xx, yy, xy; 3D xx, yy, zz, xy, xz, yz. */
+static double quad_hess(int dim, int e)
+{
+    static const int pa[2][6] = {{0, 1, 0}, {0, 1, 2, 0, 0, 1}};
+    static const int pb[2][6] = {{0, 1, 1}, {0, 1, 2, 1, 2, 2}};
+    return Q_H[pa[dim - 2][e]][pb[dim - 2][e]];
+}
+
+static void position(const pst_cloud *c, size_t i, double x[3])
+{
+    x[0] = x[1] = x[2] = 0;
+    for (int d = 0; d < pst_cloud_dim(c); ++d)
+        x[d] = pst_cloud_coord_const(c, d)[i];
+}
+
+static double *quad_field(const pst_cloud *c)
+{
+    size_t n = pst_cloud_size(c);
+    double *u = malloc(n * sizeof *u);
+    for (size_t i = 0; i < n; ++i) {
+        double x[3];
+        position(c, i, x);
+        u[i] = quad(pst_cloud_dim(c), x);
+    }
+    return u;
+}
+
+/* Quadratic exactness at full-support particles (3h from the box) on K = 0.8 clouds, and of
+ * interpolation at points of the inner region. */
+static void test_exactness(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        double s0 = 0.05, margin = 3.0 * 1.2 * s0;
+        pst_cloud *c = patch(dim, s0, 0.8, 0);
+        pst_nlist *nl = neighbours(c, 3.0);
+        size_t n = pst_cloud_size(c);
+        double *u = quad_field(c), *y = malloc(n * sizeof *y), *gr[3], *hs[6];
+        for (int a = 0; a < 3; ++a)
+            gr[a] = malloc(n * sizeof(double));
+        for (int e = 0; e < 6; ++e)
+            hs[e] = malloc(n * sizeof(double));
+        enum { NP = 40 };
+        double px[3][NP], val[NP], lap[NP];
+        const double *pts[3] = {px[0], px[1], px[2]};
+        for (int p = 0; p < NP; ++p)
+            for (int a = 0; a < 3; ++a)
+                px[a][p] = 2.3 + 0.4 * (0.5 + 0.5 * pst_rng_symmetric(5, (uint64_t)p, (uint64_t)a));
+        double lap_exact = quad_lap(dim), hmax = 0, gmax = 0;
+        for (int e = 0; e < dim * (dim + 1) / 2; ++e)
+            hmax = fmax(hmax, fabs(quad_hess(dim, e)));
+        for (int cfg = 0; cfg < 3; ++cfg) {
+            pst_op *op = make_op(c, nl, cfg);
+            pst_op_apply(op, u, y);
+            CHECK_INT(pst_op_gradient(op, u, gr), PST_OK);
+            CHECK_INT(pst_op_hessian(op, u, hs), PST_OK);
+            const uint8_t *st = pst_op_status(op);
+            double el = 0, eg = 0, eh = 0;
+            size_t used = 0, bad = 0;
+            for (size_t i = 0; i < n; ++i) {
+                if (!inner(c, i, margin))
+                    continue;
+                ++used;
+                bad += st[i] != PST_ROW_OK;
+                double x[3];
+                position(c, i, x);
+                el = fmax(el, fabs(y[i] - lap_exact) / fabs(lap_exact));
+                for (int a = 0; a < dim; ++a) {
+                    gmax = fmax(gmax, fabs(quad_grad(dim, x, a)));
+                    eg = fmax(eg, fabs(gr[a][i] - quad_grad(dim, x, a)));
+                }
+                for (int e = 0; e < dim * (dim + 1) / 2; ++e)
+                    eh = fmax(eh, fabs(hs[e][i] - quad_hess(dim, e)) / hmax);
+            }
+            eg /= gmax;
+            size_t fb = 99;
+            char err[PST_ERRLEN];
+            CHECK_INT(pst_op_interpolate(op, pts, NP, u, val, lap, &fb, err), PST_OK);
+            double ev = 0, eil = 0;
+            for (int p = 0; p < NP; ++p) {
+                double x[3] = {px[0][p], px[1][p], dim == 3 ? px[2][p] : 0};
+                ev = fmax(ev, fabs(val[p] - quad(dim, x)) / fabs(quad(dim, x)));
+                eil = fmax(eil, fabs(lap[p] - lap_exact) / fabs(lap_exact));
+            }
+            double t[PST_NPHASES];
+            pst_op_phase_times(op, t);
+            printf("exact %dD %-8s K=0.8: %zu full-support rows (%zu not ok); rel err lap %.2e "
+                   "grad %.2e hess %.2e; interp value %.2e lap %.2e (%zu fallbacks); phases "
+                   "ms geo %.2f mom %.2f inv %.2f wts %.2f\n",
+                   dim, cfg_name[cfg], used, bad, el, eg, eh, ev, eil, fb, 1e3 * t[0],
+                   1e3 * t[1], 1e3 * t[2], 1e3 * t[3]);
+            CHECK(used > 50);
+            CHECK_INT(bad, 0);
+            CHECK(el <= 1e-9);
+            CHECK(eg <= 1e-9);
+            CHECK(eh <= 1e-9);
+            CHECK(ev <= 1e-9);
+            CHECK(eil <= 1e-9);
+            CHECK_INT(fb, 0);
+            CHECK(t[PST_PHASE_MOMENTS] > 0 && t[PST_PHASE_INVERSION] > 0 &&
+                  t[PST_PHASE_WEIGHTS] > 0);
+            pst_op_destroy(op);
+        }
+        free(u);
+        free(y);
+        for (int a = 0; a < 3; ++a)
+            free(gr[a]);
+        for (int e = 0; e < 6; ++e)
+            free(hs[e]);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* §2.6: with one weight LP-MPS (Schur) and LSMPS type A (full solve) have the same weights;
+ * type B differs. */
+static void test_lpmps_is_lsmps_a(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        pst_cloud *c = patch(dim, dim == 2 ? 0.05 : 0.1, 0.8, 0);
+        pst_nlist *nl = neighbours(c, 3.0);
+        pst_op *op[3];
+        pst_csr a[3];
+        for (int cfg = 0; cfg < 3; ++cfg) {
+            op[cfg] = make_op(c, nl, cfg);
+            CHECK_INT(pst_op_assemble(op[cfg], &a[cfg]), PST_OK);
+        }
+        double worst = 0, worst_b = 0;
+        for (size_t i = 0; i < a[1].n; ++i) {
+            double mag = 0, d = 0, db = 0;
+            for (int64_t e = a[1].rowptr[i]; e < a[1].rowptr[i + 1]; ++e) {
+                mag = fmax(mag, fabs(a[1].val[e]));
+                d = fmax(d, fabs(a[1].val[e] - a[2].val[e]));
+                db = fmax(db, fabs(a[1].val[e] - a[0].val[e]));
+            }
+            worst = fmax(worst, d / mag);
+            worst_b = fmax(worst_b, db / mag);
+        }
+        printf("lpmps vs lsmps-A %dD: max |w_lp - w_A| / max |w| per row %.2e (type B vs A "
+               "%.2e)\n",
+               dim, worst, worst_b);
+        CHECK(worst <= 1e-10);
+        CHECK(worst_b >= 1e-3); /* the constant changes the fit */
+        for (int cfg = 0; cfg < 3; ++cfg) {
+            pst_csr_free(&a[cfg]);
+            pst_op_destroy(op[cfg]);
+        }
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* Both apply paths, the assembled matrix and the diagonal, on a cloud with all three kinds;
+ * 1 and 2 threads bit for bit (apply, status, gradient, Hessian); Neumann rows give n . grad u
+ * of a quadratic exactly. */
+static void test_paths_and_threads(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        pst_cloud *c = patch(dim, dim == 2 ? 0.05 : 0.1, 0.3, 1);
+        uint8_t *kind = pst_cloud_kinds(c);
+        size_t n = pst_cloud_size(c);
+        for (size_t i = 0; i < n; i += 3) /* every third boundary particle Neumann */
+            if (kind[i] == PST_DIRICHLET)
+                kind[i] = PST_NEUMANN;
+        pst_nlist *nl = neighbours(c, 3.0);
+        double *u = quad_field(c), *y1 = malloc(n * sizeof *y1), *y2 = malloc(n * sizeof *y2),
+               *y3 = malloc(n * sizeof *y3), *dg = malloc(n * sizeof *dg);
+        double *g1[3], *g2[3], *h1[6], *h2[6];
+        for (int a = 0; a < 3; ++a) {
+            g1[a] = malloc(n * sizeof(double));
+            g2[a] = malloc(n * sizeof(double));
+        }
+        for (int e = 0; e < 6; ++e) {
+            h1[e] = malloc(n * sizeof(double));
+            h2[e] = malloc(n * sizeof(double));
+        }
+        for (int cfg = 0; cfg < 3; ++cfg) {
+            omp_set_num_threads(1);
+            pst_op *op1 = make_op(c, nl, cfg);
+            pst_op_apply(op1, u, y3);
+            pst_op_gradient(op1, u, g1);
+            pst_op_hessian(op1, u, h1);
+            omp_set_num_threads(2);
+            pst_op *op = make_op(c, nl, cfg);
+            pst_op_apply(op, u, y1);
+            pst_op_gradient(op, u, g2);
+            pst_op_hessian(op, u, h2);
+            CHECK(memcmp(y1, y3, n * sizeof *y1) == 0);
+            CHECK(memcmp(pst_op_status(op), pst_op_status(op1), n) == 0);
+            for (int a = 0; a < dim; ++a)
+                CHECK(memcmp(g1[a], g2[a], n * sizeof(double)) == 0);
+            for (int e = 0; e < dim * (dim + 1) / 2; ++e)
+                CHECK(memcmp(h1[e], h2[e], n * sizeof(double)) == 0);
+            CHECK_INT(pst_op_apply_stored(op, u, y2), PST_EINVAL);
+            CHECK_INT(pst_op_store(op), PST_OK);
+            CHECK_INT(pst_op_apply_stored(op, u, y2), PST_OK);
+            pst_csr a;
+            CHECK_INT(pst_op_assemble(op, &a), PST_OK);
+            CHECK_INT(pst_op_diagonal(op, dg), PST_OK);
+            double worst = 0, worst_csr = 0, worst_diag = 0, neu = 0, nscale = 0;
+            int finite = 1;
+            size_t nneu = 0;
+            const uint8_t *st = pst_op_status(op);
+            for (size_t i = 0; i < n; ++i) {
+                double sum = 0, mag = 0;
+                for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
+                    sum += a.val[e] * u[a.col[e]];
+                    mag += fabs(a.val[e] * u[a.col[e]]);
+                    if (a.col[e] == i)
+                        worst_diag = fmax(worst_diag, fabs(a.val[e] - dg[i]));
+                }
+                finite = finite && isfinite(y1[i]) && isfinite(y2[i]);
+                worst = fmax(worst, fabs(y1[i] - y2[i]) / (mag > 0 ? mag : 1));
+                worst_csr = fmax(worst_csr, fabs(sum - y1[i]) / (mag > 0 ? mag : 1));
+                if (kind[i] == PST_NEUMANN && st[i] == PST_ROW_OK) {
+                    double x[3], flux = 0;
+                    position(c, i, x);
+                    for (int d = 0; d < dim; ++d)
+                        flux += pst_cloud_normal(c, d)[i] * quad_grad(dim, x, d);
+                    neu = fmax(neu, fabs(y1[i] - flux));
+                    nscale = fmax(nscale, fabs(flux));
+                    ++nneu;
+                }
+            }
+            printf("paths %dD %-8s: mf vs stored %.2e, csr vs apply %.2e, Neumann rows (%zu) "
+                   "|row - n.grad u| / max %.2e\n",
+                   dim, cfg_name[cfg], worst, worst_csr, nneu, neu / nscale);
+            CHECK(finite);
+            CHECK(worst <= 1e-13);
+            CHECK(worst_csr <= 1e-13);
+            CHECK(worst_diag == 0.0);
+            CHECK(nneu > 10);
+            CHECK(neu <= 1e-9 * nscale);
+            pst_csr_free(&a);
+            pst_op_destroy(op);
+            pst_op_destroy(op1);
+        }
+        free(u);
+        free(y1);
+        free(y2);
+        free(y3);
+        free(dg);
+        for (int a = 0; a < 3; ++a) {
+            free(g1[a]);
+            free(g2[a]);
+        }
+        for (int e = 0; e < 6; ++e) {
+            free(h1[e]);
+            free(h2[e]);
+        }
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* A cloud from explicit positions. */
+static pst_cloud *cloud_of(int dim, size_t n, const double *xyz, double h)
+{
+    pst_cloud *c;
+    CHECK_INT(pst_cloud_create(&c, dim, n), PST_OK);
+    for (size_t i = 0; i < n; ++i)
+        for (int d = 0; d < dim; ++d)
+            pst_cloud_coord(c, d)[i] = xyz[3 * i + (size_t)d];
+    pst_cloud_set_h_uniform(c, h);
+    return c;
+}
+
+/* Collinear 2D / coplanar 3D neighbourhoods and an isolated particle: flagged, finite, the
+ * isolated row empty; too few neighbours: the linear-exact fallback on (x, y, |x|^2). */
+static void test_degenerate(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        /* 2D: 11 particles on a line; 3D: a 5 x 5 grid in the plane z = 0; plus one far away */
+        size_t n = dim == 2 ? 12 : 26;
+        double *xyz = calloc(3 * n, sizeof *xyz);
+        for (size_t i = 0; i + 1 < n; ++i) {
+            xyz[3 * i] = dim == 2 ? 0.1 * (double)i : 0.1 * (double)(i % 5);
+            xyz[3 * i + 1] = dim == 2 ? 0.0 : 0.1 * (double)(i / 5);
+        }
+        xyz[3 * (n - 1)] = xyz[3 * (n - 1) + 1] = xyz[3 * (n - 1) + 2] = 10.0;
+        pst_cloud *c = cloud_of(dim, n, xyz, 0.12);
+        pst_nlist *nl = neighbours(c, 3.0);
+        double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y), *gr[3], *hs[6];
+        for (int a = 0; a < 3; ++a)
+            gr[a] = malloc(n * sizeof(double));
+        for (int e = 0; e < 6; ++e)
+            hs[e] = malloc(n * sizeof(double));
+        for (size_t i = 0; i < n; ++i)
+            u[i] = (double)(i * i);
+        for (int cfg = 0; cfg < 3; ++cfg) {
+            pst_op *op = make_op(c, nl, cfg);
+            size_t counts[PST_ROW_NSTATUS];
+            pst_op_status_counts(op, counts);
+            pst_op_apply(op, u, y);
+            pst_op_gradient(op, u, gr);
+            pst_op_hessian(op, u, hs);
+            int finite = 1;
+            for (size_t i = 0; i < n; ++i) {
+                finite = finite && isfinite(y[i]);
+                for (int a = 0; a < dim; ++a)
+                    finite = finite && isfinite(gr[a][i]);
+                for (int e = 0; e < dim * (dim + 1) / 2; ++e)
+                    finite = finite && isfinite(hs[e][i]);
+            }
+            CHECK(finite);
+            CHECK_INT(pst_op_status(op)[n - 1], PST_ROW_TOO_FEW);
+            CHECK(y[n - 1] == 0.0);
+            CHECK_INT(counts[PST_ROW_RANK_DEFICIENT] + counts[PST_ROW_TOO_FEW], n);
+            CHECK(counts[PST_ROW_RANK_DEFICIENT] >= (dim == 2 ? 5 : 15));
+            printf("degenerate %dD %-8s: ok %zu, fallback %zu, ill %zu, rank-deficient %zu, too "
+                   "few %zu\n",
+                   dim, cfg_name[cfg], counts[0], counts[1], counts[2], counts[3], counts[4]);
+            pst_op_destroy(op);
+        }
+        free(xyz);
+        free(u);
+        free(y);
+        for (int a = 0; a < 3; ++a)
+            free(gr[a]);
+        for (int e = 0; e < 6; ++e)
+            free(hs[e]);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+
+    /* too few: a 2D centre with 4 neighbours in general position (3D: 8); the reduced fit is
+     * exact for 1 + g . x + k |x|^2 (Laplacian 2 D k) */
+    for (int dim = 2; dim <= 3; ++dim) {
+        static const double nb2[4][3] = {{0.1, 0.02, 0}, {-0.09, 0.03, 0}, {0.02, 0.11, 0},
+                                         {-0.01, -0.1, 0}};
+        size_t n = dim == 2 ? 5 : 9;
+        double xyz[27] = {0};
+        for (size_t i = 1; i < n; ++i)
+            for (int d = 0; d < 3; ++d)
+                xyz[3 * i + (size_t)d] =
+                    dim == 2 ? nb2[i - 1][d]
+                             : 0.1 * pst_rng_symmetric(3, (uint64_t)i, (uint64_t)d);
+        pst_cloud *c = cloud_of(dim, n, xyz, 0.1);
+        pst_nlist *nl = neighbours(c, 3.0);
+        double u[9], y[9], g[3][9], hb[6][9];
+        double *gr[3] = {g[0], g[1], g[2]};
+        double *hs[6] = {hb[0], hb[1], hb[2], hb[3], hb[4], hb[5]};
+        for (size_t i = 0; i < n; ++i) {
+            double r2 = 0;
+            for (int d = 0; d < dim; ++d)
+                r2 += xyz[3 * i + (size_t)d] * xyz[3 * i + (size_t)d];
+            u[i] = 1.0 + 2.0 * xyz[3 * i] - 3.0 * xyz[3 * i + 1] + 0.7 * r2;
+        }
+        for (int cfg = 0; cfg < 3; ++cfg) {
+            pst_op *op = make_op(c, nl, cfg);
+            pst_op_apply(op, u, y);
+            pst_op_gradient(op, u, gr);
+            pst_op_hessian(op, u, hs);
+            printf("too few %dD %-8s: status %s, L u = %.15f (exact %.1f), grad (%.3e, %.3e) "
+                   "err\n",
+                   dim, cfg_name[cfg], pst_row_status_name(pst_op_status(op)[0]), y[0],
+                   1.4 * dim, g[0][0] - 2.0, g[1][0] + 3.0);
+            CHECK_INT(pst_op_status(op)[0], PST_ROW_TOO_FEW);
+            CHECK_NEAR(y[0], 1.4 * dim, 1e-10);
+            CHECK_NEAR(g[0][0], 2.0, 1e-10);
+            CHECK_NEAR(g[1][0], -3.0, 1e-10);
+            CHECK_NEAR(hb[0][0], 1.4, 1e-10);
+            CHECK_NEAR(hb[dim][0], 0.0, 1e-10);
+            pst_op_destroy(op);
+        }
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+static void test_errors(void)
+{
+    pst_cloud *c = patch(2, 0.1, 0.0, 0);
+    pst_nlist *nl = neighbours(c, 2.0);
+    pst_op_opts o;
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    pst_op_defaults(&o);
+    o.scheme = "lsmps";
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL); /* list radius 2h < 3h */
+    CHECK(strstr(err, "support") != NULL);
+    pst_nlist_destroy(nl);
+    nl = neighbours(c, 3.0);
+    o.variant = 2;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "variant") != NULL);
+    CHECK(op == NULL);
+    o.scheme = "lpmps";
+    o.variant = 1;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "variant") != NULL);
+    o.variant = 0;
+    pst_cloud_set_mobility(c, 1);
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "mobility") != NULL);
+    pst_cloud_set_mobility(c, 0);
+    CHECK_INT(pst_scheme_default_kernel("lsmps"), PST_KERNEL_QUINTIC);
+    CHECK_INT(pst_scheme_default_kernel("lpmps"), PST_KERNEL_QUINTIC);
+    /* another weight (Wendland C2, support 2h) is allowed and still quadratic-exact */
+    o.scheme = "lsmps";
+    o.kernel = PST_KERNEL_WENDLAND_C2;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_OK);
+    size_t n = pst_cloud_size(c);
+    double *u = quad_field(c), *y = malloc(n * sizeof *y), worst = 0;
+    pst_op_apply(op, u, y);
+    for (size_t i = 0; i < n; ++i)
+        if (inner(c, i, 0.25))
+            worst = fmax(worst, fabs(y[i] - quad_lap(2)));
+    printf("wendland_c2 weight 2D lsmps-B: max lap err %.2e\n", worst);
+    CHECK(worst <= 1e-9);
+    pst_op_destroy(op);
+    free(u);
+    free(y);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
+int main(void)
+{
+    test_exactness();
+    test_lpmps_is_lsmps_a();
+    test_paths_and_threads();
+    test_degenerate();
+    test_errors();
+    return check_summary("test_lsmps");
+}

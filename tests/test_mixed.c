@@ -1,0 +1,535 @@
+/* The least-squares mixed schemes (mixed0, mixed1, mixed2; seed 003 Models 3-5): exactness of
+ * the nested Laplacian and of div(m grad u) on jittered clouds (K = 0.8), the LS gradient and
+ * Hessian, Neumann rows, the two apply paths and the assembled matrix on the neighbours-of-
+ * neighbours pattern, 1 vs 2 threads, degenerate rows and bad options, in 2D and 3D. */
+#include "check.h"
+#include "pstencil.h"
+
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const schemes[] = {"mixed0", "mixed1", "mixed2"};
+#define NSCHEMES 3
+
+/* A lattice on [0,1]^dim with spacing s0, h = f s0, jitter K. */
+static pst_cloud *lattice(int dim, double s0, double f, double K, int boundary_layer)
+{
+    pst_lattice_opts o;
+    pst_lattice_defaults(&o);
+    o.dim = dim;
+    for (int d = 0; d < 3; ++d) {
+        o.lo[d] = 0.0;
+        o.hi[d] = 1.0;
+    }
+    o.s0 = s0;
+    o.h_ratio = f;
+    o.jitter = K;
+    o.seed = 11;
+    o.boundary_layer = boundary_layer;
+    pst_cloud *c = NULL;
+    char err[PST_ERRLEN];
+    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
+        fprintf(stderr, "lattice: %s\n", err);
+        exit(1);
+    }
+    return c;
+}
+
+static pst_nlist *neighbours(const pst_cloud *c, double support)
+{
+    pst_nlist *nl = NULL;
+    char err[PST_ERRLEN];
+    if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
+        fprintf(stderr, "nlist: %s\n", err);
+        exit(1);
+    }
+    return nl;
+}
+
+static pst_op *make_op(const pst_cloud *c, const pst_nlist *nl, const char *scheme)
+{
+    pst_op_opts o;
+    pst_op_defaults(&o);
+    o.scheme = scheme;
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    if (pst_op_create(&op, c, nl, &o, err) != PST_OK) {
+        fprintf(stderr, "op %s: %s\n", scheme, err);
+        exit(1);
+    }
+    return op;
+}
+
+static void coords(const pst_cloud *c, size_t i, double x[3])
+{
+    x[0] = x[1] = x[2] = 0;
+    for (int d = 0; d < pst_cloud_dim(c); ++d)
+        x[d] = pst_cloud_coord_const(c, d)[i];
+}
+
+/* Every coordinate at least `margin` inside [0,1]. */
+static int inner(const pst_cloud *c, size_t i, double margin)
+{
+    double x[3];
+    coords(c, i, x);
+    for (int d = 0; d < pst_cloud_dim(c); ++d)
+        if (x[d] < margin || x[d] > 1.0 - margin)
+            return 0;
+    return 1;
+}
+
+static double *field(const pst_cloud *c, double (*f)(const double *))
+{
+    size_t n = pst_cloud_size(c);
+    double *u = malloc(n * sizeof *u);
+    for (size_t i = 0; i < n; ++i) {
+        double x[3];
+        coords(c, i, x);
+        u[i] = f(x);
+    }
+    return u;
+}
+
+static const double slope[3] = {2.0, -3.0, 0.5};
+static double linear(const double *x) { return 1.0 + 2.0 * x[0] - 3.0 * x[1] + 0.5 * x[2]; }
+/* a full quadratic; its Laplacian is 2 (1.5 + 0.5 + 1) in 3D, 2 (1.5 + 0.5) in 2D */
+static double quad(const double *x)
+{
+    return 1.5 * x[0] * x[0] + 0.5 * x[1] * x[1] + x[2] * x[2] + 0.7 * x[0] * x[1] -
+           0.4 * x[0] * x[2] + 0.3 * x[1] * x[2] + x[0] - x[1];
+}
+static void quad_grad(const double *x, double g[3])
+{
+    g[0] = 3.0 * x[0] + 0.7 * x[1] - 0.4 * x[2] + 1.0;
+    g[1] = x[1] + 0.7 * x[0] + 0.3 * x[2] - 1.0;
+    g[2] = 2.0 * x[2] - 0.4 * x[0] + 0.3 * x[1];
+}
+/* scalar mobility m = 1 + c . x */
+static const double mc[3] = {0.5, -0.3, 0.2};
+static double mobility(const double *x) { return 1.0 + mc[0] * x[0] + mc[1] * x[1] + mc[2] * x[2]; }
+/* div(m grad quad) = m lap(quad) + grad m . grad quad */
+static double div_m_grad_quad(const double *x, int dim)
+{
+    double g[3], lap = dim == 2 ? 4.0 : 6.0, s = mobility(x) * lap;
+    quad_grad(x, g);
+    for (int d = 0; d < dim; ++d)
+        s += mc[d] * g[d];
+    return s;
+}
+
+/* The exactness test of one scheme on one cloud: linear u (L u = 0), div(m grad u) with linear
+ * m and u (= grad m . grad u), the gradient of linear u, and for mixed2 quadratics (L, div(m
+ * grad), gradient, Hessian), at rows with full 2-ring support (margin 6h). Returns the worst
+ * quadratic Laplacian error (to compare the schemes). */
+static double exactness(pst_cloud *c, const pst_nlist *nl, const char *scheme, double margin)
+{
+    int dim = pst_cloud_dim(c), quadratic = strcmp(scheme, "mixed2") == 0;
+    size_t n = pst_cloud_size(c), used = 0;
+    double *u = field(c, linear), *q = field(c, quad), *y = malloc(n * sizeof *y);
+    double *g[3], *hs[6];
+    for (int d = 0; d < 3; ++d)
+        g[d] = malloc(n * sizeof *g[d]);
+    for (int d = 0; d < 6; ++d)
+        hs[d] = malloc(n * sizeof *hs[d]);
+    pst_op *op = make_op(c, nl, scheme);
+    double e_lin = 0, e_grad = 0, e_mob = 0, e_quad = 0, e_qmob = 0, e_qgrad = 0, e_hess = 0;
+    pst_op_apply(op, u, y);
+    CHECK_INT(pst_op_gradient(op, u, g), PST_OK);
+    for (size_t i = 0; i < n; ++i) {
+        if (!inner(c, i, margin))
+            continue;
+        ++used;
+        e_lin = fmax(e_lin, fabs(y[i]));
+        for (int d = 0; d < dim; ++d)
+            e_grad = fmax(e_grad, fabs(g[d][i] - slope[d]));
+    }
+    pst_op_apply(op, q, y);
+    CHECK_INT(pst_op_gradient(op, q, g), PST_OK);
+    CHECK_INT(pst_op_hessian(op, q, hs), quadratic ? PST_OK : PST_EINVAL);
+    for (size_t i = 0; i < n; ++i) {
+        if (!inner(c, i, margin))
+            continue;
+        double x[3], gq[3];
+        coords(c, i, x);
+        quad_grad(x, gq);
+        double lap = dim == 2 ? 4.0 : 6.0;
+        e_quad = fmax(e_quad, fabs(y[i] - lap) / lap);
+        for (int d = 0; d < dim; ++d)
+            e_qgrad = fmax(e_qgrad, fabs(g[d][i] - gq[d]));
+        if (quadratic) {
+            double h2[6] = {3.0, 1.0, 0.7, 0, 0, 0}; /* 2D: xx, yy, xy */
+            if (dim == 3) {
+                double h3[6] = {3.0, 1.0, 2.0, 0.7, -0.4, 0.3};
+                memcpy(h2, h3, sizeof h2);
+            }
+            for (int k = 0; k < (dim == 2 ? 3 : 6); ++k)
+                e_hess = fmax(e_hess, fabs(hs[k][i] - h2[k]));
+        }
+    }
+    pst_op_destroy(op);
+    /* heterogeneous scalar mobility m = 1 + c . x */
+    pst_cloud_set_mobility(c, 1);
+    double *m = pst_cloud_mobility(c, 0);
+    for (size_t i = 0; i < n; ++i) {
+        double x[3];
+        coords(c, i, x);
+        m[i] = mobility(x);
+    }
+    op = make_op(c, nl, scheme);
+    pst_op_apply(op, u, y);
+    double target = 0;
+    for (int d = 0; d < dim; ++d)
+        target += mc[d] * slope[d];
+    for (size_t i = 0; i < n; ++i)
+        if (inner(c, i, margin))
+            e_mob = fmax(e_mob, fabs(y[i] - target) / fabs(target));
+    pst_op_apply(op, q, y);
+    for (size_t i = 0; i < n; ++i)
+        if (inner(c, i, margin)) {
+            double x[3];
+            coords(c, i, x);
+            double t = div_m_grad_quad(x, dim);
+            e_qmob = fmax(e_qmob, fabs(y[i] - t) / fabs(t));
+        }
+    pst_op_destroy(op);
+    pst_cloud_set_mobility(c, 0);
+    printf("exact %dD %s (%zu rows): linear |Lu| %.2e, grad err %.2e, div(m grad lin) rel %.2e; "
+           "quadratic: lap rel %.2e, div(m grad) rel %.2e, grad err %.2e, hessian err %.2e\n",
+           dim, scheme, used, e_lin, e_grad, e_mob, e_quad, e_qmob, e_qgrad, e_hess);
+    CHECK(used >= (dim == 2 ? 100u : 8u));
+    CHECK(e_lin <= 1e-9);
+    CHECK(e_grad <= 1e-10);
+    CHECK(e_mob <= 1e-9);
+    if (quadratic) {
+        CHECK(e_quad <= 1e-9);
+        CHECK(e_qmob <= 1e-9);
+        CHECK(e_qgrad <= 1e-10);
+        CHECK(e_hess <= 1e-8);
+    } else {
+        CHECK(e_qgrad >= 1e-6); /* the linear fit is not exact for quadratics on disorder */
+    }
+    free(u);
+    free(q);
+    free(y);
+    for (int d = 0; d < 3; ++d)
+        free(g[d]);
+    for (int d = 0; d < 6; ++d)
+        free(hs[d]);
+    return e_quad;
+}
+
+/* Jittered clouds K = 0.8, h = 1.2 s0 in 2D, 1.0 s0 in 3D (the precompute builds the 2-ring
+ * pattern, |N|^2 per row): full support of the nested operator is 2 * 3h from the box. */
+static void test_exactness(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        double s0 = dim == 2 ? 1.0 / 30 : 1.0 / 16, f = dim == 2 ? 1.2 : 1.0;
+        pst_cloud *c = lattice(dim, s0, f, 0.8, 0);
+        pst_nlist *nl = neighbours(c, 3.0);
+        double eq[NSCHEMES];
+        for (int s = 0; s < NSCHEMES; ++s)
+            eq[s] = exactness(c, nl, schemes[s], 6.0 * f * s0);
+        CHECK(eq[0] >= 1e-4 && eq[1] >= 1e-4); /* linear fits: O(1) truncation on disorder */
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* On a regular lattice the linear fit is centred (odd moments vanish), so mixed0/mixed1 give
+ * exact gradients of quadratics and the nested Laplacian is exact for quadratics inside: 2
+ * rings (6h) from the box for mixed1, 3 rings (9h) for mixed0, whose volumes V~ (eq. 4) must
+ * be uniform on the 2-ring too. */
+static void test_lattice(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        double s0 = dim == 2 ? 1.0 / 30 : 1.0 / 18, f = dim == 2 ? 1.2 : 1.0;
+        pst_cloud *c = lattice(dim, s0, f, 0.0, 0);
+        pst_nlist *nl = neighbours(c, 3.0);
+        size_t n = pst_cloud_size(c);
+        double *q = field(c, quad), *y = malloc(n * sizeof *y);
+        for (int s = 0; s < 2; ++s) {
+            pst_op *op = make_op(c, nl, schemes[s]);
+            pst_op_apply(op, q, y);
+            double worst = 0, lap = dim == 2 ? 4.0 : 6.0;
+            size_t used = 0;
+            for (size_t i = 0; i < n; ++i)
+                if (inner(c, i, (s == 0 ? 9 : 6) * f * s0 - 1e-9)) {
+                    worst = fmax(worst, fabs(y[i] - lap) / lap);
+                    ++used;
+                }
+            printf("lattice %dD %s: lap(quadratic) rel err %.2e over %zu rows\n", dim,
+                   schemes[s], worst, used);
+            CHECK(used >= 1);
+            CHECK(worst <= 1e-10);
+            pst_op_destroy(op);
+        }
+        free(q);
+        free(y);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+}
+
+/* Both apply paths, the assembled matrix and the diagonal on the 2-ring pattern, on a cloud
+ * with all three kinds and no/scalar/tensor mobility; 1 and 2 threads bit for bit; Neumann rows
+ * equal n . M grad u for linear u and constant M. */
+static void test_paths_and_threads(void)
+{
+    for (int dim = 2; dim <= 3; ++dim)
+        for (int ncomp = 0; ncomp <= dim; ncomp += (ncomp == 1 ? dim - 1 : 1)) {
+            pst_cloud *c = dim == 2 ? lattice(2, 1.0 / 15, 1.2, 0.3, 1)
+                                    : lattice(3, 1.0 / 7, 1.0, 0.3, 1);
+            uint8_t *kind = pst_cloud_kinds(c);
+            size_t n = pst_cloud_size(c);
+            for (size_t i = 0; i < n; i += 3) /* every third boundary particle Neumann */
+                if (kind[i] == PST_DIRICHLET)
+                    kind[i] = PST_NEUMANN;
+            pst_cloud_set_mobility(c, ncomp);
+            for (int k = 0; k < ncomp; ++k) {
+                double *m = pst_cloud_mobility(c, k);
+                for (size_t i = 0; i < n; ++i)
+                    m[i] = 1.0 + 0.5 * k + 1e3 * ((i * 2654435761u) % 5 == 0);
+            }
+            pst_nlist *nl = neighbours(c, 3.0);
+            double *u = field(c, quad), *ul = field(c, linear), *y1 = malloc(n * sizeof *y1),
+                   *y2 = malloc(n * sizeof *y2), *y3 = malloc(n * sizeof *y3),
+                   *dg = malloc(n * sizeof *dg);
+            for (int s = 0; s < NSCHEMES; ++s) {
+                omp_set_num_threads(1);
+                pst_op *op1 = make_op(c, nl, schemes[s]);
+                pst_op_apply(op1, u, y3);
+                omp_set_num_threads(2);
+                pst_op *op = make_op(c, nl, schemes[s]);
+                pst_op_apply(op, u, y1);
+                CHECK(memcmp(y1, y3, n * sizeof *y1) == 0);
+                CHECK(memcmp(pst_op_status(op), pst_op_status(op1), n) == 0);
+                CHECK_INT(pst_op_store(op), PST_OK);
+                CHECK_INT(pst_op_store(op1), PST_OK);
+                CHECK_INT(pst_op_apply_stored(op, u, y2), PST_OK);
+                pst_op_apply_stored(op1, u, y3);
+                CHECK(memcmp(y2, y3, n * sizeof *y2) == 0); /* stored weights: 1 vs 2 threads */
+                pst_csr a;
+                CHECK_INT(pst_op_assemble(op, &a), PST_OK);
+                CHECK_INT(pst_op_diagonal(op, dg), PST_OK);
+                double worst = 0, worst_csr = 0, worst_diag = 0, mean = 0;
+                int finite = 1, sorted = 1;
+                for (size_t i = 0; i < n; ++i) {
+                    double sum = 0, mag = 0;
+                    for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
+                        sum += a.val[e] * u[a.col[e]];
+                        mag += fabs(a.val[e] * u[a.col[e]]);
+                        if (a.col[e] == i)
+                            worst_diag = fmax(worst_diag, fabs(a.val[e] - dg[i]));
+                        if (e > a.rowptr[i])
+                            sorted = sorted && a.col[e] > a.col[e - 1];
+                    }
+                    mean += (double)(a.rowptr[i + 1] - a.rowptr[i] - 1);
+                    finite = finite && isfinite(y1[i]) && isfinite(y2[i]);
+                    worst = fmax(worst, fabs(y1[i] - y2[i]) / (mag > 0 ? mag : 1));
+                    worst_csr = fmax(worst_csr, fabs(sum - y1[i]) / (mag > 0 ? mag : 1));
+                }
+                printf("paths %dD %s ncomp %d: pattern %.1f per row (list %.1f), free vs stored "
+                       "%.2e, csr vs free %.2e (relative to sum |w u|)\n",
+                       dim, schemes[s], ncomp, mean / (double)n,
+                       (double)pst_nlist_pairs(nl) / (double)n, worst, worst_csr);
+                CHECK(finite);
+                CHECK(sorted);
+                CHECK(mean > 1.5 * (double)pst_nlist_pairs(nl)); /* wider than the list */
+                CHECK(worst <= 1e-13);
+                CHECK(worst_csr <= 1e-13);
+                CHECK(worst_diag == 0.0);
+                if (ncomp != 1) {
+                    /* Neumann rows: n . M grad u for linear u (M constant per particle here
+                     * only where the mobility is; use the operator's M at I) */
+                    pst_op_apply(op, ul, y1);
+                    const uint8_t *st = pst_op_status(op);
+                    double wn = 0;
+                    for (size_t i = 0; i < n; ++i) {
+                        if (kind[i] != PST_NEUMANN || st[i] >= PST_ROW_RANK_DEFICIENT)
+                            continue;
+                        double flux = 0;
+                        for (int d = 0; d < dim; ++d)
+                            flux += pst_cloud_normal(c, d)[i] * slope[d] *
+                                    (ncomp ? pst_cloud_mobility(c, d)[i] : 1.0);
+                        wn = fmax(wn, fabs(y1[i] - flux) / (fabs(flux) + 1));
+                    }
+                    CHECK(wn <= 1e-10);
+                }
+                pst_csr_free(&a);
+                pst_op_destroy(op);
+                pst_op_destroy(op1);
+            }
+            free(u);
+            free(ul);
+            free(y1);
+            free(y2);
+            free(y3);
+            free(dg);
+            pst_nlist_destroy(nl);
+            pst_cloud_destroy(c);
+        }
+}
+
+/* Degenerate rows: flagged, finite, the isolated row is 0. 2D collinear, 3D coplanar, one
+ * isolated particle each; and a 2D particle with 3 neighbours (mixed2: too few for the
+ * quadratic fit, the linear fit still gives the exact gradient of linear u). */
+static void test_degenerate(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        size_t side = dim == 2 ? 11 : 5, nflat = dim == 2 ? side : side * side, n = nflat + 1;
+        pst_cloud *c;
+        CHECK_INT(pst_cloud_create(&c, dim, n), PST_OK);
+        for (size_t i = 0; i < nflat; ++i) {
+            pst_cloud_coord(c, 0)[i] = 0.1 * (double)(i % side);
+            pst_cloud_coord(c, 1)[i] = dim == 2 ? 0.0 : 0.1 * (double)(i / side);
+            if (dim == 3)
+                pst_cloud_coord(c, 2)[i] = 0.0;
+        }
+        for (int d = 0; d < dim; ++d)
+            pst_cloud_coord(c, d)[nflat] = 10.0;
+        pst_cloud_set_h_uniform(c, dim == 2 ? 0.12 : 0.08); /* mixed2 gets >= 5 neighbours */
+        pst_nlist *nl = neighbours(c, 3.0);
+        double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y), *g[3], *hs[6];
+        for (int d = 0; d < 3; ++d)
+            g[d] = malloc(n * sizeof *g[d]);
+        for (int d = 0; d < 6; ++d)
+            hs[d] = malloc(n * sizeof *hs[d]);
+        for (size_t i = 0; i < n; ++i)
+            u[i] = (double)(i * i);
+        for (int s = 0; s < NSCHEMES; ++s) {
+            pst_op *op = make_op(c, nl, schemes[s]);
+            size_t counts[PST_ROW_NSTATUS];
+            pst_op_status_counts(op, counts);
+            pst_op_apply(op, u, y);
+            pst_op_gradient(op, u, g);
+            int finite = 1;
+            for (size_t i = 0; i < n; ++i) {
+                finite = finite && isfinite(y[i]);
+                for (int d = 0; d < dim; ++d)
+                    finite = finite && isfinite(g[d][i]);
+            }
+            if (s == 2) {
+                CHECK_INT(pst_op_hessian(op, u, hs), PST_OK);
+                for (size_t i = 0; i < n; ++i)
+                    for (int k = 0; k < (dim == 2 ? 3 : 6); ++k)
+                        finite = finite && hs[k][i] == 0.0; /* no quadratic fit anywhere */
+            }
+            CHECK(finite);
+            CHECK_INT(pst_op_status(op)[nflat], PST_ROW_TOO_FEW);
+            CHECK(y[nflat] == 0.0);
+            CHECK_INT(counts[PST_ROW_RANK_DEFICIENT] + counts[PST_ROW_TOO_FEW], n);
+            CHECK(counts[PST_ROW_RANK_DEFICIENT] > 0);
+            CHECK_INT(pst_op_store(op), PST_OK);
+            double *y2 = malloc(n * sizeof *y2);
+            pst_op_apply_stored(op, u, y2);
+            double diff = 0;
+            for (size_t i = 0; i < n; ++i)
+                diff = fmax(diff, fabs(y[i] - y2[i]) / (fabs(y[i]) + 1));
+            CHECK(diff <= 1e-12); /* fallback rows on both paths */
+            free(y2);
+            printf("degenerate %dD %s: ok %zu, fallback %zu, ill %zu, rank-deficient %zu, too few "
+                   "%zu\n",
+                   dim, schemes[s], counts[0], counts[1], counts[2], counts[3], counts[4]);
+            pst_op_destroy(op);
+        }
+        free(u);
+        free(y);
+        for (int d = 0; d < 3; ++d)
+            free(g[d]);
+        for (int d = 0; d < 6; ++d)
+            free(hs[d]);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+
+    /* particle 0 at the origin with 3 neighbours around it */
+    pst_cloud *c;
+    CHECK_INT(pst_cloud_create(&c, 2, 4), PST_OK);
+    const double px[4] = {0.0, 0.1, -0.05, 0.02}, py[4] = {0.0, 0.01, 0.08, -0.09};
+    for (int i = 0; i < 4; ++i) {
+        pst_cloud_coord(c, 0)[i] = px[i];
+        pst_cloud_coord(c, 1)[i] = py[i];
+    }
+    pst_cloud_set_h_uniform(c, 0.1);
+    pst_nlist *nl = neighbours(c, 3.0);
+    pst_op *op = make_op(c, nl, "mixed2");
+    double u[4], gx[4], gy[4], *g[3] = {gx, gy, NULL};
+    for (int i = 0; i < 4; ++i)
+        u[i] = 1.0 + 2.0 * px[i] - 3.0 * py[i];
+    pst_op_gradient(op, u, g);
+    CHECK_INT(pst_op_status(op)[0], PST_ROW_TOO_FEW);
+    CHECK_NEAR(gx[0], 2.0, 1e-12);
+    CHECK_NEAR(gy[0], -3.0, 1e-12);
+    pst_op_destroy(op);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
+/* Bad options and hooks the schemes do not have; per-particle h; phase timers. */
+static void test_errors_and_options(void)
+{
+    pst_cloud *c = lattice(2, 1.0 / 20, 1.2, 0.5, 0);
+    size_t n = pst_cloud_size(c);
+    pst_nlist *nl = neighbours(c, 2.0);
+    pst_op_opts o;
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    pst_op_defaults(&o);
+    o.scheme = "mixed1";
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL); /* list radius 2h < 3h */
+    CHECK(strstr(err, "support") != NULL);
+    pst_nlist_destroy(nl);
+    nl = neighbours(c, 3.0);
+    o.variant = 1;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "variant") != NULL);
+    CHECK(op == NULL);
+    o.variant = 0;
+    o.rank_tol = 2.0;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    pst_op_defaults(&o);
+    o.scheme = "mixed1";
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_OK);
+    double *hs[6] = {NULL};
+    CHECK_INT(pst_op_hessian(op, NULL, hs), PST_EINVAL);
+    CHECK_INT(pst_op_interpolate(op, NULL, 0, NULL, NULL, NULL, NULL, err), PST_EINVAL);
+    double t[PST_NPHASES];
+    pst_op_phase_times(op, t);
+    CHECK(t[PST_PHASE_MOMENTS] > 0 && t[PST_PHASE_INVERSION] > 0 && t[PST_PHASE_WEIGHTS] > 0);
+    CHECK(t[PST_PHASE_GEOMETRY] + t[PST_PHASE_MOMENTS] + t[PST_PHASE_INVERSION] +
+              t[PST_PHASE_WEIGHTS] <= t[PST_PHASE_PRECOMPUTE]);
+    pst_op_destroy(op);
+
+    /* per-particle h (the fit of I uses h_I): still exact for linear u */
+    double *h = pst_cloud_h_per_particle(c);
+    for (size_t i = 0; i < n; ++i)
+        h[i] = (1.1 + 0.3 * (double)(i % 3)) / 20;
+    pst_nlist_destroy(nl);
+    nl = neighbours(c, 3.0);
+    double *u = field(c, linear), *y = malloc(n * sizeof *y);
+    for (int s = 0; s < NSCHEMES; ++s) {
+        op = make_op(c, nl, schemes[s]);
+        pst_op_apply(op, u, y);
+        double worst = 0;
+        for (size_t i = 0; i < n; ++i)
+            worst = fmax(worst, fabs(y[i]));
+        printf("per-particle h %s: max |L u| (linear u, every row) %.2e\n", schemes[s], worst);
+        CHECK(worst <= 1e-9);
+        pst_op_destroy(op);
+    }
+    free(u);
+    free(y);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
+int main(void)
+{
+    test_exactness();
+    test_lattice();
+    test_paths_and_threads();
+    test_degenerate();
+    test_errors_and_options();
+    return check_summary("test_mixed");
+}
