@@ -6,6 +6,7 @@
  * p = x^2 y^2 z^2 on [2,3]^3 (the same inner box), with coarser resolutions. */
 #include "check.h"
 #include "pstencil.h"
+#include "support.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -40,43 +41,15 @@ static double lap3(const double *x)
 /* Eq. 14 over the inner box for one cloud. */
 static double error_eq14(int dim, double s0, uint64_t seed, const case_t *cs)
 {
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = 2.0;
-        o.hi[d] = 3.0;
-    }
-    o.s0 = s0;
-    o.jitter = 0.4;
-    o.seed = seed;
-    o.h_ratio = 0.9;
-    pst_cloud *c = NULL;
-    pst_nlist *nl = NULL;
-    pst_op *op = NULL;
-    char err[PST_ERRLEN];
-    if (pst_cloud_lattice(&c, &o, err) != PST_OK ||
-        pst_cloud_morton_sort(c, 3.0 * 0.9 * s0) != PST_OK ||
-        pst_nlist_build(&nl, c, 3.0, err) != PST_OK) {
-        fprintf(stderr, "setup: %s\n", err);
+    pst_cloud *c = test_lattice(dim, 2.0, 3.0, s0, 0.9, 0.4, seed, 0);
+    if (pst_cloud_morton_sort(c, 3.0 * 0.9 * s0) != PST_OK) {
+        fprintf(stderr, "setup: morton sort failed\n");
         exit(1);
     }
-    pst_op_opts oo;
-    pst_op_defaults(&oo);
-    oo.scheme = cs->scheme;
-    oo.variant = cs->variant;
-    if (pst_op_create(&op, c, nl, &oo, err) != PST_OK) {
-        fprintf(stderr, "%s: %s\n", cs->scheme, err);
-        exit(1);
-    }
+    pst_nlist *nl = test_nlist(c, 3.0);
+    pst_op *op = test_op(c, nl, cs->scheme, PST_GRAD_G1, cs->variant);
     size_t n = pst_cloud_size(c);
-    double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y);
-    for (size_t i = 0; i < n; ++i) {
-        double x[3] = {0, 0, 0};
-        for (int d = 0; d < dim; ++d)
-            x[d] = pst_cloud_coord_const(c, d)[i];
-        u[i] = dim == 2 ? p2(x) : p3(x);
-    }
+    double *u = test_field(c, dim == 2 ? p2 : p3), *y = malloc(n * sizeof *y);
     pst_op_apply(op, u, y);
     double num = 0, den = 0;
     for (size_t i = 0; i < n; ++i) {

@@ -5,8 +5,8 @@
  * and assembly, thread independence, degenerate rows and bad options. */
 #include "check.h"
 #include "pstencil.h"
+#include "support.h"
 
-#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -19,61 +19,18 @@ static const char *const schemes[] = {"cspm", "icspm", "csph2g"};
 /* A lattice on [2,3]^dim with spacing s0, h = 1.2 s0, jitter K. */
 static pst_cloud *patch(int dim, double s0, double K, int boundary_layer)
 {
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = 2.0;
-        o.hi[d] = 3.0;
-    }
-    o.s0 = s0;
-    o.h_ratio = 1.2;
-    o.jitter = K;
-    o.seed = 11;
-    o.boundary_layer = boundary_layer;
-    pst_cloud *c = NULL;
-    char err[PST_ERRLEN];
-    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
-        fprintf(stderr, "lattice: %s\n", err);
-        exit(1);
-    }
-    return c;
-}
-
-static pst_nlist *neighbours(const pst_cloud *c, double support)
-{
-    pst_nlist *nl = NULL;
-    char err[PST_ERRLEN];
-    if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
-        fprintf(stderr, "nlist: %s\n", err);
-        exit(1);
-    }
-    return nl;
+    return test_lattice(dim, 2.0, 3.0, s0, 1.2, K, 11, boundary_layer);
 }
 
 static pst_op *make_op(const pst_cloud *c, const pst_nlist *nl, const char *scheme)
 {
-    pst_op_opts o;
-    pst_op_defaults(&o);
-    o.scheme = scheme;
-    pst_op *op = NULL;
-    char err[PST_ERRLEN];
-    if (pst_op_create(&op, c, nl, &o, err) != PST_OK) {
-        fprintf(stderr, "op %s: %s\n", scheme, err);
-        exit(1);
-    }
-    return op;
+    return test_op(c, nl, scheme, PST_GRAD_G1, 0);
 }
 
 /* Full support: every coordinate at least `margin` inside [2,3]. */
 static int inner(const pst_cloud *c, size_t i, double margin)
 {
-    for (int d = 0; d < pst_cloud_dim(c); ++d) {
-        double x = pst_cloud_coord_const(c, d)[i];
-        if (x < 2.0 + margin || x > 3.0 - margin)
-            return 0;
-    }
-    return 1;
+    return test_inside(c, i, 2.0, 3.0, margin);
 }
 
 /* p = 1 + g.x + x^T H x / 2 with fixed coefficients; `quad` 0 drops the quadratic part. The
@@ -111,18 +68,12 @@ static double lap_exact(int dim)
     return t;
 }
 
+/* The test fields: x is zero-padded, so the 3D sums serve 2D unchanged. */
+static double linear_field(const double *x) { return quadratic(3, x, 0); }
+static double quadratic_field(const double *x) { return quadratic(3, x, 1); }
 static double *field(const pst_cloud *c, int quad)
 {
-    size_t n = pst_cloud_size(c);
-    int dim = pst_cloud_dim(c);
-    double *u = malloc(n * sizeof *u);
-    for (size_t i = 0; i < n; ++i) {
-        double x[3] = {0, 0, 0};
-        for (int d = 0; d < dim; ++d)
-            x[d] = pst_cloud_coord_const(c, d)[i];
-        u[i] = quadratic(dim, x, quad);
-    }
-    return u;
+    return test_field(c, quad ? quadratic_field : linear_field);
 }
 
 typedef struct {
@@ -184,7 +135,7 @@ static void test_volumes(void)
     for (int dim = 2; dim <= 3; ++dim) {
         double s0 = spacing(dim), vol = pow(s0, dim);
         pst_cloud *c = patch(dim, s0, 0.0, 0);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         pst_op *op = make_op(c, nl, "cspm");
         const double *V = pst_cspm_volumes(op);
         double worst = 0;
@@ -207,7 +158,7 @@ static void test_volumes(void)
     double h = 0.5, d = 0.7;
     pst_cloud_coord(c, 0)[1] = d;
     pst_cloud_set_h_uniform(c, h);
-    pst_nlist *nl = neighbours(c, 3.0);
+    pst_nlist *nl = test_nlist(c, 3.0);
     pst_op *op = make_op(c, nl, "csph2g");
     double W0 = pst_kernel_w(PST_KERNEL_QUINTIC, 2, 0.0, h),
            Wd = pst_kernel_w(PST_KERNEL_QUINTIC, 2, d, h),
@@ -233,7 +184,7 @@ static void test_exactness(void)
     for (int dim = 2; dim <= 3; ++dim) {
         double s0 = spacing(dim), margin = 3.6 * s0 + 1e-9;
         pst_cloud *c = patch(dim, s0, 0.8, 0);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         for (int s = 0; s < NSCHEMES; ++s) {
             pst_op *op = make_op(c, nl, schemes[s]);
             int ic = s == 1;
@@ -276,12 +227,12 @@ static void test_exactness(void)
 /* On a regular lattice the odd moments vanish where the neighbours' volumes are uniform too
  * (6h from the edge): there cspm and csph2g are exact for quadratics (second order), as is
  * icspm. */
-static void test_lattice(void)
+static void test_regular_lattice(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         double s0 = dim == 2 ? 0.025 : 1.0 / 24.0;
         pst_cloud *c = patch(dim, s0, 0.0, 0);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         for (int s = 0; s < NSCHEMES; ++s) {
             pst_op *op = make_op(c, nl, schemes[s]);
             errors q = measure(c, op, 1, 7.2 * s0 + 1e-9, 0);
@@ -301,12 +252,10 @@ static void test_neumann(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         pst_cloud *c = patch(dim, spacing(dim), 0.3, 1);
-        uint8_t *kind = pst_cloud_kinds(c);
+        const uint8_t *kind = pst_cloud_kinds(c);
         size_t n = pst_cloud_size(c);
-        for (size_t i = 0; i < n; ++i)
-            if (kind[i] == PST_DIRICHLET)
-                kind[i] = PST_NEUMANN;
-        pst_nlist *nl = neighbours(c, 3.0);
+        test_make_neumann(c, 1);
+        pst_nlist *nl = test_nlist(c, 3.0);
         double *y = malloc(n * sizeof *y);
         for (int s = 0; s < NSCHEMES; ++s)
             for (int quad = 0; quad <= (s == 1); ++quad) {
@@ -346,79 +295,41 @@ static void test_paths_and_threads(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         pst_cloud *c = patch(dim, dim == 2 ? 0.05 : 0.1, 0.5, 1);
-        uint8_t *kind = pst_cloud_kinds(c);
         size_t n = pst_cloud_size(c);
-        for (size_t i = 0; i < n; i += 3)
-            if (kind[i] == PST_DIRICHLET)
-                kind[i] = PST_NEUMANN;
-        pst_nlist *nl = neighbours(c, 3.0);
+        test_make_neumann(c, 3);
+        pst_nlist *nl = test_nlist(c, 3.0);
         double *u = field(c, 1), *y1 = malloc(n * sizeof *y1), *y2 = malloc(n * sizeof *y2),
-               *y3 = malloc(n * sizeof *y3), *dg = malloc(n * sizeof *dg);
-        double *g1[9], *g2[9]; /* gradient, then the Hessian's up to 6 arrays */
-        for (int k = 0; k < 9; ++k) {
-            g1[k] = malloc(n * sizeof **g1);
-            g2[k] = malloc(n * sizeof **g2);
-        }
+               *y3 = malloc(n * sizeof *y3);
         for (int s = 0; s < NSCHEMES; ++s) {
-            omp_set_num_threads(1);
-            pst_op *op1 = make_op(c, nl, schemes[s]);
-            pst_op_apply(op1, u, y3);
-            pst_op_gradient(op1, u, g1);
-            if (s == 1)
-                pst_op_hessian(op1, u, g1 + 3);
-            omp_set_num_threads(2);
-            pst_op *op = make_op(c, nl, schemes[s]);
-            pst_op_apply(op, u, y1);
-            pst_op_gradient(op, u, g2);
-            if (s == 1)
-                pst_op_hessian(op, u, g2 + 3);
-            CHECK(memcmp(y1, y3, n * sizeof *y1) == 0);
-            CHECK(memcmp(pst_op_status(op), pst_op_status(op1), n) == 0);
+            test_threads t = test_one_vs_two_threads(c, nl, schemes[s], PST_GRAD_G1, 0, u, y3,
+                                                     y1, s == 1 ? 2 : 1);
+            CHECK(t.same_apply);
+            CHECK(t.same_status);
             int same = 1;
-            for (int k = 0; k < (s == 1 ? 3 + dim * (dim + 1) / 2 : dim); ++k)
-                if (k < dim || k >= 3) /* gradient, then the Hessian from index 3 */
-                    same = same && memcmp(g1[k], g2[k], n * sizeof **g1) == 0;
+            for (int a = 0; a < dim; ++a)
+                same = same && t.same_grad[a];
+            for (int k = 0; k < 6; ++k) /* the Hessian, icspm only */
+                same = same && t.same_hess[k];
             CHECK(same);
-            CHECK_INT(pst_op_apply_stored(op, u, y2), PST_EINVAL);
-            CHECK_INT(pst_op_store(op), PST_OK);
-            CHECK_INT(pst_op_apply_stored(op, u, y2), PST_OK);
-            pst_csr a;
-            CHECK_INT(pst_op_assemble(op, &a), PST_OK);
-            CHECK_INT(pst_op_diagonal(op, dg), PST_OK);
-            double worst = 0, worst_csr = 0, worst_diag = 0;
-            int finite = 1;
-            for (size_t i = 0; i < n; ++i) {
-                double sum = 0, mag = 0;
-                for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
-                    sum += a.val[e] * u[a.col[e]];
-                    mag += fabs(a.val[e] * u[a.col[e]]);
-                    if (a.col[e] == i)
-                        worst_diag = fmax(worst_diag, fabs(a.val[e] - dg[i]));
-                    finite = finite && isfinite(a.val[e]);
-                }
-                finite = finite && isfinite(y1[i]) && isfinite(y2[i]);
-                worst = fmax(worst, fabs(y1[i] - y2[i]) / (mag > 0 ? mag : 1));
-                worst_csr = fmax(worst_csr, fabs(sum - y1[i]) / (mag > 0 ? mag : 1));
-            }
+            test_paths p = test_compare_paths(t.op2, u, y1, y2);
+            CHECK_INT(p.unstored, PST_EINVAL);
+            CHECK_INT(p.store, PST_OK);
+            CHECK_INT(p.stored, PST_OK);
+            CHECK_INT(p.assemble, PST_OK);
+            CHECK_INT(p.diagonal, PST_OK);
             printf("paths %dD %-6s: matrix-free vs stored %.2e, assembled vs apply %.2e\n", dim,
-                   schemes[s], worst, worst_csr);
-            CHECK(finite);
-            CHECK(worst <= 1e-13);
-            CHECK(worst_csr <= 1e-13);
-            CHECK(worst_diag == 0.0);
-            pst_csr_free(&a);
-            pst_op_destroy(op);
-            pst_op_destroy(op1);
+                   schemes[s], p.worst, p.worst_csr);
+            CHECK(p.finite && p.finite_values);
+            CHECK(p.worst <= 1e-13);
+            CHECK(p.worst_csr <= 1e-13);
+            CHECK(p.worst_diag == 0.0);
+            pst_op_destroy(t.op2);
+            pst_op_destroy(t.op1);
         }
         free(u);
         free(y1);
         free(y2);
         free(y3);
-        free(dg);
-        for (int k = 0; k < 9; ++k) {
-            free(g1[k]);
-            free(g2[k]);
-        }
         pst_nlist_destroy(nl);
         pst_cloud_destroy(c);
     }
@@ -453,17 +364,14 @@ static void test_degenerate(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         /* a line of 11 (2D) or a 5x5 plane (3D), plus one isolated particle */
-        size_t m = dim == 2 ? 11 : 25, n = m + 1;
+        size_t n = (dim == 2 ? 11 : 25) + 1;
         pst_cloud *c;
         CHECK_INT(pst_cloud_create(&c, dim, n), PST_OK);
-        for (size_t i = 0; i < m; ++i) {
-            pst_cloud_coord(c, 0)[i] = 0.1 * (double)(dim == 2 ? i : i % 5);
-            pst_cloud_coord(c, 1)[i] = dim == 2 ? 0.0 : 0.1 * (double)(i / 5);
-        }
+        size_t m = test_flat_layout(c);
         for (int d = 0; d < dim; ++d)
             pst_cloud_coord(c, d)[m] = 10.0;
         pst_cloud_set_h_uniform(c, 0.1);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y);
         for (size_t i = 0; i < n; ++i)
             u[i] = (double)(i * i);
@@ -497,7 +405,7 @@ static void test_degenerate(void)
         pst_cloud_coord(c, 1)[i] = py[i];
     }
     pst_cloud_set_h_uniform(c, 0.1);
-    pst_nlist *nl = neighbours(c, 3.0);
+    pst_nlist *nl = test_nlist(c, 3.0);
     pst_op *op = make_op(c, nl, "icspm");
     double u[5], y[5];
     for (int i = 0; i < 5; ++i)
@@ -515,7 +423,7 @@ static void test_degenerate(void)
 static void test_errors(void)
 {
     pst_cloud *c = patch(2, 0.1, 0.0, 0);
-    pst_nlist *nl = neighbours(c, 2.0);
+    pst_nlist *nl = test_nlist(c, 2.0);
     pst_op_opts o;
     pst_op *op = NULL;
     char err[PST_ERRLEN];
@@ -525,7 +433,7 @@ static void test_errors(void)
     CHECK(strstr(err, "quintic") != NULL);
     CHECK(op == NULL);
     pst_nlist_destroy(nl);
-    nl = neighbours(c, 3.0);
+    nl = test_nlist(c, 3.0);
     o.variant = 1;
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "variant") != NULL);
@@ -555,7 +463,7 @@ int main(void)
 {
     test_volumes();
     test_exactness();
-    test_lattice();
+    test_regular_lattice();
     test_neumann();
     test_paths_and_threads();
     test_degenerate();

@@ -4,8 +4,8 @@
  * and the fallback chain, bad options. */
 #include "check.h"
 #include "pstencil.h"
+#include "support.h"
 
-#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -17,62 +17,18 @@ static const char *const cfg_name[3] = {"lsmps-B", "lsmps-A", "lpmps"};
 /* A lattice on [2,3]^dim with spacing s0, h = 1.2 s0, jitter K. */
 static pst_cloud *patch(int dim, double s0, double K, int boundary_layer)
 {
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = 2.0;
-        o.hi[d] = 3.0;
-    }
-    o.s0 = s0;
-    o.h_ratio = 1.2;
-    o.jitter = K;
-    o.seed = 11;
-    o.boundary_layer = boundary_layer;
-    pst_cloud *c = NULL;
-    char err[PST_ERRLEN];
-    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
-        fprintf(stderr, "lattice: %s\n", err);
-        exit(1);
-    }
-    return c;
-}
-
-static pst_nlist *neighbours(const pst_cloud *c, double support)
-{
-    pst_nlist *nl = NULL;
-    char err[PST_ERRLEN];
-    if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
-        fprintf(stderr, "nlist: %s\n", err);
-        exit(1);
-    }
-    return nl;
+    return test_lattice(dim, 2.0, 3.0, s0, 1.2, K, 11, boundary_layer);
 }
 
 static pst_op *make_op(const pst_cloud *c, const pst_nlist *nl, int cfg)
 {
-    pst_op_opts o;
-    pst_op_defaults(&o);
-    o.scheme = cfg_scheme[cfg];
-    o.variant = cfg_variant[cfg];
-    pst_op *op = NULL;
-    char err[PST_ERRLEN];
-    if (pst_op_create(&op, c, nl, &o, err) != PST_OK) {
-        fprintf(stderr, "op %s: %s\n", cfg_name[cfg], err);
-        exit(1);
-    }
-    return op;
+    return test_op(c, nl, cfg_scheme[cfg], PST_GRAD_G1, cfg_variant[cfg]);
 }
 
 /* Full support: every coordinate at least `margin` inside [2,3]. */
 static int inner(const pst_cloud *c, size_t i, double margin)
 {
-    for (int d = 0; d < pst_cloud_dim(c); ++d) {
-        double x = pst_cloud_coord_const(c, d)[i];
-        if (x < 2.0 + margin || x > 3.0 - margin)
-            return 0;
-    }
-    return 1;
+    return test_inside(c, i, 2.0, 3.0, margin);
 }
 
 /* The quadratic p = c0 + g . x + x^T H x / 2 with a Laplacian of O(1). */
@@ -114,24 +70,8 @@ static double quad_hess(int dim, int e)
     return Q_H[pa[dim - 2][e]][pb[dim - 2][e]];
 }
 
-static void position(const pst_cloud *c, size_t i, double x[3])
-{
-    x[0] = x[1] = x[2] = 0;
-    for (int d = 0; d < pst_cloud_dim(c); ++d)
-        x[d] = pst_cloud_coord_const(c, d)[i];
-}
-
-static double *quad_field(const pst_cloud *c)
-{
-    size_t n = pst_cloud_size(c);
-    double *u = malloc(n * sizeof *u);
-    for (size_t i = 0; i < n; ++i) {
-        double x[3];
-        position(c, i, x);
-        u[i] = quad(pst_cloud_dim(c), x);
-    }
-    return u;
-}
+/* The quadratic at a zero-padded position (the 3D sums serve 2D unchanged). */
+static double quad3(const double *x) { return quad(3, x); }
 
 /* Quadratic exactness at full-support particles (3h from the box) on K = 0.8 clouds, and of
  * interpolation at points of the inner region. */
@@ -140,9 +80,9 @@ static void test_exactness(void)
     for (int dim = 2; dim <= 3; ++dim) {
         double s0 = 0.05, margin = 3.0 * 1.2 * s0;
         pst_cloud *c = patch(dim, s0, 0.8, 0);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         size_t n = pst_cloud_size(c);
-        double *u = quad_field(c), *y = malloc(n * sizeof *y), *gr[3], *hs[6];
+        double *u = test_field(c, quad3), *y = malloc(n * sizeof *y), *gr[3], *hs[6];
         for (int a = 0; a < 3; ++a)
             gr[a] = malloc(n * sizeof(double));
         for (int e = 0; e < 6; ++e)
@@ -170,7 +110,7 @@ static void test_exactness(void)
                 ++used;
                 bad += st[i] != PST_ROW_OK;
                 double x[3];
-                position(c, i, x);
+                test_position(c, i, x);
                 el = fmax(el, fabs(y[i] - lap_exact) / fabs(lap_exact));
                 for (int a = 0; a < dim; ++a) {
                     gmax = fmax(gmax, fabs(quad_grad(dim, x, a)));
@@ -225,7 +165,7 @@ static void test_lpmps_is_lsmps_a(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         pst_cloud *c = patch(dim, dim == 2 ? 0.05 : 0.1, 0.8, 0);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         pst_op *op[3];
         pst_csr a[3];
         for (int cfg = 0; cfg < 3; ++cfg) {
@@ -264,97 +204,56 @@ static void test_paths_and_threads(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         pst_cloud *c = patch(dim, dim == 2 ? 0.05 : 0.1, 0.3, 1);
-        uint8_t *kind = pst_cloud_kinds(c);
+        const uint8_t *kind = pst_cloud_kinds(c);
         size_t n = pst_cloud_size(c);
-        for (size_t i = 0; i < n; i += 3) /* every third boundary particle Neumann */
-            if (kind[i] == PST_DIRICHLET)
-                kind[i] = PST_NEUMANN;
-        pst_nlist *nl = neighbours(c, 3.0);
-        double *u = quad_field(c), *y1 = malloc(n * sizeof *y1), *y2 = malloc(n * sizeof *y2),
-               *y3 = malloc(n * sizeof *y3), *dg = malloc(n * sizeof *dg);
-        double *g1[3], *g2[3], *h1[6], *h2[6];
-        for (int a = 0; a < 3; ++a) {
-            g1[a] = malloc(n * sizeof(double));
-            g2[a] = malloc(n * sizeof(double));
-        }
-        for (int e = 0; e < 6; ++e) {
-            h1[e] = malloc(n * sizeof(double));
-            h2[e] = malloc(n * sizeof(double));
-        }
+        test_make_neumann(c, 3); /* every third boundary particle Neumann */
+        pst_nlist *nl = test_nlist(c, 3.0);
+        double *u = test_field(c, quad3), *y1 = malloc(n * sizeof *y1),
+               *y2 = malloc(n * sizeof *y2), *y3 = malloc(n * sizeof *y3);
         for (int cfg = 0; cfg < 3; ++cfg) {
-            omp_set_num_threads(1);
-            pst_op *op1 = make_op(c, nl, cfg);
-            pst_op_apply(op1, u, y3);
-            pst_op_gradient(op1, u, g1);
-            pst_op_hessian(op1, u, h1);
-            omp_set_num_threads(2);
-            pst_op *op = make_op(c, nl, cfg);
-            pst_op_apply(op, u, y1);
-            pst_op_gradient(op, u, g2);
-            pst_op_hessian(op, u, h2);
-            CHECK(memcmp(y1, y3, n * sizeof *y1) == 0);
-            CHECK(memcmp(pst_op_status(op), pst_op_status(op1), n) == 0);
+            test_threads t = test_one_vs_two_threads(c, nl, cfg_scheme[cfg], PST_GRAD_G1,
+                                                     cfg_variant[cfg], u, y3, y1, 2);
+            CHECK(t.same_apply);
+            CHECK(t.same_status);
             for (int a = 0; a < dim; ++a)
-                CHECK(memcmp(g1[a], g2[a], n * sizeof(double)) == 0);
+                CHECK(t.same_grad[a]);
             for (int e = 0; e < dim * (dim + 1) / 2; ++e)
-                CHECK(memcmp(h1[e], h2[e], n * sizeof(double)) == 0);
-            CHECK_INT(pst_op_apply_stored(op, u, y2), PST_EINVAL);
-            CHECK_INT(pst_op_store(op), PST_OK);
-            CHECK_INT(pst_op_apply_stored(op, u, y2), PST_OK);
-            pst_csr a;
-            CHECK_INT(pst_op_assemble(op, &a), PST_OK);
-            CHECK_INT(pst_op_diagonal(op, dg), PST_OK);
-            double worst = 0, worst_csr = 0, worst_diag = 0, neu = 0, nscale = 0;
-            int finite = 1;
+                CHECK(t.same_hess[e]);
+            test_paths p = test_compare_paths(t.op2, u, y1, y2);
+            CHECK_INT(p.unstored, PST_EINVAL);
+            CHECK_INT(p.store, PST_OK);
+            CHECK_INT(p.stored, PST_OK);
+            CHECK_INT(p.assemble, PST_OK);
+            CHECK_INT(p.diagonal, PST_OK);
+            double neu = 0, nscale = 0;
             size_t nneu = 0;
-            const uint8_t *st = pst_op_status(op);
-            for (size_t i = 0; i < n; ++i) {
-                double sum = 0, mag = 0;
-                for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
-                    sum += a.val[e] * u[a.col[e]];
-                    mag += fabs(a.val[e] * u[a.col[e]]);
-                    if (a.col[e] == i)
-                        worst_diag = fmax(worst_diag, fabs(a.val[e] - dg[i]));
-                }
-                finite = finite && isfinite(y1[i]) && isfinite(y2[i]);
-                worst = fmax(worst, fabs(y1[i] - y2[i]) / (mag > 0 ? mag : 1));
-                worst_csr = fmax(worst_csr, fabs(sum - y1[i]) / (mag > 0 ? mag : 1));
+            const uint8_t *st = pst_op_status(t.op2);
+            for (size_t i = 0; i < n; ++i)
                 if (kind[i] == PST_NEUMANN && st[i] == PST_ROW_OK) {
                     double x[3], flux = 0;
-                    position(c, i, x);
+                    test_position(c, i, x);
                     for (int d = 0; d < dim; ++d)
                         flux += pst_cloud_normal(c, d)[i] * quad_grad(dim, x, d);
                     neu = fmax(neu, fabs(y1[i] - flux));
                     nscale = fmax(nscale, fabs(flux));
                     ++nneu;
                 }
-            }
             printf("paths %dD %-8s: mf vs stored %.2e, csr vs apply %.2e, Neumann rows (%zu) "
                    "|row - n.grad u| / max %.2e\n",
-                   dim, cfg_name[cfg], worst, worst_csr, nneu, neu / nscale);
-            CHECK(finite);
-            CHECK(worst <= 1e-13);
-            CHECK(worst_csr <= 1e-13);
-            CHECK(worst_diag == 0.0);
+                   dim, cfg_name[cfg], p.worst, p.worst_csr, nneu, neu / nscale);
+            CHECK(p.finite);
+            CHECK(p.worst <= 1e-13);
+            CHECK(p.worst_csr <= 1e-13);
+            CHECK(p.worst_diag == 0.0);
             CHECK(nneu > 10);
             CHECK(neu <= 1e-9 * nscale);
-            pst_csr_free(&a);
-            pst_op_destroy(op);
-            pst_op_destroy(op1);
+            pst_op_destroy(t.op2);
+            pst_op_destroy(t.op1);
         }
         free(u);
         free(y1);
         free(y2);
         free(y3);
-        free(dg);
-        for (int a = 0; a < 3; ++a) {
-            free(g1[a]);
-            free(g2[a]);
-        }
-        for (int e = 0; e < 6; ++e) {
-            free(h1[e]);
-            free(h2[e]);
-        }
         pst_nlist_destroy(nl);
         pst_cloud_destroy(c);
     }
@@ -386,7 +285,7 @@ static void test_degenerate(void)
         }
         xyz[3 * (n - 1)] = xyz[3 * (n - 1) + 1] = xyz[3 * (n - 1) + 2] = 10.0;
         pst_cloud *c = cloud_of(dim, n, xyz, 0.12);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y), *gr[3], *hs[6];
         for (int a = 0; a < 3; ++a)
             gr[a] = malloc(n * sizeof(double));
@@ -443,7 +342,7 @@ static void test_degenerate(void)
                     dim == 2 ? nb2[i - 1][d]
                              : 0.1 * pst_rng_symmetric(3, (uint64_t)i, (uint64_t)d);
         pst_cloud *c = cloud_of(dim, n, xyz, 0.1);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         double u[9], y[9], g[3][9], hb[6][9];
         double *gr[3] = {g[0], g[1], g[2]};
         double *hs[6] = {hb[0], hb[1], hb[2], hb[3], hb[4], hb[5]};
@@ -478,7 +377,7 @@ static void test_degenerate(void)
 static void test_errors(void)
 {
     pst_cloud *c = patch(2, 0.1, 0.0, 0);
-    pst_nlist *nl = neighbours(c, 2.0);
+    pst_nlist *nl = test_nlist(c, 2.0);
     pst_op_opts o;
     pst_op *op = NULL;
     char err[PST_ERRLEN];
@@ -487,7 +386,7 @@ static void test_errors(void)
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL); /* list radius 2h < 3h */
     CHECK(strstr(err, "support") != NULL);
     pst_nlist_destroy(nl);
-    nl = neighbours(c, 3.0);
+    nl = test_nlist(c, 3.0);
     o.variant = 2;
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "variant") != NULL);
@@ -508,7 +407,7 @@ static void test_errors(void)
     o.kernel = PST_KERNEL_WENDLAND_C2;
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_OK);
     size_t n = pst_cloud_size(c);
-    double *u = quad_field(c), *y = malloc(n * sizeof *y), worst = 0;
+    double *u = test_field(c, quad3), *y = malloc(n * sizeof *y), worst = 0;
     pst_op_apply(op, u, y);
     for (size_t i = 0; i < n; ++i)
         if (inner(c, i, 0.25))

@@ -4,8 +4,8 @@
  * rows and bad input. */
 #include "check.h"
 #include "pstencil.h"
+#include "support.h"
 
-#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,76 +15,18 @@ static const char *const schemes[] = {"brookshaw", "cb", "schwaiger", "lv"};
 /* A lattice on [2,3]^dim with 21 points per side (s0 = 0.05), h = f s0, jitter K. */
 static pst_cloud *patch(int dim, double f, double K, int boundary_layer)
 {
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = 2.0;
-        o.hi[d] = 3.0;
-    }
-    o.s0 = 0.05;
-    o.h_ratio = f;
-    o.jitter = K;
-    o.seed = 7;
-    o.boundary_layer = boundary_layer;
-    pst_cloud *c = NULL;
-    char err[PST_ERRLEN];
-    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
-        fprintf(stderr, "lattice: %s\n", err);
-        exit(1);
-    }
-    return c;
-}
-
-static pst_nlist *neighbours(const pst_cloud *c, double support)
-{
-    pst_nlist *nl = NULL;
-    char err[PST_ERRLEN];
-    if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
-        fprintf(stderr, "nlist: %s\n", err);
-        exit(1);
-    }
-    return nl;
+    return test_lattice(dim, 2.0, 3.0, 0.05, f, K, 7, boundary_layer);
 }
 
 static pst_op *make_op(const pst_cloud *c, const pst_nlist *nl, const char *scheme, int grad)
 {
-    pst_op_opts o;
-    pst_op_defaults(&o);
-    o.scheme = scheme;
-    o.gradient = grad;
-    pst_op *op = NULL;
-    char err[PST_ERRLEN];
-    int st = pst_op_create(&op, c, nl, &o, err);
-    if (st != PST_OK) {
-        fprintf(stderr, "op %s: %s\n", scheme, err);
-        exit(1);
-    }
-    return op;
+    return test_op(c, nl, scheme, grad, 0);
 }
 
 /* Full support: every coordinate at least `margin` inside [2,3]. */
 static int inner(const pst_cloud *c, size_t i, double margin)
 {
-    for (int d = 0; d < pst_cloud_dim(c); ++d) {
-        double x = pst_cloud_coord_const(c, d)[i];
-        if (x < 2.0 + margin || x > 3.0 - margin)
-            return 0;
-    }
-    return 1;
-}
-
-static double *field(const pst_cloud *c, double (*f)(const double *))
-{
-    size_t n = pst_cloud_size(c);
-    double *u = malloc(n * sizeof *u);
-    for (size_t i = 0; i < n; ++i) {
-        double x[3] = {0, 0, 0};
-        for (int d = 0; d < pst_cloud_dim(c); ++d)
-            x[d] = pst_cloud_coord_const(c, d)[i];
-        u[i] = f(x);
-    }
-    return u;
+    return test_inside(c, i, 2.0, 3.0, margin);
 }
 
 static double cubic_sum(const double *x) { return x[0] * x[0] * x[0] + x[1] * x[1] * x[1] + x[2] * x[2] * x[2]; }
@@ -103,9 +45,8 @@ static double patch_error(const pst_cloud *c, const pst_op *op, const double *u,
     for (size_t i = 0; i < n; ++i) {
         if (!inner(c, i, margin))
             continue;
-        double x[3] = {0, 0, 0};
-        for (int d = 0; d < pst_cloud_dim(c); ++d)
-            x[d] = pst_cloud_coord_const(c, d)[i];
+        double x[3];
+        test_position(c, i, x);
         double e = exact ? exact(x) : constant;
         double r = fabs(y[i] - e) / fabs(e);
         worst = r > worst ? r : worst;
@@ -119,9 +60,9 @@ static void test_patch(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         pst_cloud *c = patch(dim, 1.2, 0.0, 0);
-        pst_nlist *nl = neighbours(c, 2.0);
+        pst_nlist *nl = test_nlist(c, 2.0);
         double margin = 2.0 * 1.2 * 0.05 + 1e-9; /* the support radius 2h */
-        double *u3 = field(c, cubic_sum), *u1 = field(c, plain_sum);
+        double *u3 = test_field(c, cubic_sum), *u1 = test_field(c, plain_sum);
         for (int s = 0; s < NSCHEMES; ++s)
             for (int g = PST_GRAD_G1; g <= PST_GRAD_G4; ++g) {
                 if (strcmp(schemes[s], "lv") != 0 && g != PST_GRAD_G1)
@@ -161,9 +102,9 @@ static void test_linear_exactness(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         pst_cloud *c = patch(dim, 1.2, 0.4, 0);
-        pst_nlist *nl = neighbours(c, 2.0);
+        pst_nlist *nl = test_nlist(c, 2.0);
         size_t n = pst_cloud_size(c);
-        double *u = field(c, linear), *y = malloc(n * sizeof *y);
+        double *u = test_field(c, linear), *y = malloc(n * sizeof *y);
         double *gx = malloc(n * sizeof *gx), *gy = malloc(n * sizeof *gy),
                *gz = malloc(n * sizeof *gz);
         double *const grad[3] = {gx, gy, gz};
@@ -206,15 +147,6 @@ static void test_linear_exactness(void)
     }
 }
 
-/* Weight w_IJ of the assembled matrix, or 0 when absent. */
-static double entry(const pst_csr *a, size_t i, size_t j)
-{
-    for (int64_t k = a->rowptr[i]; k < a->rowptr[i + 1]; ++k)
-        if (a->col[k] == j)
-            return a->val[k];
-    return 0.0;
-}
-
 /* Largest |S_IJ - S_JI| / max|S| of S = diag(d) A over the off-diagonal entries. */
 static double asymmetry(const pst_csr *a, const double *d)
 {
@@ -224,7 +156,7 @@ static double asymmetry(const pst_csr *a, const double *d)
             size_t j = a->col[k];
             if (j == i)
                 continue;
-            double sij = d[i] * a->val[k], sji = d[j] * entry(a, j, i);
+            double sij = d[i] * a->val[k], sji = d[j] * test_csr_entry(a, j, i);
             worst = fmax(worst, fabs(sij - sji));
             scale = fmax(scale, fabs(sij));
         }
@@ -240,7 +172,7 @@ static void test_symmetry(void)
         double *m = pst_cloud_mobility(c, 0);
         for (size_t i = 0; i < pst_cloud_size(c); ++i)
             m[i] = 1.0 + (double)(i % 7); /* heterogeneous */
-        pst_nlist *nl = neighbours(c, 2.0);
+        pst_nlist *nl = test_nlist(c, 2.0);
         size_t n = pst_cloud_size(c);
         double *d = malloc(n * sizeof *d), *s = malloc(n * sizeof *s);
         const double *V = pst_cloud_volume_const(c);
@@ -275,66 +207,35 @@ static void test_paths_and_threads(void)
     for (int dim = 2; dim <= 3; ++dim)
         for (int ncomp = 0; ncomp <= dim; ncomp += (ncomp == 1 ? dim - 1 : 1)) {
             pst_cloud *c = patch(dim, 1.2, 0.3, 1);
-            uint8_t *kind = pst_cloud_kinds(c);
             size_t n = pst_cloud_size(c);
-            for (size_t i = 0; i < n; i += 3) /* every third boundary particle Neumann */
-                if (kind[i] == PST_DIRICHLET)
-                    kind[i] = PST_NEUMANN;
-            pst_cloud_set_mobility(c, ncomp);
-            for (int k = 0; k < ncomp; ++k) {
-                double *m = pst_cloud_mobility(c, k);
-                for (size_t i = 0; i < n; ++i)
-                    m[i] = 1.0 + 0.5 * k + 1e3 * ((i * 2654435761u) % 5 == 0);
-            }
-            pst_nlist *nl = neighbours(c, 2.0);
-            double *u = field(c, cubic_sum), *y1 = malloc(n * sizeof *y1),
-                   *y2 = malloc(n * sizeof *y2), *y3 = malloc(n * sizeof *y3),
-                   *dg = malloc(n * sizeof *dg), *scale = malloc(n * sizeof *scale);
+            test_make_neumann(c, 3); /* every third boundary particle Neumann */
+            test_rough_mobility(c, ncomp);
+            pst_nlist *nl = test_nlist(c, 2.0);
+            double *u = test_field(c, cubic_sum), *y1 = malloc(n * sizeof *y1),
+                   *y2 = malloc(n * sizeof *y2), *y3 = malloc(n * sizeof *y3);
             for (int s = 0; s < NSCHEMES; ++s)
                 for (int g = PST_GRAD_G1; g <= PST_GRAD_G4; ++g) {
-                    omp_set_num_threads(1);
-                    pst_op *op1 = make_op(c, nl, schemes[s], g);
-                    pst_op_apply(op1, u, y3);
-                    omp_set_num_threads(2);
-                    pst_op *op = make_op(c, nl, schemes[s], g);
-                    pst_op_apply(op, u, y1);
-                    CHECK(memcmp(y1, y3, n * sizeof *y1) == 0);
-                    CHECK(memcmp(pst_op_status(op), pst_op_status(op1), n) == 0);
-                    CHECK_INT(pst_op_apply_stored(op, u, y2), PST_EINVAL);
-                    CHECK_INT(pst_op_store(op), PST_OK);
-                    CHECK_INT(pst_op_apply_stored(op, u, y2), PST_OK);
-                    pst_csr a;
-                    CHECK_INT(pst_op_assemble(op, &a), PST_OK);
-                    CHECK_INT(pst_op_diagonal(op, dg), PST_OK);
-                    double worst = 0, worst_csr = 0, worst_diag = 0;
-                    int finite = 1;
-                    for (size_t i = 0; i < n; ++i) {
-                        double sum = 0, mag = 0;
-                        for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
-                            sum += a.val[e] * u[a.col[e]];
-                            mag += fabs(a.val[e] * u[a.col[e]]);
-                            if (a.col[e] == i)
-                                worst_diag = fmax(worst_diag, fabs(a.val[e] - dg[i]));
-                        }
-                        scale[i] = mag;
-                        finite = finite && isfinite(y1[i]) && isfinite(y2[i]);
-                        worst = fmax(worst, fabs(y1[i] - y2[i]) / (mag > 0 ? mag : 1));
-                        worst_csr = fmax(worst_csr, fabs(sum - y1[i]) / (mag > 0 ? mag : 1));
-                    }
-                    CHECK(finite);
-                    CHECK(worst <= 1e-13);     /* matrix-free vs stored */
-                    CHECK(worst_csr <= 1e-13); /* assembled matvec vs apply */
-                    CHECK(worst_diag == 0.0);
-                    pst_csr_free(&a);
-                    pst_op_destroy(op);
-                    pst_op_destroy(op1);
+                    test_threads t =
+                        test_one_vs_two_threads(c, nl, schemes[s], g, 0, u, y3, y1, 0);
+                    CHECK(t.same_apply);
+                    CHECK(t.same_status);
+                    test_paths p = test_compare_paths(t.op2, u, y1, y2);
+                    CHECK_INT(p.unstored, PST_EINVAL);
+                    CHECK_INT(p.store, PST_OK);
+                    CHECK_INT(p.stored, PST_OK);
+                    CHECK_INT(p.assemble, PST_OK);
+                    CHECK_INT(p.diagonal, PST_OK);
+                    CHECK(p.finite);
+                    CHECK(p.worst <= 1e-13);     /* matrix-free vs stored */
+                    CHECK(p.worst_csr <= 1e-13); /* assembled matvec vs apply */
+                    CHECK(p.worst_diag == 0.0);
+                    pst_op_destroy(t.op2);
+                    pst_op_destroy(t.op1);
                 }
             free(u);
             free(y1);
             free(y2);
             free(y3);
-            free(dg);
-            free(scale);
             pst_nlist_destroy(nl);
             pst_cloud_destroy(c);
         }
@@ -348,16 +249,14 @@ static void test_neumann_and_tensor(void)
         pst_cloud *c = patch(dim, 1.2, 0.0, 1);
         uint8_t *kind = pst_cloud_kinds(c);
         size_t n = pst_cloud_size(c);
-        for (size_t i = 0; i < n; ++i)
-            if (kind[i] == PST_DIRICHLET)
-                kind[i] = PST_NEUMANN;
+        test_make_neumann(c, 1);
         pst_cloud_set_mobility(c, dim);
         double mdiag[3] = {2.0, 5.0, 0.5};
         for (int k = 0; k < dim; ++k)
             for (size_t i = 0; i < n; ++i)
                 pst_cloud_mobility(c, k)[i] = mdiag[k];
-        pst_nlist *nl = neighbours(c, 2.0);
-        double *u = field(c, linear), *y = malloc(n * sizeof *y);
+        pst_nlist *nl = test_nlist(c, 2.0);
+        double *u = test_field(c, linear), *y = malloc(n * sizeof *y);
         double slope[3] = {2.0, -3.0, 0.5};
         pst_op *op = make_op(c, nl, "lv", PST_GRAD_G1);
         pst_op_apply(op, u, y);
@@ -374,7 +273,7 @@ static void test_neumann_and_tensor(void)
         CHECK(worst <= 1e-10);
         pst_op_destroy(op);
 
-        double *u2 = field(c, squares);
+        double *u2 = test_field(c, squares);
         for (size_t i = 0; i < n; ++i)
             kind[i] = PST_INTERIOR;
         op = make_op(c, nl, "lv", PST_GRAD_G1);
@@ -422,7 +321,7 @@ static void test_audit(void)
     double Ks[3] = {0.0, 0.1, 0.1};
     for (int t = 0; t < 3; ++t) {
         pst_cloud *c = patch(2, fs[t], Ks[t], 1);
-        pst_nlist *nl = neighbours(c, 2.0);
+        pst_nlist *nl = test_nlist(c, 2.0);
         for (int s = 0; s < NSCHEMES; ++s) {
             pst_op *op = make_op(c, nl, schemes[s], PST_GRAD_G1);
             pst_op_audit a;
@@ -458,14 +357,11 @@ static void test_degenerate(void)
     /* 2D: particles on a line (collinear: C singular) plus one far away (isolated) */
     pst_cloud *c;
     CHECK_INT(pst_cloud_create(&c, 2, 12), PST_OK);
-    for (size_t i = 0; i < 11; ++i) {
-        pst_cloud_coord(c, 0)[i] = 0.1 * (double)i;
-        pst_cloud_coord(c, 1)[i] = 0.0;
-    }
+    test_flat_layout(c);
     pst_cloud_coord(c, 0)[11] = 10.0;
     pst_cloud_coord(c, 1)[11] = 10.0;
     pst_cloud_set_h_uniform(c, 0.12);
-    pst_nlist *nl = neighbours(c, 2.0);
+    pst_nlist *nl = test_nlist(c, 2.0);
     double u[12], y[12];
     for (int i = 0; i < 12; ++i)
         u[i] = (double)(i * i);
@@ -494,7 +390,7 @@ static void test_degenerate(void)
 static void test_errors(void)
 {
     pst_cloud *c = patch(2, 1.2, 0.0, 0);
-    pst_nlist *nl = neighbours(c, 1.5);
+    pst_nlist *nl = test_nlist(c, 1.5);
     pst_op_opts o;
     pst_op *op = NULL;
     char err[PST_ERRLEN];
@@ -503,7 +399,7 @@ static void test_errors(void)
     CHECK(strstr(err, "support") != NULL);
     CHECK(op == NULL);
     pst_nlist_destroy(nl);
-    nl = neighbours(c, 2.0);
+    nl = test_nlist(c, 2.0);
     o.scheme = "nonesuch";
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "known: brookshaw") != NULL);

@@ -4,8 +4,8 @@
  * neighbours pattern, 1 vs 2 threads, degenerate rows and bad options, in 2D and 3D. */
 #include "check.h"
 #include "pstencil.h"
+#include "support.h"
 
-#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,80 +15,18 @@ static const char *const schemes[] = {"mixed0", "mixed1", "mixed2"};
 /* A lattice on [0,1]^dim with spacing s0, h = f s0, jitter K. */
 static pst_cloud *lattice(int dim, double s0, double f, double K, int boundary_layer)
 {
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = 0.0;
-        o.hi[d] = 1.0;
-    }
-    o.s0 = s0;
-    o.h_ratio = f;
-    o.jitter = K;
-    o.seed = 11;
-    o.boundary_layer = boundary_layer;
-    pst_cloud *c = NULL;
-    char err[PST_ERRLEN];
-    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
-        fprintf(stderr, "lattice: %s\n", err);
-        exit(1);
-    }
-    return c;
-}
-
-static pst_nlist *neighbours(const pst_cloud *c, double support)
-{
-    pst_nlist *nl = NULL;
-    char err[PST_ERRLEN];
-    if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
-        fprintf(stderr, "nlist: %s\n", err);
-        exit(1);
-    }
-    return nl;
+    return test_lattice(dim, 0.0, 1.0, s0, f, K, 11, boundary_layer);
 }
 
 static pst_op *make_op(const pst_cloud *c, const pst_nlist *nl, const char *scheme)
 {
-    pst_op_opts o;
-    pst_op_defaults(&o);
-    o.scheme = scheme;
-    pst_op *op = NULL;
-    char err[PST_ERRLEN];
-    if (pst_op_create(&op, c, nl, &o, err) != PST_OK) {
-        fprintf(stderr, "op %s: %s\n", scheme, err);
-        exit(1);
-    }
-    return op;
-}
-
-static void coords(const pst_cloud *c, size_t i, double x[3])
-{
-    x[0] = x[1] = x[2] = 0;
-    for (int d = 0; d < pst_cloud_dim(c); ++d)
-        x[d] = pst_cloud_coord_const(c, d)[i];
+    return test_op(c, nl, scheme, PST_GRAD_G1, 0);
 }
 
 /* Every coordinate at least `margin` inside [0,1]. */
 static int inner(const pst_cloud *c, size_t i, double margin)
 {
-    double x[3];
-    coords(c, i, x);
-    for (int d = 0; d < pst_cloud_dim(c); ++d)
-        if (x[d] < margin || x[d] > 1.0 - margin)
-            return 0;
-    return 1;
-}
-
-static double *field(const pst_cloud *c, double (*f)(const double *))
-{
-    size_t n = pst_cloud_size(c);
-    double *u = malloc(n * sizeof *u);
-    for (size_t i = 0; i < n; ++i) {
-        double x[3];
-        coords(c, i, x);
-        u[i] = f(x);
-    }
-    return u;
+    return test_inside(c, i, 0.0, 1.0, margin);
 }
 
 static const double slope[3] = {2.0, -3.0, 0.5};
@@ -126,7 +64,7 @@ static double exactness(pst_cloud *c, const pst_nlist *nl, const char *scheme, d
 {
     int dim = pst_cloud_dim(c), quadratic = strcmp(scheme, "mixed2") == 0;
     size_t n = pst_cloud_size(c), used = 0;
-    double *u = field(c, linear), *q = field(c, quad), *y = malloc(n * sizeof *y);
+    double *u = test_field(c, linear), *q = test_field(c, quad), *y = malloc(n * sizeof *y);
     double *g[3], *hs[6];
     for (int d = 0; d < 3; ++d)
         g[d] = malloc(n * sizeof *g[d]);
@@ -151,7 +89,7 @@ static double exactness(pst_cloud *c, const pst_nlist *nl, const char *scheme, d
         if (!inner(c, i, margin))
             continue;
         double x[3], gq[3];
-        coords(c, i, x);
+        test_position(c, i, x);
         quad_grad(x, gq);
         double lap = dim == 2 ? 4.0 : 6.0;
         e_quad = fmax(e_quad, fabs(y[i] - lap) / lap);
@@ -173,7 +111,7 @@ static double exactness(pst_cloud *c, const pst_nlist *nl, const char *scheme, d
     double *m = pst_cloud_mobility(c, 0);
     for (size_t i = 0; i < n; ++i) {
         double x[3];
-        coords(c, i, x);
+        test_position(c, i, x);
         m[i] = mobility(x);
     }
     op = make_op(c, nl, scheme);
@@ -188,7 +126,7 @@ static double exactness(pst_cloud *c, const pst_nlist *nl, const char *scheme, d
     for (size_t i = 0; i < n; ++i)
         if (inner(c, i, margin)) {
             double x[3];
-            coords(c, i, x);
+            test_position(c, i, x);
             double t = div_m_grad_quad(x, dim);
             e_qmob = fmax(e_qmob, fabs(y[i] - t) / fabs(t));
         }
@@ -226,7 +164,7 @@ static void test_exactness(void)
     for (int dim = 2; dim <= 3; ++dim) {
         double s0 = dim == 2 ? 1.0 / 30 : 1.0 / 16, f = dim == 2 ? 1.2 : 1.0;
         pst_cloud *c = lattice(dim, s0, f, 0.8, 0);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         double eq[NSCHEMES];
         for (int s = 0; s < NSCHEMES; ++s)
             eq[s] = exactness(c, nl, schemes[s], 6.0 * f * s0);
@@ -240,14 +178,14 @@ static void test_exactness(void)
  * exact gradients of quadratics and the nested Laplacian is exact for quadratics inside: 2
  * rings (6h) from the box for mixed1, 3 rings (9h) for mixed0, whose volumes V~ (eq. 4) must
  * be uniform on the 2-ring too. */
-static void test_lattice(void)
+static void test_regular_lattice(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         double s0 = dim == 2 ? 1.0 / 30 : 1.0 / 18, f = dim == 2 ? 1.2 : 1.0;
         pst_cloud *c = lattice(dim, s0, f, 0.0, 0);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         size_t n = pst_cloud_size(c);
-        double *q = field(c, quad), *y = malloc(n * sizeof *y);
+        double *q = test_field(c, quad), *y = malloc(n * sizeof *y);
         for (int s = 0; s < 2; ++s) {
             pst_op *op = make_op(c, nl, schemes[s]);
             pst_op_apply(op, q, y);
@@ -280,65 +218,39 @@ static void test_paths_and_threads(void)
         for (int ncomp = 0; ncomp <= dim; ncomp += (ncomp == 1 ? dim - 1 : 1)) {
             pst_cloud *c = dim == 2 ? lattice(2, 1.0 / 15, 1.2, 0.3, 1)
                                     : lattice(3, 1.0 / 7, 1.0, 0.3, 1);
-            uint8_t *kind = pst_cloud_kinds(c);
+            const uint8_t *kind = pst_cloud_kinds(c);
             size_t n = pst_cloud_size(c);
-            for (size_t i = 0; i < n; i += 3) /* every third boundary particle Neumann */
-                if (kind[i] == PST_DIRICHLET)
-                    kind[i] = PST_NEUMANN;
-            pst_cloud_set_mobility(c, ncomp);
-            for (int k = 0; k < ncomp; ++k) {
-                double *m = pst_cloud_mobility(c, k);
-                for (size_t i = 0; i < n; ++i)
-                    m[i] = 1.0 + 0.5 * k + 1e3 * ((i * 2654435761u) % 5 == 0);
-            }
-            pst_nlist *nl = neighbours(c, 3.0);
-            double *u = field(c, quad), *ul = field(c, linear), *y1 = malloc(n * sizeof *y1),
-                   *y2 = malloc(n * sizeof *y2), *y3 = malloc(n * sizeof *y3),
-                   *dg = malloc(n * sizeof *dg);
+            test_make_neumann(c, 3); /* every third boundary particle Neumann */
+            test_rough_mobility(c, ncomp);
+            pst_nlist *nl = test_nlist(c, 3.0);
+            double *u = test_field(c, quad), *ul = test_field(c, linear),
+                   *y1 = malloc(n * sizeof *y1), *y2 = malloc(n * sizeof *y2),
+                   *y3 = malloc(n * sizeof *y3);
             for (int s = 0; s < NSCHEMES; ++s) {
-                omp_set_num_threads(1);
-                pst_op *op1 = make_op(c, nl, schemes[s]);
-                pst_op_apply(op1, u, y3);
-                omp_set_num_threads(2);
-                pst_op *op = make_op(c, nl, schemes[s]);
-                pst_op_apply(op, u, y1);
-                CHECK(memcmp(y1, y3, n * sizeof *y1) == 0);
-                CHECK(memcmp(pst_op_status(op), pst_op_status(op1), n) == 0);
-                CHECK_INT(pst_op_store(op), PST_OK);
+                test_threads t =
+                    test_one_vs_two_threads(c, nl, schemes[s], PST_GRAD_G1, 0, u, y3, y1, 0);
+                pst_op *op = t.op2, *op1 = t.op1;
+                CHECK(t.same_apply);
+                CHECK(t.same_status);
+                test_paths p = test_compare_paths(op, u, y1, y2);
+                CHECK_INT(p.store, PST_OK);
                 CHECK_INT(pst_op_store(op1), PST_OK);
-                CHECK_INT(pst_op_apply_stored(op, u, y2), PST_OK);
+                CHECK_INT(p.stored, PST_OK);
                 pst_op_apply_stored(op1, u, y3);
                 CHECK(memcmp(y2, y3, n * sizeof *y2) == 0); /* stored weights: 1 vs 2 threads */
-                pst_csr a;
-                CHECK_INT(pst_op_assemble(op, &a), PST_OK);
-                CHECK_INT(pst_op_diagonal(op, dg), PST_OK);
-                double worst = 0, worst_csr = 0, worst_diag = 0, mean = 0;
-                int finite = 1, sorted = 1;
-                for (size_t i = 0; i < n; ++i) {
-                    double sum = 0, mag = 0;
-                    for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
-                        sum += a.val[e] * u[a.col[e]];
-                        mag += fabs(a.val[e] * u[a.col[e]]);
-                        if (a.col[e] == i)
-                            worst_diag = fmax(worst_diag, fabs(a.val[e] - dg[i]));
-                        if (e > a.rowptr[i])
-                            sorted = sorted && a.col[e] > a.col[e - 1];
-                    }
-                    mean += (double)(a.rowptr[i + 1] - a.rowptr[i] - 1);
-                    finite = finite && isfinite(y1[i]) && isfinite(y2[i]);
-                    worst = fmax(worst, fabs(y1[i] - y2[i]) / (mag > 0 ? mag : 1));
-                    worst_csr = fmax(worst_csr, fabs(sum - y1[i]) / (mag > 0 ? mag : 1));
-                }
+                CHECK_INT(p.assemble, PST_OK);
+                CHECK_INT(p.diagonal, PST_OK);
                 printf("paths %dD %s ncomp %d: pattern %.1f per row (list %.1f), free vs stored "
                        "%.2e, csr vs free %.2e (relative to sum |w u|)\n",
-                       dim, schemes[s], ncomp, mean / (double)n,
-                       (double)pst_nlist_pairs(nl) / (double)n, worst, worst_csr);
-                CHECK(finite);
-                CHECK(sorted);
-                CHECK(mean > 1.5 * (double)pst_nlist_pairs(nl)); /* wider than the list */
-                CHECK(worst <= 1e-13);
-                CHECK(worst_csr <= 1e-13);
-                CHECK(worst_diag == 0.0);
+                       dim, schemes[s], ncomp, (double)p.offdiag / (double)n,
+                       (double)pst_nlist_pairs(nl) / (double)n, p.worst, p.worst_csr);
+                CHECK(p.finite);
+                CHECK(p.sorted);
+                /* wider than the list */
+                CHECK((double)p.offdiag > 1.5 * (double)pst_nlist_pairs(nl));
+                CHECK(p.worst <= 1e-13);
+                CHECK(p.worst_csr <= 1e-13);
+                CHECK(p.worst_diag == 0.0);
                 if (ncomp != 1) {
                     /* Neumann rows: n . M grad u for linear u (M constant per particle here
                      * only where the mobility is; use the operator's M at I) */
@@ -356,7 +268,6 @@ static void test_paths_and_threads(void)
                     }
                     CHECK(wn <= 1e-10);
                 }
-                pst_csr_free(&a);
                 pst_op_destroy(op);
                 pst_op_destroy(op1);
             }
@@ -365,7 +276,6 @@ static void test_paths_and_threads(void)
             free(y1);
             free(y2);
             free(y3);
-            free(dg);
             pst_nlist_destroy(nl);
             pst_cloud_destroy(c);
         }
@@ -377,19 +287,14 @@ static void test_paths_and_threads(void)
 static void test_degenerate(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
-        size_t side = dim == 2 ? 11 : 5, nflat = dim == 2 ? side : side * side, n = nflat + 1;
+        size_t n = (dim == 2 ? 11 : 25) + 1;
         pst_cloud *c;
         CHECK_INT(pst_cloud_create(&c, dim, n), PST_OK);
-        for (size_t i = 0; i < nflat; ++i) {
-            pst_cloud_coord(c, 0)[i] = 0.1 * (double)(i % side);
-            pst_cloud_coord(c, 1)[i] = dim == 2 ? 0.0 : 0.1 * (double)(i / side);
-            if (dim == 3)
-                pst_cloud_coord(c, 2)[i] = 0.0;
-        }
+        size_t nflat = test_flat_layout(c);
         for (int d = 0; d < dim; ++d)
             pst_cloud_coord(c, d)[nflat] = 10.0;
         pst_cloud_set_h_uniform(c, dim == 2 ? 0.12 : 0.08); /* mixed2 gets >= 5 neighbours */
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y), *g[3], *hs[6];
         for (int d = 0; d < 3; ++d)
             g[d] = malloc(n * sizeof *g[d]);
@@ -452,7 +357,7 @@ static void test_degenerate(void)
         pst_cloud_coord(c, 1)[i] = py[i];
     }
     pst_cloud_set_h_uniform(c, 0.1);
-    pst_nlist *nl = neighbours(c, 3.0);
+    pst_nlist *nl = test_nlist(c, 3.0);
     pst_op *op = make_op(c, nl, "mixed2");
     double u[4], gx[4], gy[4], *g[3] = {gx, gy, NULL};
     for (int i = 0; i < 4; ++i)
@@ -471,7 +376,7 @@ static void test_errors_and_options(void)
 {
     pst_cloud *c = lattice(2, 1.0 / 20, 1.2, 0.5, 0);
     size_t n = pst_cloud_size(c);
-    pst_nlist *nl = neighbours(c, 2.0);
+    pst_nlist *nl = test_nlist(c, 2.0);
     pst_op_opts o;
     pst_op *op = NULL;
     char err[PST_ERRLEN];
@@ -480,7 +385,7 @@ static void test_errors_and_options(void)
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL); /* list radius 2h < 3h */
     CHECK(strstr(err, "support") != NULL);
     pst_nlist_destroy(nl);
-    nl = neighbours(c, 3.0);
+    nl = test_nlist(c, 3.0);
     o.variant = 1;
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "variant") != NULL);
@@ -506,8 +411,8 @@ static void test_errors_and_options(void)
     for (size_t i = 0; i < n; ++i)
         h[i] = (1.1 + 0.3 * (double)(i % 3)) / 20;
     pst_nlist_destroy(nl);
-    nl = neighbours(c, 3.0);
-    double *u = field(c, linear), *y = malloc(n * sizeof *y);
+    nl = test_nlist(c, 3.0);
+    double *u = test_field(c, linear), *y = malloc(n * sizeof *y);
     for (int s = 0; s < NSCHEMES; ++s) {
         op = make_op(c, nl, schemes[s]);
         pst_op_apply(op, u, y);
@@ -527,7 +432,7 @@ static void test_errors_and_options(void)
 int main(void)
 {
     test_exactness();
-    test_lattice();
+    test_regular_lattice();
     test_paths_and_threads();
     test_degenerate();
     test_errors_and_options();

@@ -6,69 +6,14 @@
 #include "check.h"
 #include "pstencil.h"
 #include "qsfdi_oracle.h"
+#include "support.h"
 
-#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* A lattice on [lo,hi]^dim with spacing s0, h = f s0, jitter K. */
-static pst_cloud *lattice(int dim, double lo, double hi, double s0, double f, double K,
-                          uint64_t seed, int boundary_layer)
-{
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = lo;
-        o.hi[d] = hi;
-    }
-    o.s0 = s0;
-    o.h_ratio = f;
-    o.jitter = K;
-    o.seed = seed;
-    o.boundary_layer = boundary_layer;
-    pst_cloud *c = NULL;
-    char err[PST_ERRLEN];
-    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
-        fprintf(stderr, "lattice: %s\n", err);
-        exit(1);
-    }
-    return c;
-}
-
-static pst_nlist *neighbours(const pst_cloud *c, double support)
-{
-    pst_nlist *nl = NULL;
-    char err[PST_ERRLEN];
-    if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
-        fprintf(stderr, "nlist: %s\n", err);
-        exit(1);
-    }
-    return nl;
-}
-
 static pst_op *make_op(const pst_cloud *c, const pst_nlist *nl)
 {
-    pst_op_opts o;
-    pst_op_defaults(&o);
-    o.scheme = "qsfdi";
-    pst_op *op = NULL;
-    char err[PST_ERRLEN];
-    if (pst_op_create(&op, c, nl, &o, err) != PST_OK) {
-        fprintf(stderr, "op qsfdi: %s\n", err);
-        exit(1);
-    }
-    return op;
-}
-
-static int inner(const pst_cloud *c, size_t i, double lo, double hi, double margin)
-{
-    for (int d = 0; d < pst_cloud_dim(c); ++d) {
-        double x = pst_cloud_coord_const(c, d)[i];
-        if (x < lo + margin || x > hi - margin)
-            return 0;
-    }
-    return 1;
+    return test_op(c, nl, "qsfdi", PST_GRAD_G1, 0);
 }
 
 /* A random quadratic p = c0 + g.x + x^T H x / 2 (H symmetric, tr H = 7.5). */
@@ -99,20 +44,13 @@ static double quad_value(const quad *q, const double *x)
 
 static double quad_lap(const quad *q) { return q->H[0][0] + q->H[1][1] + q->H[2][2]; }
 
-static void position(const pst_cloud *c, size_t i, double x[3])
-{
-    x[0] = x[1] = x[2] = 0;
-    for (int d = 0; d < pst_cloud_dim(c); ++d)
-        x[d] = pst_cloud_coord_const(c, d)[i];
-}
-
 static double *quad_field(const pst_cloud *c, const quad *q)
 {
     size_t n = pst_cloud_size(c);
     double *u = malloc(n * sizeof *u);
     for (size_t i = 0; i < n; ++i) {
         double x[3];
-        position(c, i, x);
+        test_position(c, i, x);
         u[i] = quad_value(q, x);
     }
     return u;
@@ -132,7 +70,7 @@ static void test_exactness(void)
     for (size_t t = 0; t < sizeof cases / sizeof *cases; ++t) {
         int dim = cases[t].dim;
         double s0 = cases[t].s0, f = cases[t].f;
-        pst_cloud *c = lattice(dim, 2.0, 3.0, s0, f, 0.8, 11 + t % 2, 0);
+        pst_cloud *c = test_lattice(dim, 2.0, 3.0, s0, f, 0.8, 11 + t % 2, 0);
         size_t n = pst_cloud_size(c);
         if (cases[t].varh) {
             double *h = pst_cloud_h_per_particle(c);
@@ -140,7 +78,7 @@ static void test_exactness(void)
                 h[i] = f * s0 * (1.0 + 0.2 * pst_rng_symmetric(5, i, 9));
         }
         double hmax = pst_cloud_h_max(c), margin = 3.0 * hmax + 1e-9;
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         pst_op *op = make_op(c, nl);
         quad q = make_quad(dim);
         double *u = quad_field(c, &q), *y = malloc(n * sizeof *y);
@@ -160,7 +98,7 @@ static void test_exactness(void)
             hidx[2][0] = 0, hidx[2][1] = 1;
         for (size_t i = 0; i < n; ++i) {
             double err = fabs(y[i] - quad_lap(&q)) / fabs(quad_lap(&q));
-            if (!inner(c, i, 2.0, 3.0, margin)) {
+            if (!test_inside(c, i, 2.0, 3.0, margin)) {
                 if (st[i] == PST_ROW_OK) { /* one-sided support, nonsingular fit */
                     elb = fmax(elb, err);
                     ++usedb;
@@ -171,7 +109,7 @@ static void test_exactness(void)
             CHECK_INT(st[i], PST_ROW_OK);
             el = fmax(el, err);
             double x[3];
-            position(c, i, x);
+            test_position(c, i, x);
             double ga[3], gn = 0;
             for (int a = 0; a < dim; ++a) {
                 ga[a] = q.g[a];
@@ -231,24 +169,15 @@ static void test_exactness(void)
     }
 }
 
-/* Weight of column j in row i of an assembled matrix. */
-static double entry(const pst_csr *a, size_t i, size_t j)
-{
-    for (int64_t k = a->rowptr[i]; k < a->rowptr[i + 1]; ++k)
-        if (a->col[k] == j)
-            return a->val[k];
-    return 0.0;
-}
-
 /* The moment-form weights equal the literal multi-pass oracle's (spec §7.2) on every row with
  * a nonsingular fit; the oracle's printed Gamma fails exactness (spec §7.6). */
 static void test_oracle(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         double s0 = dim == 2 ? 0.05 : 0.1;
-        pst_cloud *c = lattice(dim, 2.0, 3.0, s0, 0.9, 0.8, 21, 0);
+        pst_cloud *c = test_lattice(dim, 2.0, 3.0, s0, 0.9, 0.8, 21, 0);
         size_t n = pst_cloud_size(c);
-        pst_nlist *nl = neighbours(c, 3.0);
+        pst_nlist *nl = test_nlist(c, 3.0);
         pst_op *op = make_op(c, nl);
         pst_csr a;
         CHECK_INT(pst_op_assemble(op, &a), PST_OK);
@@ -264,7 +193,7 @@ static void test_oracle(void)
         for (size_t i = 0; i < n; ++i) {
             size_t len = (size_t)(off[i + 1] - off[i]);
             double *w = malloc(len * sizeof *w), *wp = malloc(len * sizeof *wp), xi[3];
-            position(c, i, xi);
+            test_position(c, i, xi);
             int ok = qsfdi_oracle_weights(dim, x, xi, idx + off[i], len, h, 0, w, NULL);
             int okp = qsfdi_oracle_weights(dim, x, xi, idx + off[i], len, h,
                                            QSFDI_ORACLE_PRINTED_GAMMA, wp, NULL);
@@ -273,11 +202,12 @@ static void test_oracle(void)
                 double scale = 0, diff = 0, l = 0, lp = 0;
                 for (size_t k = 0; k < len; ++k) {
                     scale = fmax(scale, fabs(w[k]));
-                    diff = fmax(diff, fabs(w[k] - entry(&a, i, idx[off[i] + k])));
+                    double aik = test_csr_entry(&a, i, idx[off[i] + k]);
+                    diff = fmax(diff, fabs(w[k] - aik));
                     l += w[k] * (u[idx[off[i] + k]] - u[i]);
                     lp += wp[k] * (u[idx[off[i] + k]] - u[i]);
                 }
-                if (inner(c, i, 2.0, 3.0, 3 * h + 1e-9)) {
+                if (test_inside(c, i, 2.0, 3.0, 3 * h + 1e-9)) {
                     worst = fmax(worst, diff / scale);
                     lit_err = fmax(lit_err, fabs(l - quad_lap(&q)) / quad_lap(&q));
                     printed_err = fmax(printed_err, fabs(lp - quad_lap(&q)) / quad_lap(&q));
@@ -311,56 +241,32 @@ static void test_paths_and_threads(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         double s0 = dim == 2 ? 0.05 : 0.1;
-        pst_cloud *c = lattice(dim, 2.0, 3.0, s0, 1.2, 0.3, 5, 1);
-        uint8_t *kind = pst_cloud_kinds(c);
+        pst_cloud *c = test_lattice(dim, 2.0, 3.0, s0, 1.2, 0.3, 5, 1);
+        const uint8_t *kind = pst_cloud_kinds(c);
         size_t n = pst_cloud_size(c);
-        for (size_t i = 0; i < n; i += 3)
-            if (kind[i] == PST_DIRICHLET)
-                kind[i] = PST_NEUMANN;
-        pst_nlist *nl = neighbours(c, 3.0);
+        test_make_neumann(c, 3);
+        pst_nlist *nl = test_nlist(c, 3.0);
         quad q = make_quad(dim);
         double *u = quad_field(c, &q), *y1 = malloc(n * sizeof *y1),
-               *y2 = malloc(n * sizeof *y2), *y3 = malloc(n * sizeof *y3),
-               *dg = malloc(n * sizeof *dg), *g1[3], *g2[3];
-        for (int a = 0; a < 3; ++a) {
-            g1[a] = malloc(n * sizeof(double));
-            g2[a] = malloc(n * sizeof(double));
-        }
-        omp_set_num_threads(1);
-        pst_op *op1 = make_op(c, nl);
-        pst_op_apply(op1, u, y3);
-        pst_op_gradient(op1, u, g1);
-        omp_set_num_threads(2);
-        pst_op *op = make_op(c, nl);
-        pst_op_apply(op, u, y1);
-        pst_op_gradient(op, u, g2);
-        CHECK(memcmp(y1, y3, n * sizeof *y1) == 0);
-        CHECK(memcmp(pst_op_status(op), pst_op_status(op1), n) == 0);
+               *y2 = malloc(n * sizeof *y2), *y3 = malloc(n * sizeof *y3);
+        test_threads t = test_one_vs_two_threads(c, nl, "qsfdi", PST_GRAD_G1, 0, u, y3, y1, 1);
+        pst_op *op = t.op2;
+        CHECK(t.same_apply);
+        CHECK(t.same_status);
         for (int a = 0; a < dim; ++a)
-            CHECK(memcmp(g1[a], g2[a], n * sizeof(double)) == 0);
-        CHECK_INT(pst_op_store(op), PST_OK);
-        CHECK_INT(pst_op_apply_stored(op, u, y2), PST_OK);
-        pst_csr a;
-        CHECK_INT(pst_op_assemble(op, &a), PST_OK);
-        CHECK_INT(pst_op_diagonal(op, dg), PST_OK);
-        double worst = 0, worst_csr = 0, worst_diag = 0, neu = 0;
-        int finite = 1;
+            CHECK(t.same_grad[a]);
+        test_paths p = test_compare_paths(op, u, y1, y2);
+        CHECK_INT(p.store, PST_OK);
+        CHECK_INT(p.stored, PST_OK);
+        CHECK_INT(p.assemble, PST_OK);
+        CHECK_INT(p.diagonal, PST_OK);
+        double neu = 0;
         size_t nneu = 0;
         const uint8_t *st = pst_op_status(op);
-        for (size_t i = 0; i < n; ++i) {
-            double sum = 0, mag = 0;
-            for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
-                sum += a.val[e] * u[a.col[e]];
-                mag += fabs(a.val[e] * u[a.col[e]]);
-                if (a.col[e] == i)
-                    worst_diag = fmax(worst_diag, fabs(a.val[e] - dg[i]));
-            }
-            finite = finite && isfinite(y1[i]) && isfinite(y2[i]);
-            worst = fmax(worst, fabs(y1[i] - y2[i]) / (mag > 0 ? mag : 1));
-            worst_csr = fmax(worst_csr, fabs(sum - y1[i]) / (mag > 0 ? mag : 1));
+        for (size_t i = 0; i < n; ++i)
             if (kind[i] == PST_NEUMANN && st[i] == PST_ROW_OK) {
                 double x[3], flux = 0;
-                position(c, i, x);
+                test_position(c, i, x);
                 for (int d = 0; d < dim; ++d) {
                     double gd = q.g[d];
                     for (int b = 0; b < dim; ++b)
@@ -370,35 +276,28 @@ static void test_paths_and_threads(void)
                 neu = fmax(neu, fabs(y1[i] - flux));
                 ++nneu;
             }
-        }
         printf("paths %dD: matrix-free vs stored %.2e, assembled %.2e, diagonal %.1e; "
                "%zu Neumann rows, max |row - n.grad u| %.2e\n",
-               dim, worst, worst_csr, worst_diag, nneu, neu);
-        CHECK(finite);
-        CHECK(worst <= 1e-13);
-        CHECK(worst_csr <= 1e-13);
-        CHECK(worst_diag == 0.0);
+               dim, p.worst, p.worst_csr, p.worst_diag, nneu, neu);
+        CHECK(p.finite);
+        CHECK(p.worst <= 1e-13);
+        CHECK(p.worst_csr <= 1e-13);
+        CHECK(p.worst_diag == 0.0);
         CHECK(nneu > 0);
         CHECK(neu <= 1e-8);
-        double t[PST_NPHASES];
-        pst_op_phase_times(op, t);
-        CHECK(t[PST_PHASE_GEOMETRY] == 0.0);
-        CHECK(t[PST_PHASE_MOMENTS] > 0 && t[PST_PHASE_INVERSION] > 0 &&
-              t[PST_PHASE_WEIGHTS] > 0);
-        CHECK(t[PST_PHASE_MOMENTS] + t[PST_PHASE_INVERSION] + t[PST_PHASE_WEIGHTS] <=
-              t[PST_PHASE_PRECOMPUTE]);
-        pst_csr_free(&a);
-        pst_op_destroy(op);
-        pst_op_destroy(op1);
-        for (int k = 0; k < 3; ++k) {
-            free(g1[k]);
-            free(g2[k]);
-        }
+        double t_ph[PST_NPHASES];
+        pst_op_phase_times(op, t_ph);
+        CHECK(t_ph[PST_PHASE_GEOMETRY] == 0.0);
+        CHECK(t_ph[PST_PHASE_MOMENTS] > 0 && t_ph[PST_PHASE_INVERSION] > 0 &&
+              t_ph[PST_PHASE_WEIGHTS] > 0);
+        CHECK(t_ph[PST_PHASE_MOMENTS] + t_ph[PST_PHASE_INVERSION] + t_ph[PST_PHASE_WEIGHTS] <=
+              t_ph[PST_PHASE_PRECOMPUTE]);
+        pst_op_destroy(t.op2);
+        pst_op_destroy(t.op1);
         free(u);
         free(y1);
         free(y2);
         free(y3);
-        free(dg);
         pst_nlist_destroy(nl);
         pst_cloud_destroy(c);
     }
@@ -410,9 +309,9 @@ static void test_paths_and_threads(void)
  * Never NaN, in any output. */
 static void test_degenerate(void)
 {
-    pst_cloud *c = lattice(2, 2.0, 3.0, 0.05, 0.75, 0.8, 3, 0);
+    pst_cloud *c = test_lattice(2, 2.0, 3.0, 0.05, 0.75, 0.8, 3, 0);
     size_t n = pst_cloud_size(c);
-    pst_nlist *nl = neighbours(c, 3.0);
+    pst_nlist *nl = test_nlist(c, 3.0);
     pst_op *op = make_op(c, nl);
     size_t counts[PST_ROW_NSTATUS];
     pst_op_status_counts(op, counts);
@@ -420,7 +319,7 @@ static void test_degenerate(void)
            *ys = malloc(n * sizeof *ys);
     for (size_t i = 0; i < n; ++i) {
         double x[3];
-        position(c, i, x);
+        test_position(c, i, x);
         ul[i] = 1.0 + 2.0 * x[0] - 3.0 * x[1];
         us[i] = x[0] * x[0] + x[1] * x[1];
     }
@@ -458,18 +357,15 @@ static void test_degenerate(void)
 
     for (int dim = 2; dim <= 3; ++dim) {
         /* a line (2D) or a 5x5 plane (3D), plus one isolated particle and a cluster of 3 */
-        size_t m = dim == 2 ? 11 : 25, nn = m + 4;
+        size_t nn = (dim == 2 ? 11 : 25) + 4;
         CHECK_INT(pst_cloud_create(&c, dim, nn), PST_OK);
-        for (size_t i = 0; i < m; ++i) {
-            pst_cloud_coord(c, 0)[i] = 0.1 * (double)(dim == 2 ? i : i % 5);
-            pst_cloud_coord(c, 1)[i] = dim == 2 ? 0.0 : 0.1 * (double)(i / 5);
-        }
+        size_t m = test_flat_layout(c);
         double far[4][2] = {{10, 10}, {20, 20}, {20.05, 20}, {20, 20.05}};
         for (size_t i = 0; i < 4; ++i)
             for (int d = 0; d < 2; ++d)
                 pst_cloud_coord(c, d)[m + i] = far[i][d];
         pst_cloud_set_h_uniform(c, 0.1);
-        nl = neighbours(c, 3.0);
+        nl = test_nlist(c, 3.0);
         op = make_op(c, nl);
         double *u = malloc(nn * sizeof *u), *yy = malloc(nn * sizeof *yy), *g[3], *hs[6];
         for (int a = 0; a < 3; ++a)
@@ -522,8 +418,8 @@ static void test_degenerate(void)
 
 static void test_errors(void)
 {
-    pst_cloud *c = lattice(2, 2.0, 3.0, 0.1, 1.2, 0.0, 1, 0);
-    pst_nlist *nl = neighbours(c, 2.0);
+    pst_cloud *c = test_lattice(2, 2.0, 3.0, 0.1, 1.2, 0.0, 1, 0);
+    pst_nlist *nl = test_nlist(c, 2.0);
     pst_op_opts o;
     pst_op *op = NULL;
     char err[PST_ERRLEN];
@@ -533,7 +429,7 @@ static void test_errors(void)
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL); /* list radius 2h < 3h */
     CHECK(strstr(err, "support") != NULL);
     pst_nlist_destroy(nl);
-    nl = neighbours(c, 3.0);
+    nl = test_nlist(c, 3.0);
     o.variant = 1;
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "variant") != NULL);
@@ -567,14 +463,14 @@ static void test_a(double K, double f, const double proto[2])
     for (int s = 0; s < 5; ++s) {
         E[s] = En[s] = 0;
         for (int r = 0; r < 3; ++r) {
-            pst_cloud *c = lattice(2, 2.0, 3.0, s0s[s], f, K, 100 + (uint64_t)r, 0);
+            pst_cloud *c = test_lattice(2, 2.0, 3.0, s0s[s], f, K, 100 + (uint64_t)r, 0);
             size_t n = pst_cloud_size(c);
-            pst_nlist *nl = neighbours(c, 3.0);
+            pst_nlist *nl = test_nlist(c, 3.0);
             pst_op *op = make_op(c, nl);
             double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y), h = f * s0s[s];
             for (size_t i = 0; i < n; ++i) {
                 double x[3];
-                position(c, i, x);
+                test_position(c, i, x);
                 u[i] = x6y6(x);
             }
             pst_op_apply(op, u, y);
@@ -583,13 +479,13 @@ static void test_a(double K, double f, const double proto[2])
             double sum = 0, vsum = 0;
             for (size_t i = 0; i < n; ++i) {
                 double x[3];
-                position(c, i, x);
+                test_position(c, i, x);
                 if (!(x[0] > 2.25 && x[0] < 2.75 && x[1] > 2.25 && x[1] < 2.75))
                     continue;
                 double nd = pst_kernel_w(PST_KERNEL_QUINTIC, 2, 0.0, h);
                 for (int64_t e = off[i]; e < off[i + 1]; ++e) {
                     double xj[3];
-                    position(c, idx[e], xj);
+                    test_position(c, idx[e], xj);
                     nd += pst_kernel_w(PST_KERNEL_QUINTIC, 2, hypot(xj[0] - x[0], xj[1] - x[1]),
                                        h);
                 }

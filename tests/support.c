@@ -1,0 +1,215 @@
+/* Fixtures shared by the operator tests; see support.h. */
+#include "support.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+pst_cloud *test_lattice(int dim, double lo, double hi, double s0, double h_ratio, double K,
+                        uint64_t seed, int boundary_layer)
+{
+    pst_lattice_opts o;
+    pst_lattice_defaults(&o);
+    o.dim = dim;
+    for (int d = 0; d < 3; ++d) {
+        o.lo[d] = lo;
+        o.hi[d] = hi;
+    }
+    o.s0 = s0;
+    o.h_ratio = h_ratio;
+    o.jitter = K;
+    o.seed = seed;
+    o.boundary_layer = boundary_layer;
+    pst_cloud *c = NULL;
+    char err[PST_ERRLEN];
+    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
+        fprintf(stderr, "lattice: %s\n", err);
+        exit(1);
+    }
+    return c;
+}
+
+pst_nlist *test_nlist(const pst_cloud *c, double support)
+{
+    pst_nlist *nl = NULL;
+    char err[PST_ERRLEN];
+    if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
+        fprintf(stderr, "nlist: %s\n", err);
+        exit(1);
+    }
+    return nl;
+}
+
+pst_op *test_op(const pst_cloud *c, const pst_nlist *nl, const char *scheme, int gradient,
+                int variant)
+{
+    pst_op_opts o;
+    pst_op_defaults(&o);
+    o.scheme = scheme;
+    o.gradient = gradient;
+    o.variant = variant;
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    if (pst_op_create(&op, c, nl, &o, err) != PST_OK) {
+        fprintf(stderr, "op %s (gradient %d, variant %d): %s\n", scheme, gradient, variant, err);
+        exit(1);
+    }
+    return op;
+}
+
+void test_position(const pst_cloud *c, size_t i, double x[3])
+{
+    x[0] = x[1] = x[2] = 0;
+    for (int d = 0; d < pst_cloud_dim(c); ++d)
+        x[d] = pst_cloud_coord_const(c, d)[i];
+}
+
+double *test_field(const pst_cloud *c, double (*fn)(const double *x))
+{
+    size_t n = pst_cloud_size(c);
+    double *u = malloc(n * sizeof *u);
+    for (size_t i = 0; i < n; ++i) {
+        double x[3];
+        test_position(c, i, x);
+        u[i] = fn(x);
+    }
+    return u;
+}
+
+int test_inside(const pst_cloud *c, size_t i, double lo, double hi, double margin)
+{
+    for (int d = 0; d < pst_cloud_dim(c); ++d) {
+        double x = pst_cloud_coord_const(c, d)[i];
+        if (x < lo + margin || x > hi - margin)
+            return 0;
+    }
+    return 1;
+}
+
+void test_make_neumann(pst_cloud *c, size_t stride)
+{
+    uint8_t *kind = pst_cloud_kinds(c);
+    for (size_t i = 0; i < pst_cloud_size(c); i += stride)
+        if (kind[i] == PST_DIRICHLET)
+            kind[i] = PST_NEUMANN;
+}
+
+void test_rough_mobility(pst_cloud *c, int ncomp)
+{
+    size_t n = pst_cloud_size(c);
+    pst_cloud_set_mobility(c, ncomp);
+    for (int k = 0; k < ncomp; ++k) {
+        double *m = pst_cloud_mobility(c, k);
+        for (size_t i = 0; i < n; ++i)
+            m[i] = 1.0 + 0.5 * k + 1e3 * ((i * 2654435761u) % 5 == 0);
+    }
+}
+
+size_t test_flat_layout(pst_cloud *c)
+{
+    int dim = pst_cloud_dim(c);
+    size_t m = dim == 2 ? 11 : 25;
+    for (size_t i = 0; i < m; ++i) {
+        pst_cloud_coord(c, 0)[i] = 0.1 * (double)(dim == 2 ? i : i % 5);
+        pst_cloud_coord(c, 1)[i] = dim == 2 ? 0.0 : 0.1 * (double)(i / 5);
+        if (dim == 3)
+            pst_cloud_coord(c, 2)[i] = 0.0;
+    }
+    return m;
+}
+
+double test_csr_entry(const pst_csr *a, size_t i, size_t j)
+{
+    for (int64_t k = a->rowptr[i]; k < a->rowptr[i + 1]; ++k)
+        if (a->col[k] == j)
+            return a->val[k];
+    return 0.0;
+}
+
+/* Apply, and the derivatives asked for, into y and the 9 arrays d (gradient 0-2, Hessian 3-8). */
+static void evaluate(const pst_op *op, const double *u, double *y, double **d, int derivs)
+{
+    pst_op_apply(op, u, y);
+    if (derivs >= 1)
+        pst_op_gradient(op, u, d);
+    if (derivs >= 2)
+        pst_op_hessian(op, u, d + 3);
+}
+
+test_threads test_one_vs_two_threads(const pst_cloud *c, const pst_nlist *nl,
+                                     const char *scheme, int gradient, int variant,
+                                     const double *u, double *y1, double *y2, int derivs)
+{
+    size_t n = pst_cloud_size(c);
+    int dim = pst_cloud_dim(c);
+    double *d1[9], *d2[9];
+    for (int k = 0; k < 9; ++k) {
+        d1[k] = malloc(n * sizeof **d1);
+        d2[k] = malloc(n * sizeof **d2);
+    }
+    test_threads t;
+    omp_set_num_threads(1);
+    t.op1 = test_op(c, nl, scheme, gradient, variant);
+    evaluate(t.op1, u, y1, d1, derivs);
+    omp_set_num_threads(2);
+    t.op2 = test_op(c, nl, scheme, gradient, variant);
+    evaluate(t.op2, u, y2, d2, derivs);
+    t.same_apply = memcmp(y1, y2, n * sizeof *y1) == 0;
+    t.same_status = memcmp(pst_op_status(t.op1), pst_op_status(t.op2), n) == 0;
+    for (int a = 0; a < 3; ++a)
+        t.same_grad[a] = derivs < 1 || a >= dim || memcmp(d1[a], d2[a], n * sizeof **d1) == 0;
+    for (int k = 0; k < 6; ++k)
+        t.same_hess[k] = derivs < 2 || k >= dim * (dim + 1) / 2 ||
+                         memcmp(d1[3 + k], d2[3 + k], n * sizeof **d1) == 0;
+    for (int k = 0; k < 9; ++k) {
+        free(d1[k]);
+        free(d2[k]);
+    }
+    return t;
+}
+
+test_paths test_compare_paths(pst_op *op, const double *u, const double *y_free,
+                              double *y_stored)
+{
+    test_paths p = {0};
+    p.unstored = pst_op_apply_stored(op, u, y_stored);
+    p.store = pst_op_store(op);
+    p.stored = pst_op_apply_stored(op, u, y_stored);
+    pst_csr a;
+    p.assemble = pst_op_assemble(op, &a);
+    p.diagonal = PST_EINVAL;
+    p.worst = p.worst_csr = p.worst_diag = INFINITY;
+    if (p.assemble != PST_OK)
+        return p;
+    size_t n = a.n;
+    double *dg = malloc(n * sizeof *dg);
+    p.diagonal = pst_op_diagonal(op, dg);
+    if (p.diagonal != PST_OK || p.stored != PST_OK) {
+        pst_csr_free(&a);
+        free(dg);
+        return p;
+    }
+    p.worst = p.worst_csr = p.worst_diag = 0;
+    p.finite = p.finite_values = p.sorted = 1;
+    for (size_t i = 0; i < n; ++i) {
+        double sum = 0, mag = 0;
+        for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
+            sum += a.val[e] * u[a.col[e]];
+            mag += fabs(a.val[e] * u[a.col[e]]);
+            if (a.col[e] == i)
+                p.worst_diag = fmax(p.worst_diag, fabs(a.val[e] - dg[i]));
+            if (e > a.rowptr[i])
+                p.sorted = p.sorted && a.col[e] > a.col[e - 1];
+            p.finite_values = p.finite_values && isfinite(a.val[e]);
+        }
+        p.finite = p.finite && isfinite(y_free[i]) && isfinite(y_stored[i]);
+        p.worst = fmax(p.worst, fabs(y_free[i] - y_stored[i]) / (mag > 0 ? mag : 1));
+        p.worst_csr = fmax(p.worst_csr, fabs(sum - y_free[i]) / (mag > 0 ? mag : 1));
+    }
+    p.offdiag = a.rowptr[n] - (int64_t)n;
+    pst_csr_free(&a);
+    free(dg);
+    return p;
+}
