@@ -13,27 +13,11 @@
  * algebraically identical and differ only in rounding and cost. The moment pass, the apply, the
  * fallback chain, Neumann rows, gradient, Hessian and interpolation are those of lsmps.c's
  * engine; this file supplies the block factorisation and its solve. */
-#include "operator.h"
 #include "small_matrix.h"
+#include "wls.h"
 
 #include <math.h>
 #include <string.h>
-
-/* The WLS engine in lsmps.c. */
-int pst_wls_precompute(pst_op *op, int typeB,
-                       double (*factor)(int dim, int nb, const double *M, double *fac),
-                       void (*solve)(int dim, int nb, const double *M, const double *fac,
-                                     double *b),
-                       char *err);
-int pst_wls_min_neighbours(int dim);
-void pst_wls_apply(const pst_op *op, const double *u, double *y);
-void pst_wls_emit_row(const pst_op *op, size_t i, double *w);
-void pst_wls_gradient(const pst_op *op, const double *u, double *const grad[3]);
-void pst_wls_hessian(const pst_op *op, const double *u, double *const hess[6]);
-int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,
-                        const double *u, double *value, double *lap, size_t *fallbacks,
-                        char *err);
-void pst_wls_free(void *p);
 
 /* fac = [M1^-1 (D x D) | T = M1^-1 C (D x n2) | S^-1 (2D) or the LDL^T factor of S (3D)];
  * returns the larger condition estimate of the two inversions (1-norm for the closed forms,

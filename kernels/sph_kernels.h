@@ -37,10 +37,12 @@ static inline int pst_sph_valid(pst_kernel k, int dim, double r, double h)
            && h < INFINITY && r >= 0.0;
 }
 
-/* max(x, 0) as a compare-select (maxsd), not fmax: NaN never reaches here. */
+/* max(x, 0), exact for finite x (x + |x| is 2x or +0): arithmetic, not a compare-select,
+ * which GCC turns into a branch around the powers (it may not speculate FP multiplies under
+ * -ftrapping-math), and that keeps kernel loops from vectorising. NaN never reaches here. */
 static inline double pst_sph_pos(double x)
 {
-    return x > 0.0 ? x : 0.0;
+    return 0.5 * (x + fabs(x));
 }
 
 /* 1/h^n for n = 0..5 without pow(). */

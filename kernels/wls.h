@@ -1,0 +1,32 @@
+/* The weighted-least-squares engine of kernels/lsmps.c, shared by lsmps (types A and B), lpmps
+ * (which supplies only its block factorisation) and qsfdi (which uses the vectorised moment
+ * sums). Internal. */
+#ifndef PSTENCIL_WLS_H
+#define PSTENCIL_WLS_H
+
+#include "operator.h"
+
+/* Factor the moment matrix M of a row (nb unknowns) into fac; returns a condition estimate
+ * (INFINITY when singular). Solve M x = b in place with that factor. */
+typedef double (*wls_factor_fn)(int dim, int nb, const double *M, double *fac);
+typedef void (*wls_solve_fn)(int dim, int nb, const double *M, const double *fac, double *b);
+
+/* Precompute a quadric WLS operator (typeB: with the constant) with the given factorisation. */
+int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn solve,
+                       char *err);
+int pst_wls_min_neighbours(int dim);
+void pst_wls_apply(const pst_op *op, const double *u, double *y);
+void pst_wls_emit_row(const pst_op *op, size_t i, double *w);
+void pst_wls_gradient(const pst_op *op, const double *u, double *const grad[3]);
+void pst_wls_hessian(const pst_op *op, const double *u, double *const hess[6]);
+int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,
+                        const double *u, double *value, double *lap, size_t *fallbacks,
+                        char *err);
+void pst_wls_free(void *p);
+
+/* s[.] += sum_c w_c m(r_c) over the monomials m of degree deg (1 to 4), graded lexicographic
+ * order; r holds x, y[, z] at stride `stride`, n pairs. Vectorised reduction loops. */
+void pst_wls_msums(int dim, int deg, int n, const double *r, int stride, const double *w,
+                   double *s);
+
+#endif
