@@ -1,5 +1,6 @@
 /* `pstencil sysinfo`: what the machine offers a run (hwloc topology, OpenMP threads, the BLAS
  * and the compiler flags), printed with every benchmark so numbers can be compared. */
+#define _DEFAULT_SOURCE /* sysconf(_SC_PHYS_PAGES) */
 #include "cli.h"
 
 #include <cblas.h>
@@ -7,6 +8,7 @@
 #include <omp.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 static void print_cache(hwloc_topology_t topo, hwloc_obj_type_t type, const char *label)
 {
@@ -44,7 +46,10 @@ int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv)
     printf("cores                %d\n", hwloc_get_nbobjs_by_type(topo, HWLOC_OBJ_CORE));
     printf("hardware threads     %d\n", hwloc_get_nbobjs_by_type(topo, HWLOC_OBJ_PU));
     printf("NUMA nodes           %d\n", hwloc_get_nbobjs_by_type(topo, HWLOC_OBJ_NUMANODE));
-    printf("memory               %.1f GiB\n", (double)root->total_memory / (1 << 30));
+    /* a VM may expose only part of its memory in its NUMA nodes: report both views */
+    double phys = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
+    printf("memory               %.1f GiB (in hwloc's NUMA nodes: %.1f GiB)\n", phys / (1 << 30),
+           (double)root->total_memory / (1 << 30));
     print_cache(topo, HWLOC_OBJ_L1CACHE, "L1 data cache");
     print_cache(topo, HWLOC_OBJ_L2CACHE, "L2 cache");
     print_cache(topo, HWLOC_OBJ_L3CACHE, "L3 cache");
