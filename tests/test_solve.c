@@ -1,0 +1,420 @@
+/* The solver (pst_solve, docs/solving.md): manufactured Poisson solutions on jittered clouds
+ * with a Dirichlet boundary layer converge at second order (QSFDI eq. 15) for the QSFDI family
+ * and the LV family in 2D and 3D; CG on the symmetrised Brookshaw / corrected-Brookshaw system
+ * agrees with GMRES; BiCGSTAB converges; the two apply paths give the same iterates; 1 and 2
+ * threads give the same bits; failures (iteration limit, no Dirichlet row, CG on a
+ * nonsymmetric scheme, bad options) are clear statuses with finite u; a mixed Dirichlet /
+ * Neumann problem converges to the manufactured solution. */
+#include "check.h"
+#include "pstencil.h"
+#include "support.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* 2D: QSFDI eq. 13. 3D: a plane wave of the same kind. */
+static double u2(const double *x) { return sin(6 * x[0] + 8 * x[1]); }
+static double lap2(const double *x) { return -100 * sin(6 * x[0] + 8 * x[1]); }
+static double u3(const double *x) { return sin(2 * x[0] + 3 * x[1] + 4 * x[2]); }
+static double lap3(const double *x) { return -29 * sin(2 * x[0] + 3 * x[1] + 4 * x[2]); }
+/* The Neumann problem: a gentler wave, because the flux rows (LV eq. 100) are first order. */
+static double un(const double *x) { return 2 + sin(1.5 * x[0] + 2 * x[1]); }
+
+typedef struct {
+    pst_cloud *c;
+    pst_nlist *nl;
+    pst_op *op;
+    double *b, *exact, *u;
+    size_t n;
+} problem;
+
+/* The unit square / cube, jitter K, Dirichlet boundary layer; b = the Laplacian at interior
+ * particles and the value at Dirichlet ones. h = 1.2 s0 (quintic schemes, support 3h; the
+ * cubic LV family, 2h). */
+static problem make(int dim, double s0, const char *scheme, double K, uint64_t seed)
+{
+    problem p;
+    p.c = test_lattice(dim, 0.0, 1.0, s0, 1.2, K, seed, 1);
+    double support = pst_kernel_support(pst_scheme_default_kernel(scheme));
+    if (pst_cloud_morton_sort(p.c, support * 1.2 * s0) != PST_OK)
+        exit(1);
+    p.nl = test_nlist(p.c, support);
+    p.op = test_op(p.c, p.nl, scheme, PST_GRAD_G1, 0);
+    p.n = pst_cloud_size(p.c);
+    p.exact = test_field(p.c, dim == 2 ? u2 : u3);
+    p.b = test_field(p.c, dim == 2 ? lap2 : lap3);
+    p.u = calloc(p.n, sizeof *p.u);
+    const uint8_t *kind = pst_cloud_kinds_const(p.c);
+    for (size_t i = 0; i < p.n; ++i)
+        if (kind[i] == PST_DIRICHLET)
+            p.b[i] = p.exact[i];
+    return p;
+}
+
+static void destroy(problem *p)
+{
+    pst_op_destroy(p->op);
+    pst_nlist_destroy(p->nl);
+    pst_cloud_destroy(p->c);
+    free(p->b);
+    free(p->exact);
+    free(p->u);
+}
+
+/* QSFDI eq. 15: ||u - u_exact|| / ||u_exact|| over the interior (unknown) particles. */
+static double error_eq15(const problem *p, const double *u)
+{
+    const uint8_t *kind = pst_cloud_kinds_const(p->c);
+    double num = 0, den = 0;
+    for (size_t i = 0; i < p->n; ++i) {
+        if (kind[i] != PST_INTERIOR)
+            continue;
+        num += (u[i] - p->exact[i]) * (u[i] - p->exact[i]);
+        den += p->exact[i] * p->exact[i];
+    }
+    return sqrt(num / den);
+}
+
+static int all_finite(const double *u, size_t n)
+{
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(u[i]))
+            return 0;
+    return 1;
+}
+
+static double max_rel_diff(const double *a, const double *b, size_t n)
+{
+    double d = 0, m = 0;
+    for (size_t i = 0; i < n; ++i) {
+        d = fmax(d, fabs(a[i] - b[i]));
+        m = fmax(m, fabs(b[i]));
+    }
+    return d / m;
+}
+
+static double slope(const double *s, const double *e, int m)
+{
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (int k = 0; k < m; ++k) {
+        double x = log(s[k]), y = log(e[k]);
+        sx += x;
+        sy += y;
+        sxx += x * x;
+        sxy += x * y;
+    }
+    return (m * sxy - sx * sy) / (m * sxx - sx * sx);
+}
+
+static pst_solve_opts opts(int solver)
+{
+    pst_solve_opts o;
+    pst_solve_defaults(&o);
+    o.solver = solver;
+    o.rtol = 1e-10;
+    o.stored = 1;
+    return o;
+}
+
+/* Convergence of the solution error with GMRES + Jacobi to 1e-10. The QSFDI family is run at
+ * K = 0.35; the Lukyanov-Vuik schemes at the paper's perturbation (+-10 %, K = 0.1): their
+ * normalisation tr(Gamma^-1)/n is exact only where Gamma is isotropic, so on strongly
+ * disordered clouds at fixed h/s0 the error levels off (measured and printed below at
+ * K = 0.35, LV Theorems 2-3: error ~ dx^omega / h). icspm is left out: GMRES stagnates on its
+ * Poisson operator (docs/solving.md). */
+static void test_convergence(int dim, const double *s0, int m)
+{
+    static const char *const schemes[] = {"qsfdi", "lpmps", "lsmps", "lv", "schwaiger", "lv"};
+    static const double jitter[] = {0.35, 0.35, 0.35, 0.1, 0.1, 0.35};
+    for (int k = 0; k < 6; ++k) {
+        double e[4];
+        int iters[4];
+        for (int r = 0; r < m; ++r) {
+            problem p = make(dim, s0[r], schemes[k], jitter[k], 3);
+            pst_op_store(p.op);
+            pst_solve_opts o = opts(PST_SOLVER_GMRES);
+            pst_solve_result res;
+            char err[PST_ERRLEN];
+            int st = pst_solve(p.op, p.b, p.u, &o, &res, err);
+            CHECK_INT(st, PST_OK);
+            CHECK(res.converged && res.rel_residual <= 1e-10);
+            e[r] = error_eq15(&p, p.u);
+            iters[r] = res.iterations;
+            destroy(&p);
+        }
+        double sl = slope(s0, e, m);
+        printf("%dD %-9s K = %.2f eq. 15 error:", dim, schemes[k], jitter[k]);
+        for (int r = 0; r < m; ++r)
+            printf(" %.3e (%d it)", e[r], iters[r]);
+        printf("  slope %.2f%s\n", sl, k == 5 ? " (measured, not asserted)" : "");
+        if (k < 5) {
+            CHECK(sl >= 1.8);
+            CHECK(e[m - 1] < (dim == 2 ? 3e-2 : 1e-1));
+        }
+    }
+}
+
+/* CG on brookshaw and cb: converges, is the AUTO choice, agrees with GMRES. */
+static void test_cg(void)
+{
+    static const char *const schemes[] = {"brookshaw", "cb"};
+    for (int k = 0; k < 2; ++k) {
+        problem p = make(2, 1.0 / 40, schemes[k], 0.35, 5);
+        pst_op_store(p.op);
+        pst_solve_opts o = opts(PST_SOLVER_AUTO);
+        pst_solve_result rc, rg;
+        CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &rc, NULL), PST_OK);
+        CHECK_INT(rc.solver, PST_SOLVER_CG);
+        double *ug = calloc(p.n, sizeof *ug);
+        o.solver = PST_SOLVER_GMRES;
+        CHECK_INT(pst_solve(p.op, p.b, ug, &o, &rg, NULL), PST_OK);
+        double d = max_rel_diff(p.u, ug, p.n);
+        printf("%-9s CG %d it, GMRES %d it, max rel diff %.2e, error %.3e; %s\n", schemes[k],
+               rc.iterations, rg.iterations, d, error_eq15(&p, p.u), rc.message);
+        CHECK(d <= 1e-8);
+        CHECK(rc.rel_residual <= 1e-10);
+        /* without a preconditioner too */
+        o.solver = PST_SOLVER_CG;
+        o.precond = PST_PREC_NONE;
+        memset(ug, 0, p.n * sizeof *ug);
+        CHECK_INT(pst_solve(p.op, p.b, ug, &o, &rg, NULL), PST_OK);
+        CHECK(max_rel_diff(p.u, ug, p.n) <= 1e-8);
+        free(ug);
+        destroy(&p);
+    }
+}
+
+static void test_bicgstab(void)
+{
+    problem p = make(2, 1.0 / 40, "lv", 0.35, 5);
+    pst_op_store(p.op);
+    pst_solve_opts o = opts(PST_SOLVER_BICGSTAB);
+    pst_solve_result r;
+    CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, NULL), PST_OK);
+    double *ug = calloc(p.n, sizeof *ug);
+    o.solver = PST_SOLVER_GMRES;
+    pst_solve_result rg;
+    CHECK_INT(pst_solve(p.op, p.b, ug, &o, &rg, NULL), PST_OK);
+    printf("lv BiCGSTAB %d it (GMRES %d it), rel residual %.2e, diff to GMRES %.2e\n",
+           r.iterations, rg.iterations, r.rel_residual, max_rel_diff(p.u, ug, p.n));
+    CHECK(r.converged && r.rel_residual <= 1e-10);
+    CHECK(max_rel_diff(p.u, ug, p.n) <= 1e-8);
+    free(ug);
+    destroy(&p);
+}
+
+/* Matrix-free and stored applies: the same iterations, solutions within 1e-12. */
+static void test_apply_paths(void)
+{
+    static const char *const schemes[] = {"qsfdi", "lv", "cb"};
+    static const int solvers[] = {PST_SOLVER_GMRES, PST_SOLVER_BICGSTAB, PST_SOLVER_CG};
+    for (int k = 0; k < 3; ++k) {
+        problem p = make(2, 1.0 / 30, schemes[k], 0.35, 9);
+        pst_solve_opts o = opts(solvers[k]);
+        o.stored = 1;
+        pst_solve_result r1, r2;
+        CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r1, NULL), PST_EINVAL); /* not stored yet */
+        CHECK(strstr(r1.message, "pst_op_store") != NULL);
+        pst_op_store(p.op);
+        CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r1, NULL), PST_OK);
+        double *uf = calloc(p.n, sizeof *uf);
+        o.stored = 0;
+        CHECK_INT(pst_solve(p.op, p.b, uf, &o, &r2, NULL), PST_OK);
+        double d = max_rel_diff(uf, p.u, p.n);
+        printf("%-9s stored %d it, matrix-free %d it, max rel diff %.2e\n", schemes[k],
+               r1.iterations, r2.iterations, d);
+        CHECK_INT(r1.iterations, r2.iterations);
+        CHECK(d <= 1e-12);
+        free(uf);
+        destroy(&p);
+    }
+}
+
+/* 1 and 2 threads: the same bits and iteration counts, for each method. */
+static void test_thread_counts(void)
+{
+    static const char *const schemes[] = {"lsmps", "lv", "brookshaw"};
+    static const int solvers[] = {PST_SOLVER_GMRES, PST_SOLVER_BICGSTAB, PST_SOLVER_CG};
+    for (int k = 0; k < 3; ++k) {
+        problem p = make(2, 1.0 / 30, schemes[k], 0.35, 11);
+        pst_solve_opts o = opts(solvers[k]);
+        o.stored = 0;
+        o.history = 1;
+        pst_solve_result r1, r2;
+        double *u1 = calloc(p.n, sizeof *u1);
+        omp_set_num_threads(1);
+        CHECK_INT(pst_solve(p.op, p.b, u1, &o, &r1, NULL), PST_OK);
+        omp_set_num_threads(2);
+        CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r2, NULL), PST_OK);
+        CHECK_INT(r1.iterations, r2.iterations);
+        CHECK(memcmp(u1, p.u, p.n * sizeof *u1) == 0);
+        CHECK(r1.rel_residual == r2.rel_residual);
+        /* the history: initial residual, then one estimate per iteration */
+        CHECK_INT(r1.nhistory, r1.iterations + 1);
+        CHECK(r1.history && r1.history[0] > 0.1 && r1.history[r1.nhistory - 1] <= 1e-10);
+        CHECK(r1.nhistory == r2.nhistory &&
+              memcmp(r1.history, r2.history, (size_t)r1.nhistory * sizeof(double)) == 0);
+        pst_solve_result_free(&r1);
+        pst_solve_result_free(&r2);
+        CHECK(r1.history == NULL && r1.nhistory == 0);
+        free(u1);
+        destroy(&p);
+    }
+}
+
+/* Failures: clear statuses, finite u. */
+static void test_failures(void)
+{
+    problem p = make(2, 1.0 / 30, "lv", 0.35, 13);
+    pst_solve_opts o = opts(PST_SOLVER_GMRES);
+    o.stored = 0;
+    pst_solve_result r;
+    char err[PST_ERRLEN];
+    /* an impossible tolerance with a tiny iteration limit */
+    o.rtol = 1e-300;
+    o.max_iter = 5;
+    CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_ENUMERIC);
+    CHECK(r.converged == 0 && r.iterations == 5 && all_finite(p.u, p.n));
+    CHECK(strstr(r.message, "iteration limit 5") && strstr(r.message, "relative residual"));
+    CHECK(r.rel_residual > 0 && r.rel_residual < 1);
+    printf("limit: %s\n", r.message);
+    for (int s = PST_SOLVER_BICGSTAB; s <= PST_SOLVER_BICGSTAB; ++s) {
+        o.solver = s;
+        CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_ENUMERIC);
+        CHECK(r.converged == 0 && all_finite(p.u, p.n) && strstr(r.message, "residual"));
+    }
+    /* CG on a nonsymmetric scheme */
+    o = opts(PST_SOLVER_CG);
+    o.stored = 0;
+    CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_EINVAL);
+    CHECK(strstr(err, "CG needs a symmetrisable operator") != NULL);
+    printf("CG on lv: %s\n", err);
+    /* bad options */
+    o = opts(PST_SOLVER_GMRES);
+    o.rtol = 0;
+    CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_EINVAL);
+    o = opts(PST_SOLVER_GMRES);
+    o.restart = 0;
+    CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_EINVAL);
+    o = opts(7);
+    CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_EINVAL);
+    /* non-finite b */
+    o = opts(PST_SOLVER_GMRES);
+    o.stored = 0;
+    double keep = p.b[p.n / 2];
+    p.b[p.n / 2] = NAN;
+    CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_EINPUT);
+    p.b[p.n / 2] = keep;
+    /* b = 0: u = u_D = 0 */
+    double *zero = calloc(p.n, sizeof *zero);
+    for (size_t i = 0; i < p.n; ++i)
+        p.u[i] = 1.0;
+    CHECK_INT(pst_solve(p.op, zero, p.u, &o, &r, err), PST_OK);
+    CHECK(strcmp(r.message, "b = 0: u = u_D") == 0 && r.iterations == 0);
+    CHECK(memcmp(p.u, zero, p.n * sizeof *zero) == 0);
+    free(zero);
+    /* NULL result and options are allowed */
+    CHECK_INT(pst_solve(p.op, p.b, p.u, NULL, NULL, NULL), PST_OK);
+    CHECK(error_eq15(&p, p.u) < 3e-2);
+    destroy(&p);
+
+    /* no Dirichlet row: interior only, then Neumann only */
+    pst_cloud *c = test_lattice(2, 0.0, 1.0, 0.1, 1.2, 0.3, 1, 0);
+    pst_nlist *nl = test_nlist(c, 2.0);
+    pst_op *op = test_op(c, nl, "lv", PST_GRAD_G1, 0);
+    size_t n = pst_cloud_size(c);
+    double *b = test_field(c, lap2), *u = calloc(n, sizeof *u);
+    CHECK_INT(pst_solve(op, b, u, NULL, &r, err), PST_EINVAL);
+    CHECK(strstr(err, "up to a constant") && strstr(err, "Dirichlet"));
+    printf("singular: %s\n", err);
+    pst_op_destroy(op);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+    c = test_lattice(2, 0.0, 1.0, 0.1, 1.2, 0.3, 1, 1);
+    test_make_neumann(c, 1);
+    nl = test_nlist(c, 2.0);
+    op = test_op(c, nl, "lv", PST_GRAD_G1, 0);
+    CHECK_INT(pst_solve(op, b, u, NULL, &r, err), PST_EINVAL);
+    pst_op_destroy(op);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+    free(b);
+    free(u);
+}
+
+/* Dirichlet on x = 0, Neumann n . grad u = exact flux on the other sides (corners touching
+ * x = 0 stay Dirichlet), lv with GMRES. */
+static double neumann_error(double s0, int *iters)
+{
+    pst_cloud *c = test_lattice(2, 0.0, 1.0, s0, 1.2, 0.35, 17, 1);
+    size_t n = pst_cloud_size(c);
+    uint8_t *kind = pst_cloud_kinds(c);
+    const double *x = pst_cloud_coord_const(c, 0), *y = pst_cloud_coord_const(c, 1);
+    const double *nx = pst_cloud_normal(c, 0), *ny = pst_cloud_normal(c, 1);
+    for (size_t i = 0; i < n; ++i)
+        if (kind[i] == PST_DIRICHLET && x[i] > 1e-12)
+            kind[i] = PST_NEUMANN;
+    pst_nlist *nl = test_nlist(c, 2.0);
+    pst_op *op = test_op(c, nl, "lv", PST_GRAD_G1, 0);
+    double *b = malloc(n * sizeof *b), *u = calloc(n, sizeof *u);
+    double *exact = test_field(c, un);
+    for (size_t i = 0; i < n; ++i) {
+        double p[3] = {x[i], y[i], 0}, a = 1.5 * x[i] + 2 * y[i];
+        b[i] = kind[i] == PST_DIRICHLET ? un(p)
+               : kind[i] == PST_NEUMANN ? cos(a) * (1.5 * nx[i] + 2 * ny[i])
+                                        : -6.25 * sin(a);
+    }
+    pst_solve_opts o = opts(PST_SOLVER_AUTO);
+    o.stored = 0;
+    pst_solve_result r;
+    char err[PST_ERRLEN];
+    int st = pst_solve(op, b, u, &o, &r, err);
+    CHECK_INT(st, PST_OK);
+    CHECK_INT(r.solver, PST_SOLVER_GMRES);
+    *iters = r.iterations;
+    double num = 0, den = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (kind[i] == PST_INTERIOR) {
+            num += (u[i] - exact[i]) * (u[i] - exact[i]);
+            den += exact[i] * exact[i];
+        }
+    free(b);
+    free(u);
+    free(exact);
+    pst_op_destroy(op);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+    return sqrt(num / den);
+}
+
+static void test_neumann(void)
+{
+    const double s0[2] = {1.0 / 20, 1.0 / 40};
+    double e[2];
+    int it[2];
+    for (int r = 0; r < 2; ++r)
+        e[r] = neumann_error(s0[r], &it[r]);
+    printf("lv mixed Dirichlet/Neumann eq. 15 error: %.3e (%d it), %.3e (%d it), slope %.2f\n",
+           e[0], it[0], e[1], it[1], slope(s0, e, 2));
+    CHECK(e[1] < 4e-2);
+    CHECK(e[1] < e[0]);
+}
+
+int main(void)
+{
+    double t0 = omp_get_wtime();
+    test_failures();
+    test_cg();
+    test_bicgstab();
+    test_apply_paths();
+    test_thread_counts();
+    test_neumann();
+    const double s2[3] = {1.0 / 20, 1.0 / 40, 1.0 / 80};
+    test_convergence(2, s2, 3);
+    const double s3[3] = {1.0 / 6, 1.0 / 9, 1.0 / 12};
+    test_convergence(3, s3, 3);
+    printf("test_solve: %.1f s\n", omp_get_wtime() - t0);
+    return check_summary("test_solve");
+}
