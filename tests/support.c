@@ -213,3 +213,16 @@ test_paths test_compare_paths(pst_op *op, const double *u, const double *y_free,
     free(dg);
     return p;
 }
+
+double test_slope(const double *s, const double *e, int m)
+{
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (int k = 0; k < m; ++k) {
+        double x = log(s[k]), y = log(e[k]);
+        sx += x;
+        sy += y;
+        sxx += x * x;
+        sxy += x * y;
+    }
+    return (m * sxy - sx * sy) / (m * sxx - sx * sx);
+}

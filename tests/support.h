@@ -85,6 +85,9 @@ typedef struct {
     int64_t offdiag;       /* entries of A minus its rows: the off-diagonal pattern size */
 } test_paths;
 
+/* Least-squares slope of log e against log s over m points (a convergence order). */
+double test_slope(const double *s, const double *e, int m);
+
 test_paths test_compare_paths(pst_op *op, const double *u, const double *y_free,
                               double *y_stored);
 

@@ -73,20 +73,6 @@ static double error_eq14(int dim, double s0, uint64_t seed, const case_t *cs)
     return sqrt(num / den);
 }
 
-/* Least-squares slope of log e against log s. */
-static double slope(const double *s, const double *e, int m)
-{
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (int k = 0; k < m; ++k) {
-        double x = log(s[k]), y = log(e[k]);
-        sx += x;
-        sy += y;
-        sxx += x * x;
-        sxy += x * y;
-    }
-    return (m * sxy - sx * sy) / (m * sxx - sx * sx);
-}
-
 static void run(int dim, const double *s0, int m)
 {
     for (size_t k = 0; k < NCASES; ++k) {
@@ -96,7 +82,7 @@ static void run(int dim, const double *s0, int m)
             for (uint64_t seed = 1; seed <= SEEDS; ++seed)
                 e[r] += error_eq14(dim, s0[r], seed, &cases[k]) / SEEDS;
         }
-        double sl = slope(s0, e, m);
+        double sl = test_slope(s0, e, m);
         printf("Test A %dD %-6s%s: E(eq. 14) =", dim, cases[k].scheme,
                strcmp(cases[k].scheme, "lsmps") == 0 ? (cases[k].variant ? " A" : " B") : "  ");
         for (int r = 0; r < m; ++r)

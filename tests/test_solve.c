@@ -95,19 +95,6 @@ static double max_rel_diff(const double *a, const double *b, size_t n)
     return d / m;
 }
 
-static double slope(const double *s, const double *e, int m)
-{
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (int k = 0; k < m; ++k) {
-        double x = log(s[k]), y = log(e[k]);
-        sx += x;
-        sy += y;
-        sxx += x * x;
-        sxy += x * y;
-    }
-    return (m * sxy - sx * sy) / (m * sxx - sx * sx);
-}
-
 static pst_solve_opts opts(int solver)
 {
     pst_solve_opts o;
@@ -144,7 +131,7 @@ static void test_convergence(int dim, const double *s0, int m)
             iters[r] = res.iterations;
             destroy(&p);
         }
-        double sl = slope(s0, e, m);
+        double sl = test_slope(s0, e, m);
         printf("%dD %-9s K = %.2f eq. 15 error:", dim, schemes[k], jitter[k]);
         for (int r = 0; r < m; ++r)
             printf(" %.3e (%d it)", e[r], iters[r]);
@@ -397,7 +384,7 @@ static void test_neumann(void)
     for (int r = 0; r < 2; ++r)
         e[r] = neumann_error(s0[r], &it[r]);
     printf("lv mixed Dirichlet/Neumann eq. 15 error: %.3e (%d it), %.3e (%d it), slope %.2f\n",
-           e[0], it[0], e[1], it[1], slope(s0, e, 2));
+           e[0], it[0], e[1], it[1], test_slope(s0, e, 2));
     CHECK(e[1] < 4e-2);
     CHECK(e[1] < e[0]);
 }
