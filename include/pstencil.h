@@ -404,8 +404,8 @@ int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, c
  * u holds the initial guess on entry (Dirichlet entries are ignored) and the solution on
  * return, also on failure (the last iterate, never NaN). */
 typedef enum {
-    PST_SOLVER_AUTO = 0,   /* CG when the operator is symmetrisable (brookshaw, cb without
-                              Neumann rows), else GMRES                                      */
+    PST_SOLVER_AUTO = 0,   /* CG when the operator is symmetrisable (brookshaw, cb with G1
+                              and without Neumann rows), else GMRES                          */
     PST_SOLVER_CG = 1,     /* on diag(V/s) K, the symmetric scaling of spec lukyanov_vuik §4.5 */
     PST_SOLVER_GMRES = 2,  /* restarted GMRES(m), right preconditioning, CGS2 orthogonalisation */
     PST_SOLVER_BICGSTAB = 3
