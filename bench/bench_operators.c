@@ -29,36 +29,23 @@
 
 /* ---- clouds and lists, built once per process ------------------------------------------- */
 
-static uint64_t rng_state;
-static double rnd(void) /* splitmix64 -> [0, 1) */
-{
-    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return (double)(z >> 11) * 0x1p-53;
-}
-
-/* 10^6 particles (1000^2 or 100^3), s0 = 1, V = 1 (the lattice cell), all interior. */
+/* 10^6 particles (1000^2 or 100^3) on the library's own jittered lattice: s0 = 1, V = 1 (the
+ * lattice cell), all interior, h = H_RATIO, lattice (input) order. */
 static pst_cloud *lattice(int dim)
 {
-    int side = dim == 2 ? 1000 : 100;
-    size_t n = 1000000;
-    pst_cloud *c;
-    if (pst_cloud_create(&c, dim, n) != PST_OK)
-        return NULL;
-    rng_state = 2024;
-    double *V = pst_cloud_volume(c);
-    for (size_t i = 0; i < n; ++i) {
-        size_t s = i;
-        for (int d = 0; d < dim; ++d) {
-            pst_cloud_coord(c, d)[i] = (double)(s % (size_t)side) + JITTER * (2 * rnd() - 1);
-            s /= (size_t)side;
-        }
-        V[i] = 1.0;
+    pst_lattice_opts o;
+    pst_lattice_defaults(&o);
+    o.dim = dim;
+    for (int d = 0; d < 3; ++d) {
+        o.lo[d] = 0;
+        o.hi[d] = dim == 2 ? 999 : 99;
     }
-    pst_cloud_set_h_uniform(c, H_RATIO);
-    return c;
+    o.s0 = 1.0;
+    o.jitter = JITTER;
+    o.seed = 2024;
+    o.h_ratio = H_RATIO;
+    pst_cloud *c = NULL;
+    return pst_cloud_lattice(&c, &o, NULL) == PST_OK ? c : NULL;
 }
 
 typedef struct {
