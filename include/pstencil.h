@@ -176,6 +176,20 @@ int pst_cloud_read_csv(pst_cloud **out, const char *path, char *err);
  * never leaves a half-written file. */
 int pst_cloud_write_csv(const pst_cloud *c, const char *path, char *err);
 
+/* --- VTU (ParaView) ------------------------------------------------------------------------ */
+
+/* Write a cloud as a VTK XML UnstructuredGrid (.vtu), binary appended raw data, little-endian,
+ * 64-bit byte-count headers: the particles as Points (z = 0 in 2D), one VTK_VERTEX cell each,
+ * and the PointData arrays id, kind, V, h, normal (3 components), m or M (when the cloud has a
+ * mobility; M is the diagonal, 3 components), status (when `row_status` is given) and every
+ * named field (docs/io.md). Particles are written in input order (by ids), so a file does not
+ * depend on the cloud's storage order or the thread count. `row_status` (may be NULL) holds n
+ * bytes in cloud order, e.g. pst_op_status(). All or nothing, like the CSV writer: PST_EIO on a
+ * failed write, PST_EINVAL when the ids are not a permutation or a field is named like one of
+ * the arrays above ("normal", "M", "status"); `err` names the path. */
+int pst_cloud_write_vtu(const pst_cloud *c, const char *path, const uint8_t *row_status,
+                        char *err);
+
 /* ------------------------------------------------------------------------------------------ */
 /* Smoothing kernels                                                                          */
 /* ------------------------------------------------------------------------------------------ */
