@@ -9,6 +9,7 @@
  * plus a STREAM-like triad a = b + s c (3 x 80 MB and 3 x 400 MB arrays) and a read-only
  * dot product (2 x 400 MB) as the bandwidth references of the stored apply. bench/README.md explains the counters and the byte model. */
 #include "bench_shim.h"
+#include "stream.h"
 #include "pstencil.h"
 
 #include <omp.h>
@@ -299,19 +300,9 @@ static void triad(pstb_state *st, size_t n)
     if (!a || !b || !c) {
         pstb_skip(st, "out of memory");
     } else {
-        /* first touch with the same static schedule as the timed loop */
-#pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < n; ++i) {
-            a[i] = 0.0;
-            b[i] = 1.0;
-            c[i] = 2.0;
-        }
-        const double scalar = 3.0;
-        while (pstb_keep_running(st)) {
-#pragma omp parallel for schedule(static)
-            for (size_t i = 0; i < n; ++i)
-                a[i] = b[i] + scalar * c[i];
-        }
+        pstb_triad_fill(a, b, c, n);
+        while (pstb_keep_running(st))
+            pstb_triad_pass(a, b, c, n);
         double check = 0;
         for (size_t i = 0; i < n; i += 4096)
             check += a[i];

@@ -1,13 +1,16 @@
 /* Time to solution of a manufactured Poisson problem (docs/solving.md): a jittered lattice on
  * the unit square or cube (K = 0.3, Dirichlet boundary layer), u = sin(6x + 8y) (2D) or
  * sin(2x + 3y + 4z) (3D), b = the exact Laplacian inside and u on the boundary, solved to a
- * relative residual of 1e-8. Prints the phases (cloud, neighbours, precompute, store, solve),
- * iterations, the eq. 15 error and the peak memory, one line per run.
+ * relative residual of 1e-8. Prints one markdown table row per run: the phases (neighbours,
+ * precompute, store, solve), iterations, the eq. 15 error, the operator apply's rate beside a
+ * STREAM triad measured in the same process, and the peak memory. bench/solve_table.sh runs
+ * the grid of docs/solving.md.
  *
  * usage: bench_solve [--dim 2|3] [--n N] [--scheme S] [--precond jacobi|amg] [--stored 0|1]
- *                    [--h-ratio F]
+ *                    [--h-ratio F] [--max-iter N] [--header]
  */
 #include "pstencil.h"
+#include "stream.h"
 
 #include <math.h>
 #include <omp.h>
@@ -26,12 +29,44 @@ static double laplacian(int dim, const double *x)
     return dim == 2 ? -100 * sin(6 * x[0] + 8 * x[1]) : -29 * sin(2 * x[0] + 3 * x[1] + 4 * x[2]);
 }
 
+/* The operator's apply rate: the mean of `reps` applies of the path the solver uses. The stored
+ * path's byte model is bench/README.md's: 12 bytes per pair (weight + index) and 32 per row. */
+static double apply_seconds(const pst_op *op, size_t np, int stored, int reps)
+{
+    double *u = malloc(np * sizeof *u), *y = malloc(np * sizeof *y);
+    for (size_t i = 0; i < np; ++i)
+        u[i] = (double)(i % 7);
+    double t = omp_get_wtime();
+    for (int r = 0; r < reps; ++r) {
+        if (stored)
+            pst_op_apply_stored(op, u, y);
+        else
+            pst_op_apply(op, u, y);
+    }
+    t = (omp_get_wtime() - t) / reps;
+    free(u);
+    free(y);
+    return t;
+}
+
+static void print_header(void)
+{
+    printf("| dim | particles | nbrs | scheme | precond | operator | neighbours s | precompute s "
+           "| store s | solve s | iterations | rel. residual | eq. 15 error | apply ms "
+           "| apply rate | triad GB/s | peak GB |\n"
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+}
+
 int main(int argc, char **argv)
 {
-    int dim = 2, stored = 1, precond = PST_PREC_AMG;
+    int dim = 2, stored = 1, precond = PST_PREC_AMG, max_iter = 0;
     size_t n = 1000000;
     double ratio = 1.2;
     const char *scheme = "qsfdi";
+    if (argc == 2 && strcmp(argv[1], "--header") == 0) {
+        print_header();
+        return 0;
+    }
     for (int i = 1; i + 1 < argc; i += 2) {
         if (strcmp(argv[i], "--dim") == 0)
             dim = atoi(argv[i + 1]);
@@ -45,6 +80,8 @@ int main(int argc, char **argv)
             stored = atoi(argv[i + 1]);
         else if (strcmp(argv[i], "--h-ratio") == 0)
             ratio = atof(argv[i + 1]);
+        else if (strcmp(argv[i], "--max-iter") == 0)
+            max_iter = atoi(argv[i + 1]);
         else {
             fprintf(stderr, "bench_solve: unknown option %s\n", argv[i]);
             return 1;
@@ -55,7 +92,8 @@ int main(int argc, char **argv)
         return 1;
     }
     char err[PST_ERRLEN];
-    double t0 = omp_get_wtime();
+    /* 3 x 80 MB: far beyond the caches, small beside the solve's memory. */
+    double triad = pstb_triad_gbs(10000000, 10);
     pst_lattice_opts o;
     pst_lattice_defaults(&o);
     o.dim = dim;
@@ -111,6 +149,8 @@ int main(int argc, char **argv)
     so.rtol = 1e-8;
     so.stored = stored;
     so.precond = precond;
+    if (max_iter > 0)
+        so.max_iter = max_iter;
     pst_solve_result r;
     int st = pst_solve(op, b, u, &so, &r, err);
     double t5 = omp_get_wtime();
@@ -120,16 +160,23 @@ int main(int argc, char **argv)
             num += (u[i] - ue[i]) * (u[i] - ue[i]);
             den += ue[i] * ue[i];
         }
+    double ta = apply_seconds(op, np, stored, 10);
+    double pairs = (double)pst_nlist_pairs(nl);
+    char rate[64];
+    if (stored) {
+        double gbs = (12.0 * pairs + 32.0 * (double)np) / ta * 1e-9;
+        snprintf(rate, sizeof rate, "%.1f GB/s (%.0f %%)", gbs, 100 * gbs / triad);
+    } else {
+        snprintf(rate, sizeof rate, "%.0f M pairs/s", pairs / ta * 1e-6);
+    }
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
-    printf("%dD %zu particles (%.1f neighbours) %s %s %s: cloud %.2f s, neighbours %.2f s, "
-           "precompute %.2f s, store %.2f s, solve %.2f s (%d it, %s, rel. residual %.1e), "
-           "eq. 15 error %.2e, peak memory %.2f GB\n",
-           dim, np, (double)pst_nlist_pairs(nl) / (double)np, scheme,
-           precond == PST_PREC_AMG ? "AMG" : "Jacobi", stored ? "stored" : "matrix-free",
-           t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4, r.iterations,
-           st == PST_OK ? "converged" : "NOT converged", r.rel_residual, sqrt(num / den),
-           (double)ru.ru_maxrss / (1 << 20));
+    printf("| %dD | %zu | %.1f | %s | %s | %s | %.2f | %.2f | %.2f | %.2f | %d%s | %.1e | %.2e "
+           "| %.1f | %s | %.1f | %.2f |\n",
+           dim, np, pairs / (double)np, scheme, precond == PST_PREC_AMG ? "AMG" : "Jacobi",
+           stored ? "stored" : "matrix-free", t2 - t1, t3 - t2, t4 - t3, t5 - t4, r.iterations,
+           st == PST_OK ? "" : " (not converged)", r.rel_residual, sqrt(num / den), ta * 1e3,
+           rate, triad, (double)ru.ru_maxrss / (1 << 20));
     pst_solve_result_free(&r);
     free(b);
     free(u);

@@ -301,10 +301,32 @@ typedef struct {
                              ill-conditioned (default 1e10)                                   */
     double rank_tol;      /* ... and below 1/cond of rank_tol it is rank-deficient and the
                              row falls back (default 1e-13)                                    */
+    int mobility_mean;    /* pst_mobility_mean: how a pair (I, J) averages the mobility
+                             (default PST_MEAN_ARITHMETIC, the paper's)                        */
+    int laplacian;        /* 1 (default): precompute the rows of L. 0: the operator serves
+                             pst_op_gradient, _hessian and _interpolate only; schemes whose
+                             derivative estimates do not read the rows (PST_SUPPORTS_
+                             DERIVATIVES_ONLY) then skip the precompute, and every call that
+                             needs the rows (apply, store, diagonal, scale, assemble, audit)
+                             returns PST_EINVAL                                               */
 } pst_op_opts;
 
+/* Pair mobility of the LV family (brookshaw, cb, schwaiger, lv), the factor (m_I + m_J) of
+ * w_IJ = s_I V_J (m_I + m_J) T_IJ (LV eqs. 27, 29, 90), per component for a diagonal tensor:
+ *   PST_MEAN_ARITHMETIC: m_I + m_J = 2 x the arithmetic mean (LV eq. 29, the paper's choice);
+ *   PST_MEAN_HARMONIC:   4 m_I m_J / (m_I + m_J) = 2 x the harmonic mean, the transmissibility
+ *                        average of TPFA. An implementer extension, not from the paper (spec
+ *                        §3.6); for discontinuous, high-contrast mobility. Defined as 0 when
+ *                        m_I + m_J <= 0 (never NaN). Equal to the arithmetic sum where m_I = m_J.
+ * Only the LV family averages pairwise: harmonic with any other scheme is PST_EINVAL. Neumann
+ * rows (LV eq. 100) use M_I alone and are the same for both. docs/operators.md. */
+typedef enum {
+    PST_MEAN_ARITHMETIC = 0,
+    PST_MEAN_HARMONIC = 1
+} pst_mobility_mean;
+
 /* Defaults: scheme "lv", the scheme's default kernel, G1, variant 0, cond_max 1e10,
- * rank_tol 1e-13. */
+ * rank_tol 1e-13, mobility_mean PST_MEAN_ARITHMETIC, laplacian 1. */
 void pst_op_defaults(pst_op_opts *o);
 
 /* The registered schemes: count, names (index < count) and a one-line description. */
@@ -313,6 +335,17 @@ const char *pst_scheme_name(int index);
 const char *pst_scheme_description(int index);
 /* The kernel a scheme uses by default (a pst_kernel), or -1 for an unknown scheme name. */
 int pst_scheme_default_kernel(const char *name);
+
+/* What a scheme can do, for planning before an operator exists (0 for an unknown name). */
+enum {
+    PST_SUPPORTS_GRADIENT = 0,     /* pst_op_gradient                                          */
+    PST_SUPPORTS_HESSIAN,          /* pst_op_hessian                                           */
+    PST_SUPPORTS_INTERPOLATE,      /* pst_op_interpolate                                       */
+    PST_SUPPORTS_MOBILITY,         /* a per-particle mobility: div(M grad u)                   */
+    PST_SUPPORTS_SYMMETRIC,        /* CG through a symmetric scaling (with G1, no Neumann rows) */
+    PST_SUPPORTS_DERIVATIVES_ONLY  /* derivatives without the rows (opts.laplacian = 0)        */
+};
+int pst_scheme_supports(const char *name, int what);
 
 /* Build an operator: validate the inputs, precompute the per-particle data (one threaded
  * pass), classify every row. The cloud and the list must outlive the operator and must not
@@ -323,8 +356,15 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
 void pst_op_destroy(pst_op *op);
 
 /* Matrix-free apply: y = L u, pair geometry recomputed from the positions and the per-particle
- * data. u and y have one value per particle (cloud order) and must not alias. */
-void pst_op_apply(const pst_op *op, const double *u, double *y);
+ * data. u and y have one value per particle (cloud order) and must not alias. PST_EINVAL for
+ * an operator built without rows (opts.laplacian = 0). */
+int pst_op_apply(const pst_op *op, const double *u, double *y);
+
+/* 1 when the operator has its rows (see pst_op_opts.laplacian); its scheme's name; its kernel
+ * (a pst_kernel). */
+int pst_op_has_rows(const pst_op *op);
+const char *pst_op_scheme(const pst_op *op);
+int pst_op_kernel(const pst_op *op);
 
 /* Compute and keep the stencil weights w_IJ (CSR, the list's layout: 8 bytes per pair). */
 int pst_op_store(pst_op *op);
@@ -445,6 +485,11 @@ typedef struct {
     double rtol;           /* stop when ||b - L u|| <= rtol ||b|| (2-norms, default 1e-10)      */
     int stored;            /* 1: apply the stored weights (pst_op_store), 0: matrix-free      */
     int history;           /* 1: keep the relative residual of every iteration                */
+    /* Called after every iteration with the iteration count and the estimated relative
+     * residual, from the calling thread outside any parallel region (progress bars); NULL
+     * (the default) for none. */
+    void (*monitor)(int iteration, double rel_residual, void *ctx);
+    void *monitor_ctx;
 } pst_solve_opts;
 
 void pst_solve_defaults(pst_solve_opts *o);
@@ -467,6 +512,47 @@ void pst_solve_result_free(pst_solve_result *r);
  * operator, AMG without hypre), PST_ENOMEM. Results are identical for every thread count. */
 int pst_solve(const pst_op *op, const double *b, double *u, const pst_solve_opts *o,
               pst_solve_result *r, char *err);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Error norms                                                                                */
+/* ------------------------------------------------------------------------------------------ */
+
+/* The papers' error norms (docs/norms.md), e = approx - exact over the particles of a region:
+ *   REL_L2              ||e||_2 / ||exact||_2                              QSFDI eqs. 14, 15
+ *   QSFDI11             sqrt(sum V (e / exact)^2)      (as printed)         QSFDI eq. 11
+ *   QSFDI11_NORMALISED  sqrt(sum V (e / exact)^2 / sum V)
+ *   LV78                sqrt(sum V e^2 / sum V)        (absolute)           LV eq. 78
+ *   LV95                sqrt(sum V (e / exact)^2 / sum V)                   LV eq. 95
+ *   MAX_ABS             max |e|;   MAX_REL  max |e| / max |exact|
+ * For vector values (ncomp > 1: gradients, Hessians) e and exact are Euclidean lengths per
+ * particle. */
+typedef enum {
+    PST_NORM_REL_L2 = 0,
+    PST_NORM_QSFDI11,
+    PST_NORM_QSFDI11_NORMALISED,
+    PST_NORM_LV78,
+    PST_NORM_LV95,
+    PST_NORM_MAX_ABS,
+    PST_NORM_MAX_REL,
+    PST_NNORMS
+} pst_norm;
+
+/* The norm's name ("rel_l2", "qsfdi11", ...; NULL when out of range) and its inverse (-1 for
+ * an unknown name). */
+const char *pst_norm_name(int norm);
+int pst_norm_from_name(const char *name);
+
+/* One norm of approx[a][i] - exact[a][i] (a < ncomp <= 6) over the particles with mask[i] != 0
+ * (every particle when mask is NULL), in the cloud's order. Errors, with the reason in err:
+ * PST_EINVAL (bad norm or ncomp, empty region), PST_ENUMERIC (a non-finite value; a
+ * pointwise-relative norm where the exact value is 0; a relative norm whose exact values are all
+ * 0). The result never is NaN. */
+int pst_error_norm(const pst_cloud *c, int ncomp, const double *const *approx,
+                   const double *const *exact, const uint8_t *mask, int norm, double *out,
+                   char *err);
+/* The same over n values at points that are not particles (unit volumes; no mask). */
+int pst_error_norm_points(size_t n, int ncomp, const double *const *approx,
+                          const double *const *exact, int norm, double *out, char *err);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Permeability grids (SPE10)                                                                 */

@@ -14,6 +14,9 @@
  *                strictly diagonally dominant with a positive diagonal, else Gamma (fallback)
  * and eta = C^T zeta (so eta . g = zeta . C g; for radial variants F - eta.g = F (1 - eta.x),
  * the bracket of (91)). C = (A^T)^-1, A = sum_J V_J x (x) g (23)-(25).
+ * The pair mobility (m_I + m_J) is the paper's arithmetic sum (29); with opts.mobility_mean =
+ * PST_MEAN_HARMONIC (an extension, spec §3.6) it is 4 m_I m_J / (m_I + m_J) instead, per
+ * component for tensors (pair_mobility below; 0 when m_I + m_J <= 0).
  * Fallback chain (docs/schemes/): too few neighbours or a singular C / Gamma -> the Brookshaw
  * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN. */
 #include "operator.h"
@@ -42,6 +45,7 @@ typedef struct {
 /* Everything the pair functions read, gathered once per call. */
 typedef struct {
     int dim, variant, ncomp;
+    int harmonic; /* opts.mobility_mean == PST_MEAN_HARMONIC */
     pst_kernel kernel;
     const double *x[3], *V, *h, *mob[3];
     double h_uniform;
@@ -54,8 +58,8 @@ static lv_ctx make_ctx(const pst_op *op)
 {
     const pst_cloud *c = op->cloud;
     lv_ctx k = {.dim = c->dim, .variant = op->opts.gradient, .ncomp = c->mob_ncomp,
-                .kernel = op->kernel, .V = c->V, .h = c->h, .h_uniform = c->h_uniform,
-                .kind = c->kind, .d = op->data};
+                .harmonic = op->opts.mobility_mean == PST_MEAN_HARMONIC, .kernel = op->kernel,
+                .V = c->V, .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind, .d = op->data};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.mob[a] = c->mob[a];
@@ -70,10 +74,23 @@ static inline double mob_of(const lv_ctx *k, int comp, size_t i)
     return k->ncomp ? k->mob[k->ncomp == 1 ? 0 : comp][i] : 1.0;
 }
 
-/* The hot pair functions take the dimension D, the gradient variant G and the tensor flag T
- * as arguments; the applies call them with constants (one instantiation per combination), so
- * the loops carry no per-pair branches on them. Other callers pass runtime values. */
+/* The hot pair functions take the dimension D, the gradient variant G, the tensor flag T and
+ * the harmonic-mean flag H as arguments; the applies call them with constants (one
+ * instantiation per combination), so the loops carry no per-pair branches on them. Other
+ * callers pass runtime values. */
 #define LV_HOT static inline __attribute__((always_inline))
+
+/* The pair mobility of one component: the paper's arithmetic sum a + b (29), or with H twice
+ * the harmonic mean, 4 a b / (a + b) (spec §3.6, an extension). The harmonic form is written
+ * 4 a (b / s) so that it cannot overflow for finite a, b > 0 (b / s <= 1), and is 0 when
+ * s = a + b is not positive (or NaN): no NaN from it. Equal to a + b when a == b. */
+LV_HOT double pair_mobility(double a, double b, int H)
+{
+    if (!H)
+        return a + b;
+    double s = a + b;
+    return s > 0 ? 4.0 * a * (b / s) : 0.0;
+}
 
 /* The pair geometry of (i, j): x = r_j - r_i, d^2, h~ = (h_i + h_j)/2 (26), the kernel value W
  * (only when needW) and a = -dW/dr / d >= 0, so that the G1 gradient (15) is a x. Degenerate
@@ -123,7 +140,7 @@ LV_HOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j, d
 
 /* w_IJ of a scheme row (see the file comment). Shared by apply and emit_row so that the two
  * apply paths use the same weights bit for bit. */
-LV_HOT double row_weight(const lv_ctx *k, int D, int G, int T, size_t i, size_t j)
+LV_HOT double row_weight(const lv_ctx *k, int D, int G, int T, int H, size_t i, size_t j)
 {
     double x[3], g[3], d2;
     double F = pair_gradient(k, D, G, i, j, x, g, &d2);
@@ -135,7 +152,7 @@ LV_HOT double row_weight(const lv_ctx *k, int D, int G, int T, size_t i, size_t 
         double t = F;
         for (int c = 0; c < D; ++c)
             t -= d->eta[(size_t)D * i + c] * g[c];
-        return Vs * (mob_of(k, 0, i) + mob_of(k, 0, j)) * t;
+        return Vs * pair_mobility(mob_of(k, 0, i), mob_of(k, 0, j), H) * t;
     }
     const double *C = d->C + (size_t)D * D * i, *zeta = d->zeta + (size_t)D * i;
     double w = 0;
@@ -143,7 +160,7 @@ LV_HOT double row_weight(const lv_ctx *k, int D, int G, int T, size_t i, size_t 
         double Cg = 0;
         for (int b = 0; b < D; ++b)
             Cg += C[a * D + b] * g[b];
-        w += (k->mob[a][i] + k->mob[a][j]) * (x[a] * g[a] / d2 - zeta[a] * Cg);
+        w += pair_mobility(k->mob[a][i], k->mob[a][j], H) * (x[a] * g[a] / d2 - zeta[a] * Cg);
     }
     return Vs * w;
 }
@@ -165,15 +182,15 @@ LV_HOT double neumann_weight(const lv_ctx *k, int D, int G, size_t i, size_t j)
     return k->V[j] * w;
 }
 
-/* Row i into y (apply) or its weights into w (emission), for constant D, G, T. */
+/* Row i into y (apply) or its weights into w (emission), for constant D, G, T, H. */
 LV_HOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
-                  const double *u, double *y, double *w, int D, int G, int T)
+                  const double *u, double *y, double *w, int D, int G, int T, int H)
 {
     int neumann = k->kind[i] == PST_NEUMANN;
     double ui = u ? u[i] : 0, s = 0;
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
-        double wij = neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, i, j);
+        double wij = neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, H, i, j);
         if (w)
             w[e - off[i]] = wij;
         else
@@ -185,28 +202,28 @@ LV_HOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size
 
 typedef void (*row_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t,
                        const double *, double *, double *);
-#define LV_ROW(D, G, T)                                                                        \
-    static void row_##D##_##G##_##T(const lv_ctx *k, const int64_t *off, const uint32_t *idx,   \
-                                    size_t i, const double *u, double *y, double *w)            \
+#define LV_ROW(D, G, T, H)                                                                     \
+    static void row_##D##_##G##_##T##_##H(const lv_ctx *k, const int64_t *off,                 \
+                                          const uint32_t *idx, size_t i, const double *u,      \
+                                          double *y, double *w)                                \
     {                                                                                          \
-        row_t(k, off, idx, i, u, y, w, D, G, T);                                               \
+        row_t(k, off, idx, i, u, y, w, D, G, T, H);                                            \
     }
-#define LV_ROWS_G(D, T) LV_ROW(D, 1, T) LV_ROW(D, 2, T) LV_ROW(D, 3, T) LV_ROW(D, 4, T)
-LV_ROWS_G(2, 0)
-LV_ROWS_G(2, 1)
-LV_ROWS_G(3, 0)
-LV_ROWS_G(3, 1)
-static const row_fn row_table[2][4][2] = {
-    {{row_2_1_0, row_2_1_1}, {row_2_2_0, row_2_2_1}, {row_2_3_0, row_2_3_1},
-     {row_2_4_0, row_2_4_1}},
-    {{row_3_1_0, row_3_1_1}, {row_3_2_0, row_3_2_1}, {row_3_3_0, row_3_3_1},
-     {row_3_4_0, row_3_4_1}}};
+#define LV_ROWS_H(D, G) LV_ROW(D, G, 0, 0) LV_ROW(D, G, 0, 1) LV_ROW(D, G, 1, 0) LV_ROW(D, G, 1, 1)
+#define LV_ROWS_G(D) LV_ROWS_H(D, 1) LV_ROWS_H(D, 2) LV_ROWS_H(D, 3) LV_ROWS_H(D, 4)
+LV_ROWS_G(2)
+LV_ROWS_G(3)
+#define LV_ENTRY(D, G)                                                                         \
+    {{row_##D##_##G##_0_0, row_##D##_##G##_0_1}, {row_##D##_##G##_1_0, row_##D##_##G##_1_1}}
+static const row_fn row_table[2][4][2][2] = {
+    {LV_ENTRY(2, 1), LV_ENTRY(2, 2), LV_ENTRY(2, 3), LV_ENTRY(2, 4)},
+    {LV_ENTRY(3, 1), LV_ENTRY(3, 2), LV_ENTRY(3, 3), LV_ENTRY(3, 4)}};
 
 /* The instantiation for this operator: a diagonal tensor (T) when the mobility has dim > 1
- * components. */
+ * components; the harmonic pair mobility (H) when asked for. */
 static row_fn row_for(const lv_ctx *k)
 {
-    return row_table[k->dim - 2][k->variant - 1][k->ncomp > 1];
+    return row_table[k->dim - 2][k->variant - 1][k->ncomp > 1][k->harmonic];
 }
 
 /* ---- precompute ------------------------------------------------------------------------ */
@@ -511,6 +528,8 @@ static void lv_lemma3(const pst_op *op, size_t i, int *sign_mixed, int *xi_large
     const pst_scheme ID = {.name = NAME,                                                      \
                            .description = DESC,                                               \
                            .default_kernel = PST_KERNEL_CUBIC,                                \
+                           .pair_mobility = 1,                                                \
+                           .mobility = 1,                                                     \
                            .min_neighbours = MIN,                                             \
                            .precompute = PRE,                                                 \
                            .apply = lv_apply,                                                 \

@@ -780,6 +780,7 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
     const pst_scheme ID = {.name = NAME,                                                       \
                            .description = DESC,                                                \
                            .default_kernel = PST_KERNEL_QUINTIC,                               \
+                           .mobility = 1,                                                      \
                            .min_neighbours = MIN,                                              \
                            .precompute = PRE,                                                  \
                            .apply = mx_apply,                                                  \

@@ -940,6 +940,7 @@ static int qs_interpolate(const pst_op *op, const double *const pts[3], size_t m
 
 const pst_scheme pst_scheme_qsfdi = {
     .name = "qsfdi",
+    .derivatives_standalone = 1,
     .description = "quadric SFDI, Yan-Ma-Wang 2020 (eqs. 2, 3, 20-35), one-pass moments",
     .default_kernel = PST_KERNEL_QUINTIC,
     .min_neighbours = qs_min,

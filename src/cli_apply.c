@@ -63,6 +63,18 @@ static int parse_gradient(const char *v)
     return -1;
 }
 
+/* "arithmetic" / "harmonic" into a pst_mobility_mean; -1 for anything else (or NULL). */
+static int mean_from_name(const char *v)
+{
+    if (v && strcmp(v, "arithmetic") == 0)
+        return PST_MEAN_ARITHMETIC;
+    if (v && strcmp(v, "harmonic") == 0)
+        return PST_MEAN_HARMONIC;
+    return -1;
+}
+
+static const char *mean_name(int m) { return m == PST_MEAN_HARMONIC ? "harmonic" : "arithmetic"; }
+
 static int bad_option(const char *cmd, const char *name, const char *value, const char *expected)
 {
     fprintf(stderr, "pstencil: %s: option %s: %s expected (got '%s')\n", cmd, name, expected,
@@ -75,13 +87,14 @@ static void print_help(const char *cmd)
     if (strcmp(cmd, "apply") == 0)
         printf("usage: pstencil apply --scheme NAME --in CLOUD.csv --field COLUMN --out RESULT.csv\n"
                "                      [--mobility COLUMN] [--kernel NAME] [--h VALUE]\n"
-               "                      [--gradient G1..G4] [--stored]\n\n"
+               "                      [--gradient G1..G4] [--mean arithmetic|harmonic]\n"
+               "                      [--stored]\n\n"
                "Apply the operator L u = div(M grad u) of a scheme to the field COLUMN of a cloud\n"
                "(docs/clouds.md) and write 'id,Lu,status', one row per particle in input order.\n\n");
     else
         printf("usage: pstencil stencil --scheme NAME --in CLOUD.csv --out A.mtx\n"
                "                        [--mobility COLUMN] [--kernel NAME] [--h VALUE]\n"
-               "                        [--gradient G1..G4]\n\n"
+               "                        [--gradient G1..G4] [--mean arithmetic|harmonic]\n\n"
                "Assemble the matrix of L (with its diagonal) and write it as MatrixMarket\n"
                "'coordinate real general', rows and columns in input order (1-based).\n\n");
     printf("options:\n"
@@ -98,6 +111,9 @@ static void print_help(const char *cmd)
            "  --h VALUE           uniform smoothing length; default: the file's h column\n"
            "  --gradient G1..G4   kernel-gradient variant of the LV family (default G1)\n"
            "  --variant N         scheme variant (lsmps: 0 type B, 1 type A; default 0)\n"
+           "  --mean MEAN         pair mobility of the LV family: arithmetic (m_I + m_J, the\n"
+           "                      paper's, default) or harmonic (4 m_I m_J / (m_I + m_J), an\n"
+           "                      extension for high-contrast mobility)\n"
            "  --timers FILE.json  write the counts and per-phase timers as JSON\n");
     if (strcmp(cmd, "apply") == 0)
         printf("  --stored            store the weights and apply from them (default:\n"
@@ -156,6 +172,11 @@ static int parse_args(apply_args *a, int argc, char **argv)
             if (!v || cli_parse_long(v, &var) != 0 || var < 0 || var > 9)
                 return bad_option(a->cmd, "--variant", v, "a scheme variant number (0-9)");
             a->opts.variant = (int)var;
+        } else if (cli_option(argc, argv, &i, "--mean", &v)) {
+            int m = mean_from_name(v);
+            if (m < 0)
+                return bad_option(a->cmd, "--mean", v, "arithmetic or harmonic");
+            a->opts.mobility_mean = m;
         } else if (cli_option(argc, argv, &i, "--timers", &v)) {
             if (!v || !*v)
                 return bad_option(a->cmd, "--timers", v, "a file name");
@@ -266,6 +287,7 @@ static void print_summary(const apply_args *a, const apply_setup *s)
     size_t counts[PST_ROW_NSTATUS];
     pst_op_status_counts(s->op, counts);
     printf("scheme               %s (gradient G%d)\n", a->opts.scheme, a->opts.gradient);
+    printf("mobility mean        %s\n", mean_name(a->opts.mobility_mean));
     int kernel = a->opts.kernel >= 0 ? a->opts.kernel : pst_scheme_default_kernel(a->opts.scheme);
     printf("kernel               %s, support %g h\n", pst_kernel_name((pst_kernel)kernel),
            s->support);
@@ -307,6 +329,7 @@ static void write_timers(FILE *f, const void *job)
     fprintf(f, "{\n  \"pstencil\": \"%s\",\n  \"command\": \"%s\",\n", pst_version(), t->a->cmd);
     fprintf(f, "  \"scheme\": \"%s\",\n  \"variant\": %d,\n  \"gradient\": %d,\n",
             t->a->opts.scheme, t->a->opts.variant, t->a->opts.gradient);
+    fprintf(f, "  \"mobility_mean\": \"%s\",\n", mean_name(t->a->opts.mobility_mean));
     fprintf(f, "  \"kernel\": \"%s\",\n  \"dim\": %d,\n  \"particles\": %zu,\n",
             pst_kernel_name((pst_kernel)kernel), pst_cloud_dim(t->s->c), pst_cloud_size(t->s->c));
     fprintf(f, "  \"pairs\": %lld,\n  \"threads\": %d,\n", (long long)pst_nlist_pairs(t->s->nl),

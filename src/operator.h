@@ -14,6 +14,14 @@ typedef struct pst_scheme {
     const char *name;
     const char *description;
     pst_kernel default_kernel;
+    /* 1 when the rows average the mobility pairwise, (M_I + M_J), and honour
+     * opts.mobility_mean (the LV family); 0: PST_MEAN_HARMONIC is refused */
+    int pair_mobility;
+    /* 1 when the rows accept a per-particle mobility (div(M grad u)); 0: refused */
+    int mobility;
+    /* 1 when gradient, hessian and interpolate do not read the precomputed rows, so an
+     * operator for derivatives only (opts.laplacian = 0) can skip the precompute */
+    int derivatives_standalone;
     /* minimum neighbours (j != i) of a row in dimension dim (spec choice 6) */
     int (*min_neighbours)(int dim);
     /* Precompute the per-particle data into op->data (op->status is zeroed, fill it); one
@@ -55,7 +63,11 @@ struct pst_op {
     const int64_t *poff;
     const uint32_t *pidx;
     double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
+    int rows;              /* 1 when the Laplacian rows were precomputed (opts.laplacian)     */
 };
+
+/* 1 for the schemes CG can solve through their symmetric scaling (brookshaw, cb). */
+int pst_scheme_symmetrisable(const pst_scheme *s);
 
 /* The registered schemes (one file each under kernels/), one declaration per line. */
 extern const pst_scheme pst_scheme_brookshaw;

@@ -19,6 +19,8 @@ void pst_solve_defaults(pst_solve_opts *o)
     o->rtol = 1e-10;
     o->stored = 0;
     o->history = 0;
+    o->monitor = NULL;
+    o->monitor_ctx = NULL;
 }
 
 void pst_solve_result_free(pst_solve_result *r)
@@ -151,6 +153,8 @@ void pst_ksp_record(pst_ksp *k, double rnorm)
 {
     if (k->history && k->nhistory <= k->max_iter)
         k->history[k->nhistory++] = rnorm / k->bnorm;
+    if (k->monitor)
+        k->monitor(k->iterations, rnorm / k->bnorm, k->monitor_ctx);
 }
 
 void pst_ksp_finish(pst_ksp *k, const char *method, double rnorm)
@@ -239,8 +243,8 @@ static const char *solver_name(int s)
  * Brookshaw with the radial G1 gradient (F_IJ symmetric) and no Neumann (flux) rows. */
 static int symmetrisable(const pst_op *op, size_t neumann)
 {
-    return (op->scheme == &pst_scheme_brookshaw || op->scheme == &pst_scheme_cb) &&
-           op->opts.gradient == PST_GRAD_G1 && neumann == 0;
+    return pst_scheme_symmetrisable(op->scheme) && op->opts.gradient == PST_GRAD_G1 &&
+           neumann == 0;
 }
 
 static int check_opts(const pst_op *op, const pst_solve_opts *o, char *err)
@@ -360,6 +364,8 @@ int pst_solve(const pst_op *op, const double *b, double *u, const pst_solve_opts
     k.kind = kind;
     k.max_iter = o->max_iter;
     k.restart = o->restart;
+    k.monitor = o->monitor;
+    k.monitor_ctx = o->monitor_ctx;
     k.message = r->message;
     k.nblocks = (n + PST_KSP_BLOCK - 1) / PST_KSP_BLOCK;
     size_t nb = k.nblocks ? k.nblocks : 1;

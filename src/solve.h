@@ -40,6 +40,8 @@ typedef struct {
     double rel_residual;   /* true residual of x at return                                */
     double *history;       /* max_iter + 1 entries or NULL                                */
     int nhistory;
+    void (*monitor)(int iteration, double rel_residual, void *ctx); /* or NULL             */
+    void *monitor_ctx;
     char *message;         /* PST_ERRLEN bytes                                            */
     /* scratch of the deterministic reductions: nblocks * (restart + 2) partial sums       */
     size_t nblocks;
@@ -72,7 +74,8 @@ double pst_ksp_residual(pst_ksp *k, const double *x, double *r);
 int pst_ksp_update(pst_ksp *k, double *x, double a, const double *p, double c, const double *q);
 /* y = a x + c y, elementwise. */
 void pst_ksp_axpby(pst_ksp *k, double a, const double *x, double c, double *y);
-/* Append the relative residual of an iteration to the history (when kept). */
+/* Append the relative residual of an iteration to the history (when kept) and report it to
+ * the monitor (when set). */
 void pst_ksp_record(pst_ksp *k, double rnorm);
 /* The closing messages; they also set rel_residual and converged. */
 void pst_ksp_finish(pst_ksp *k, const char *method, double rnorm);

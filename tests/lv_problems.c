@@ -211,9 +211,15 @@ int lv_solve_dense(const pst_op *op, const double *b, double *uh, char *err)
         snprintf(err, PST_ERRLEN, "lv_solve_dense: assembly failed (%s)", pst_strerror(st));
         return st;
     }
-    size_t n = a.n;
+    st = lv_solve_dense_csr(&a, b, uh, err);
+    pst_csr_free(&a);
+    return st;
+}
+
+int lv_solve_dense_csr(const pst_csr *a, const double *b, double *uh, char *err)
+{
+    size_t n = a->n;
     if (n > 4000) {
-        pst_csr_free(&a);
         snprintf(err, PST_ERRLEN, "lv_solve_dense: %zu unknowns is too many for a dense LU", n);
         return PST_EINVAL;
     }
@@ -222,19 +228,17 @@ int lv_solve_dense(const pst_op *op, const double *b, double *uh, char *err)
     if (!m || !piv) {
         free(m);
         free(piv);
-        pst_csr_free(&a);
         snprintf(err, PST_ERRLEN, "lv_solve_dense: out of memory");
         return PST_ENOMEM;
     }
     for (size_t i = 0; i < n; ++i)
-        for (int64_t k = a.rowptr[i]; k < a.rowptr[i + 1]; ++k)
-            m[i + n * a.col[k]] = a.val[k]; /* column major */
+        for (int64_t k = a->rowptr[i]; k < a->rowptr[i + 1]; ++k)
+            m[i + n * a->col[k]] = a->val[k]; /* column major */
     memcpy(uh, b, n * sizeof *uh);
     lapack_int info = LAPACKE_dgesv(LAPACK_COL_MAJOR, (lapack_int)n, 1, m, (lapack_int)n, piv,
                                     uh, (lapack_int)n);
     free(m);
     free(piv);
-    pst_csr_free(&a);
     if (info != 0) {
         snprintf(err, PST_ERRLEN, "lv_solve_dense: dgesv info %d", (int)info);
         return PST_ENUMERIC;

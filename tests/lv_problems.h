@@ -69,6 +69,8 @@ int lv_solve_scheme(const lv_case *pc, const char *scheme, double *uh, int *iter
 /* The same discrete solution by a dense LU of the assembled matrix (LAPACKE_dgesv): a
  * solver-independent cross-check for small clouds (n <= 4000). */
 int lv_solve_dense(const pst_op *op, const double *b, double *uh, char *err);
+/* The same for an assembled (possibly edited) matrix a, n <= 4000. */
+int lv_solve_dense_csr(const pst_csr *a, const double *b, double *uh, char *err);
 
 /* Least-squares slope of log2(err) against log2(1/side) over m levels: the convergence rate
  * in powers of h (DoF x 4 = h / 2). */
@@ -83,7 +85,8 @@ int lv_tpfa_error(lv_problem prob, int n, double *e95, char *err);
  * [0,1] x [0, ny/nx] (x [0, nz/nx]), mobility diag(Kx, Ky[, Kz]) of the grid cell holding each
  * particle, Dirichlet u = 1 on y = 0 and u = 0 on y = ymax, no-flow Neumann (g_N = 0) on
  * every other face. The grid is mapped cell for cell (square cells: docs/spe10.md "aspect
- * ratio"). h = f / nx. b receives the right-hand side (caller frees). */
+ * ratio"). h = f / nx. b receives the right-hand side (caller frees). Interior particles come
+ * first, in the grid's cell order (pst_cloud_cell_centred). */
 int lv_spe10_case(const pst_perm_grid *g, double f, pst_cloud **c, pst_nlist **nl, double **b,
                   char *err);
 

@@ -1,12 +1,14 @@
 /* The CSPM family (cspm, icspm, csph2g; spec qsfdi.md §2.1-§2.4) on the operator object:
  * the volume pre-pass, linear exactness of cspm and csph2g and quadratic exactness of icspm
  * (Laplacian, gradient, Hessian) at full-support particles of jittered clouds (K = 0.8), cspm's
- * second order on a lattice and its inexactness on disorder, Neumann rows, the two apply paths
- * and assembly, thread independence, degenerate rows and bad options. */
+ * second order on a lattice and its inexactness on disorder, the lattice symbol's weak
+ * checkerboard response (why the Poisson operators lose stability, icspm.md), Neumann rows, the
+ * two apply paths and assembly, thread independence, degenerate rows and bad options. */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -246,6 +248,59 @@ static void test_regular_lattice(void)
     }
 }
 
+/* Why the family's Poisson operators lose stability (icspm.md, "Poisson problems"): on a regular
+ * 2D lattice the symbol of a full-support row, sigma(k) = s0^2 sum_j a_Ij (cos k.r_j - 1), is
+ * -|k s0|^2 for smooth modes but only weakly negative at the checkerboard k = (pi, pi)/s0, and
+ * its margin collapses with h/s0 (the stencil is a kernel second derivative, whose transform
+ * decays with k h): -0.85 at h = 0.9 s0, -3.8e-3 at 1.2 s0, and positive (an unstable interior
+ * mode even without jitter) at 1.5 s0. qsfdi, for comparison, gives about -4.7 at 1.2 s0. */
+static double checkerboard_symbol(const char *scheme, double h_ratio)
+{
+    const double s0 = 0.05;
+    pst_cloud *c = test_lattice(2, 2.0, 3.0, s0, h_ratio, 0.0, 11, 0);
+    pst_nlist *nl = test_nlist(c, 3.0);
+    pst_op *op = make_op(c, nl, scheme);
+    pst_csr a;
+    CHECK_INT(pst_op_assemble(op, &a), PST_OK);
+    size_t n = pst_cloud_size(c), ic = n;
+    double x[3], xj[3], sym = 0;
+    for (size_t i = 0; i < n && ic == n; ++i) {
+        test_position(c, i, x);
+        if (fabs(x[0] - 2.5) < 1e-9 && fabs(x[1] - 2.5) < 1e-9)
+            ic = i;
+    }
+    CHECK(ic < n);
+    test_position(c, ic, x);
+    for (int64_t e = a.rowptr[ic]; ic < n && e < a.rowptr[ic + 1]; ++e) {
+        test_position(c, a.col[e], xj);
+        long m = lround((xj[0] - x[0]) / s0) + lround((xj[1] - x[1]) / s0);
+        sym += a.val[e] * ((m % 2 ? -1.0 : 1.0) - 1.0) * s0 * s0;
+    }
+    pst_csr_free(&a);
+    pst_op_destroy(op);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+    return sym;
+}
+
+static void test_checkerboard(void)
+{
+    for (int s = 0; s < 2; ++s) {
+        double s09 = checkerboard_symbol(schemes[s], 0.9),
+               s12 = checkerboard_symbol(schemes[s], 1.2),
+               s15 = checkerboard_symbol(schemes[s], 1.5);
+        printf("lattice 2D %-6s: checkerboard symbol s0^2 sigma(pi, pi) = %.3e (h = 0.9 s0), "
+               "%.3e (1.2 s0), %.3e (1.5 s0)\n",
+               schemes[s], s09, s12, s15);
+        CHECK(s09 < -0.5);
+        CHECK(s12 < 0 && s12 > -1e-2);
+        CHECK(s15 > 0);
+    }
+    double q = checkerboard_symbol("qsfdi", 1.2);
+    printf("lattice 2D qsfdi : checkerboard symbol %.3e (h = 1.2 s0)\n", q);
+    CHECK(q < -1.0);
+}
+
 /* Neumann rows give n . grad u: exactly for linear u (all three), and for quadratics with
  * icspm's gradient (47) where its row status is ok. */
 static void test_neumann(void)
@@ -464,6 +519,7 @@ int main(void)
     test_volumes();
     test_exactness();
     test_regular_lattice();
+    test_checkerboard();
     test_neumann();
     test_paths_and_threads();
     test_degenerate();

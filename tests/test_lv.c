@@ -1,11 +1,13 @@
 /* The Lukyanov–Vuik family on the operator object: patch tests (spec §7.2-7.3), linear
  * exactness on jittered clouds, the corrected gradient, symmetry facts (§4.5), Neumann rows
  * (100), diagonal tensors, the two apply paths, assembly, thread independence, degenerate
- * rows and bad input. */
+ * rows, bad input, and the harmonic pair mobility (PST_MEAN_HARMONIC, an extension). */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"
 
+#include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -387,6 +389,284 @@ static void test_degenerate(void)
     pst_cloud_destroy(c);
 }
 
+
+/* ---- the harmonic pair mobility (pst_op_opts.mobility_mean) ---------------------------- */
+
+/* An operator with the pair mobility `mean`, every other option at its default. */
+static pst_op *make_op_mean(const pst_cloud *c, const pst_nlist *nl, const char *scheme,
+                            int grad, int mean)
+{
+    pst_op_opts o;
+    pst_op_defaults(&o);
+    o.scheme = scheme;
+    o.gradient = grad;
+    o.mobility_mean = mean;
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    if (pst_op_create(&op, c, nl, &o, err) != PST_OK) {
+        fprintf(stderr, "op %s (mean %d): %s\n", scheme, mean, err);
+        exit(1);
+    }
+    return op;
+}
+
+/* Constant mobility (scalar, and a tensor with unequal constant components): 4 m m / (2 m) =
+ * 2 m exactly, so harmonic and arithmetic give the same weights bit for bit, every scheme and
+ * variant, with Dirichlet and Neumann rows on a jittered cloud. */
+static void test_mean_constant(void)
+{
+    for (int dim = 2; dim <= 3; ++dim)
+        for (int ncomp = 1; ncomp <= dim; ncomp += dim - 1) {
+            pst_cloud *c = patch(dim, 1.2, 0.3, 1);
+            size_t n = pst_cloud_size(c);
+            test_make_neumann(c, 3);
+            pst_cloud_set_mobility(c, ncomp);
+            for (int k = 0; k < ncomp; ++k) {
+                double *m = pst_cloud_mobility(c, k);
+                for (size_t i = 0; i < n; ++i)
+                    m[i] = 0.37 * (k + 1);
+            }
+            pst_nlist *nl = test_nlist(c, 2.0);
+            double *u = test_field(c, cubic_sum), *ya = malloc(n * sizeof *ya),
+                   *yh = malloc(n * sizeof *yh);
+            int same = 1;
+            for (int s = 0; s < NSCHEMES; ++s)
+                for (int g = PST_GRAD_G1; g <= PST_GRAD_G4; ++g) {
+                    pst_op *oa = make_op_mean(c, nl, schemes[s], g, PST_MEAN_ARITHMETIC);
+                    pst_op *oh = make_op_mean(c, nl, schemes[s], g, PST_MEAN_HARMONIC);
+                    pst_op_apply(oa, u, ya);
+                    pst_op_apply(oh, u, yh);
+                    same &= memcmp(ya, yh, n * sizeof *ya) == 0;
+                    pst_op_destroy(oa);
+                    pst_op_destroy(oh);
+                }
+            printf("harmonic == arithmetic bit for bit, constant m, %dD, %d component(s): %s\n",
+                   dim, ncomp, same ? "yes" : "NO");
+            CHECK(same);
+            free(u);
+            free(ya);
+            free(yh);
+            pst_nlist_destroy(nl);
+            pst_cloud_destroy(c);
+        }
+}
+
+/* Two-valued mobility, m = 1 for x < 2.5 and 100 beyond, on the regular 2D lattice (row and
+ * column of a pair known): one assembled Brookshaw entry by hand,
+ *     w_IJ = V_J 4 m_I m_J / (m_I + m_J) (-W'(d, h~) / d)      (G1: F_IJ = -W'/d)
+ * and, for every scheme and the tensor path, harmonic / arithmetic = 4 m_I m_J / (m_I + m_J)^2
+ * on the pairs across the jump and 1 on the others (s_I, V_J and the bracket do not depend
+ * on m). */
+static void test_mean_two_valued(void)
+{
+    pst_cloud *c = patch(2, 1.2, 0.0, 0);
+    size_t n = pst_cloud_size(c);
+    const double *x = pst_cloud_coord_const(c, 0), *y = pst_cloud_coord_const(c, 1);
+    pst_nlist *nl = test_nlist(c, 2.0);
+    /* I at (2.45, 2.5), J at (2.55, 2.5): across the jump at x = 2.5 */
+    size_t I = n, J = n;
+    for (size_t i = 0; i < n; ++i) {
+        if (fabs(y[i] - 2.5) < 1e-9 && fabs(x[i] - 2.45) < 1e-9)
+            I = i;
+        if (fabs(y[i] - 2.5) < 1e-9 && fabs(x[i] - 2.55) < 1e-9)
+            J = i;
+    }
+    CHECK(I < n && J < n);
+    if (I == n || J == n)
+        goto out;
+    for (int ncomp = 1; ncomp <= 2; ++ncomp) {
+        pst_cloud_set_mobility(c, ncomp);
+        for (int k = 0; k < ncomp; ++k) {
+            double *m = pst_cloud_mobility(c, k);
+            for (size_t i = 0; i < n; ++i)
+                m[i] = (x[i] < 2.5 ? 1.0 : 100.0) * (k + 1);
+        }
+        const double mI = 1, mJ = 100;
+        const double hsum = 4 * mI * mJ / (mI + mJ), asum = mI + mJ; /* 3.9604, 101 */
+        for (int s = 0; s < NSCHEMES; ++s) {
+            pst_op *oa = make_op_mean(c, nl, schemes[s], PST_GRAD_G1, PST_MEAN_ARITHMETIC);
+            pst_op *oh = make_op_mean(c, nl, schemes[s], PST_GRAD_G1, PST_MEAN_HARMONIC);
+            pst_csr a, h;
+            CHECK_INT(pst_op_assemble(oa, &a), PST_OK);
+            CHECK_INT(pst_op_assemble(oh, &h), PST_OK);
+            if (s == 0 && ncomp == 1) {
+                const double d = 0.1, ht = 1.2 * 0.05, V = 0.05 * 0.05;
+                double F = -pst_kernel_dw(PST_KERNEL_CUBIC, 2, d, ht) / d;
+                double want_h = V * hsum * F, want_a = V * asum * F;
+                double got_h = test_csr_entry(&h, I, J), got_a = test_csr_entry(&a, I, J);
+                printf("brookshaw entry across m = 1 | 100: harmonic %.15g (by hand %.15g), "
+                       "arithmetic %.15g (by hand %.15g)\n", got_h, want_h, got_a, want_a);
+                CHECK(fabs(got_h - want_h) <= 1e-13 * want_h);
+                CHECK(fabs(got_a - want_a) <= 1e-13 * want_a);
+            }
+            /* every pair: the ratio is the mobility factor's */
+            double worst = 0;
+            size_t cross = 0;
+            for (size_t i = 0; i < n; ++i)
+                for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
+                    size_t j = a.col[e];
+                    if (j == i || a.val[e] == 0.0)
+                        continue;
+                    int across = (x[i] < 2.5) != (x[j] < 2.5);
+                    double want = across ? hsum / asum : 1.0;
+                    cross += across;
+                    worst = fmax(worst, fabs(h.val[e] / a.val[e] - want) / want);
+                }
+            printf("%-9s %s: harmonic/arithmetic entry ratio, %zu pairs across the jump, "
+                   "max rel error %.2e\n", schemes[s], ncomp == 1 ? "scalar" : "tensor", cross,
+                   worst);
+            CHECK(cross > 0);
+            CHECK(worst <= 1e-12);
+            pst_csr_free(&a);
+            pst_csr_free(&h);
+            pst_op_destroy(oa);
+            pst_op_destroy(oh);
+        }
+    }
+out:
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
+static double linear_m(const double *x) { return 1.0 + x[0] + 2.0 * x[1] + 0.5 * x[2]; }
+
+/* Smooth m: div(m grad u) for linear u and linear m is grad m . grad u. The arithmetic sum is
+ * exact there (m_I + m_J = 2 m_I + grad m . x_IJ); the harmonic sum differs from it by
+ * -(grad m . x_IJ)^2 / (m_I + m_J) = O(h^2 |grad m|^2 / m), so it is consistent (first order
+ * kept, Theorem 3's setting) but not exact: an error O(h) in general, O(h^2) on a symmetric
+ * lattice's interior. Measured on two lattice spacings, lv G1, interior rows (full support). */
+static void test_mean_smooth(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        double err[2][2]; /* [mean][level] */
+        const double s0[2] = {0.05, 0.025};
+        for (int lev = 0; lev < 2; ++lev) {
+            pst_cloud *c = test_lattice(dim, 2.0, 3.0, s0[lev], 1.2, 0.0, 7, 0);
+            size_t n = pst_cloud_size(c);
+            pst_cloud_set_mobility(c, 1);
+            double *m = pst_cloud_mobility(c, 0), *mm = test_field(c, linear_m);
+            memcpy(m, mm, n * sizeof *m);
+            free(mm);
+            pst_nlist *nl = test_nlist(c, 2.0);
+            double *u = test_field(c, linear), *y = malloc(n * sizeof *y);
+            double exact = 2.0 * 1.0 - 3.0 * 2.0 + (dim == 3 ? 0.5 * 0.5 : 0.0);
+            for (int mean = 0; mean < 2; ++mean) {
+                pst_op *op = make_op_mean(c, nl, "lv", PST_GRAD_G1, mean);
+                pst_op_apply(op, u, y);
+                double worst = 0;
+                for (size_t i = 0; i < n; ++i)
+                    if (inner(c, i, 2.0 * 1.2 * s0[lev] + 1e-9))
+                        worst = fmax(worst, fabs(y[i] - exact) / fabs(exact));
+                err[mean][lev] = worst;
+                pst_op_destroy(op);
+            }
+            free(u);
+            free(y);
+            pst_nlist_destroy(nl);
+            pst_cloud_destroy(c);
+        }
+        printf("div(m grad u), linear m and u, %dD lattice interior, rel. error at s0 = 0.05 / "
+               "0.025: arithmetic %.2e / %.2e, harmonic %.2e / %.2e (ratio %.2f)\n",
+               dim, err[0][0], err[0][1], err[1][0], err[1][1], err[1][0] / err[1][1]);
+        CHECK(err[0][0] < 1e-10 && err[0][1] < 1e-10);
+        CHECK(err[1][0] < 1e-2); /* h^2 |grad m|^2 / m^2: small, not rounding */
+        CHECK(err[1][0] > 1e-8);
+        CHECK(err[1][0] / err[1][1] > 3.0); /* second order on the lattice: ~4 */
+    }
+}
+
+/* The two apply paths and thread independence with the harmonic mean: rough mobility (a 1e3
+ * jump on a fifth of the particles), scalar and tensor, every scheme and variant, all row
+ * kinds. */
+static void test_mean_paths(void)
+{
+    for (int dim = 2; dim <= 3; ++dim)
+        for (int ncomp = 1; ncomp <= dim; ncomp += dim - 1) {
+            pst_cloud *c = patch(dim, 1.2, 0.3, 1);
+            size_t n = pst_cloud_size(c);
+            test_make_neumann(c, 3);
+            test_rough_mobility(c, ncomp);
+            pst_nlist *nl = test_nlist(c, 2.0);
+            double *u = test_field(c, cubic_sum), *y1 = malloc(n * sizeof *y1),
+                   *y2 = malloc(n * sizeof *y2), *ya = malloc(n * sizeof *ya);
+            double worst = 0, worst_csr = 0, differs = 0;
+            int ok = 1;
+            for (int s = 0; s < NSCHEMES; ++s)
+                for (int g = PST_GRAD_G1; g <= PST_GRAD_G4; ++g) {
+                    pst_op *op = make_op_mean(c, nl, schemes[s], g, PST_MEAN_HARMONIC);
+                    pst_op *oa = make_op_mean(c, nl, schemes[s], g, PST_MEAN_ARITHMETIC);
+                    pst_op_apply(op, u, y1);
+                    pst_op_apply(oa, u, ya);
+                    for (size_t i = 0; i < n; ++i)
+                        differs = fmax(differs, fabs(y1[i] - ya[i]));
+                    test_paths p = test_compare_paths(op, u, y1, y2);
+                    ok &= p.store == PST_OK && p.stored == PST_OK && p.assemble == PST_OK &&
+                          p.diagonal == PST_OK && p.finite && p.finite_values &&
+                          p.worst_diag == 0.0;
+                    worst = fmax(worst, p.worst);
+                    worst_csr = fmax(worst_csr, p.worst_csr);
+                    pst_op_destroy(op);
+                    pst_op_destroy(oa);
+                }
+            printf("harmonic %dD, %d component(s): matrix-free vs stored %.2e, csr %.2e; "
+                   "max |L_h u - L_a u| %.2e\n", dim, ncomp, worst, worst_csr, differs);
+            CHECK(ok);
+            CHECK(worst <= 1e-13);
+            CHECK(worst_csr <= 1e-13);
+            CHECK(differs > 1.0); /* the option does something on rough m */
+            /* bit-identical for 1 and 2 threads: the shared thread fixture builds default
+             * (arithmetic) operators, so compare two harmonic builds here */
+            int nt = pst_threads();
+            omp_set_num_threads(1);
+            pst_op *o1 = make_op_mean(c, nl, "lv", PST_GRAD_G2, PST_MEAN_HARMONIC);
+            pst_op_apply(o1, u, y1);
+            omp_set_num_threads(2);
+            pst_op *o2 = make_op_mean(c, nl, "lv", PST_GRAD_G2, PST_MEAN_HARMONIC);
+            pst_op_apply(o2, u, y2);
+            omp_set_num_threads(nt);
+            CHECK(memcmp(y1, y2, n * sizeof *y1) == 0);
+            pst_op_destroy(o1);
+            pst_op_destroy(o2);
+            free(u);
+            free(y1);
+            free(y2);
+            free(ya);
+            pst_nlist_destroy(nl);
+            pst_cloud_destroy(c);
+        }
+}
+
+/* m_I + m_J = 0 (zero mobility, which pst_op_create does not reject): the harmonic pair
+ * mobility is 0, never NaN; so is the pair with one zero (no flow through it). */
+static void test_mean_zero(void)
+{
+    pst_cloud *c = patch(2, 1.2, 0.2, 0);
+    size_t n = pst_cloud_size(c);
+    pst_cloud_set_mobility(c, 1);
+    double *m = pst_cloud_mobility(c, 0);
+    for (size_t i = 0; i < n; ++i)
+        m[i] = i % 3 == 0 ? 0.0 : 2.0;
+    pst_nlist *nl = test_nlist(c, 2.0);
+    for (int s = 0; s < NSCHEMES; ++s) {
+        pst_op *op = make_op_mean(c, nl, schemes[s], PST_GRAD_G1, PST_MEAN_HARMONIC);
+        pst_csr a;
+        CHECK_INT(pst_op_assemble(op, &a), PST_OK);
+        int finite = 1, zero = 1;
+        for (size_t i = 0; i < n; ++i)
+            for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
+                finite &= isfinite(a.val[e]);
+                if (a.col[e] != i && (m[i] == 0.0 || m[a.col[e]] == 0.0))
+                    zero &= a.val[e] == 0.0;
+            }
+        CHECK(finite);
+        CHECK(zero);
+        pst_csr_free(&a);
+        pst_op_destroy(op);
+    }
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
 static void test_errors(void)
 {
     pst_cloud *c = patch(2, 1.2, 0.0, 0);
@@ -407,6 +687,25 @@ static void test_errors(void)
     o.gradient = 5;
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     pst_op_defaults(&o);
+    CHECK_INT(o.mobility_mean, PST_MEAN_ARITHMETIC); /* the paper's */
+    o.mobility_mean = 2;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "mobility_mean") != NULL);
+    o.mobility_mean = -1;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(op == NULL);
+    /* schemes that do not average the mobility pairwise refuse the harmonic mean by name */
+    const char *other[] = {"cspm", "mixed1", "qsfdi", "lsmps", "lpmps"};
+    for (int k = 0; k < 5; ++k) {
+        pst_op_defaults(&o);
+        o.scheme = other[k];
+        o.mobility_mean = PST_MEAN_HARMONIC;
+        pst_nlist *wide = test_nlist(c, 3.0); /* covers every default kernel's support */
+        CHECK_INT(pst_op_create(&op, c, wide, &o, err), PST_EINVAL);
+        CHECK(strstr(err, other[k]) != NULL && strstr(err, "pairwise") != NULL);
+        pst_nlist_destroy(wide);
+    }
+    pst_op_defaults(&o);
     o.scheme = "brookshaw";
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_OK);
     double *g[3] = {NULL, NULL, NULL};
@@ -425,6 +724,11 @@ int main(void)
     test_neumann_and_tensor();
     test_audit();
     test_degenerate();
+    test_mean_constant();
+    test_mean_two_valued();
+    test_mean_smooth();
+    test_mean_paths();
+    test_mean_zero();
     test_errors();
     return check_summary("test_lv");
 }

@@ -4,7 +4,9 @@
  * agrees with GMRES; BiCGSTAB converges; the two apply paths give the same iterates; 1 and 2
  * threads give the same bits; failures (iteration limit, no Dirichlet row, CG on a
  * nonsymmetric scheme, bad options) are clear statuses with finite u; a mixed Dirichlet /
- * Neumann problem converges to the manufactured solution. */
+ * Neumann problem converges to the manufactured solution. icspm converges at second order where
+ * its Poisson operator is stable (h = 0.9 s0, K <= 0.2 in 2D, K <= 0.1 in 3D); at the QSFDI
+ * family's K = 0.35, h = 1.2 s0 it is not, and the solver says so (docs/schemes/icspm.md). */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"
@@ -31,14 +33,15 @@ typedef struct {
 } problem;
 
 /* The unit square / cube, jitter K, Dirichlet boundary layer; b = the Laplacian at interior
- * particles and the value at Dirichlet ones. h = 1.2 s0 (quintic schemes, support 3h; the
+ * particles and the value at Dirichlet ones. h = h_ratio s0 (quintic schemes, support 3h; the
  * cubic LV family, 2h). */
-static problem make(int dim, double s0, const char *scheme, double K, uint64_t seed)
+static problem make_h(int dim, double s0, const char *scheme, double K, double h_ratio,
+                      uint64_t seed)
 {
     problem p;
-    p.c = test_lattice(dim, 0.0, 1.0, s0, 1.2, K, seed, 1);
+    p.c = test_lattice(dim, 0.0, 1.0, s0, h_ratio, K, seed, 1);
     double support = pst_kernel_support(pst_scheme_default_kernel(scheme));
-    if (pst_cloud_morton_sort(p.c, support * 1.2 * s0) != PST_OK)
+    if (pst_cloud_morton_sort(p.c, support * h_ratio * s0) != PST_OK)
         exit(1);
     p.nl = test_nlist(p.c, support);
     p.op = test_op(p.c, p.nl, scheme, PST_GRAD_G1, 0);
@@ -51,6 +54,12 @@ static problem make(int dim, double s0, const char *scheme, double K, uint64_t s
         if (kind[i] == PST_DIRICHLET)
             p.b[i] = p.exact[i];
     return p;
+}
+
+/* h = 1.2 s0, the tests' default. */
+static problem make(int dim, double s0, const char *scheme, double K, uint64_t seed)
+{
+    return make_h(dim, s0, scheme, K, 1.2, seed);
 }
 
 static void destroy(problem *p)
@@ -109,8 +118,8 @@ static pst_solve_opts opts(int solver)
  * K = 0.35; the Lukyanov-Vuik schemes at the paper's perturbation (+-10 %, K = 0.1): their
  * normalisation tr(Gamma^-1)/n is exact only where Gamma is isotropic, so on strongly
  * disordered clouds at fixed h/s0 the error levels off (measured and printed below at
- * K = 0.35, LV Theorems 2-3: error ~ dx^omega / h). icspm is left out: GMRES stagnates on its
- * Poisson operator (docs/solving.md). */
+ * K = 0.35, LV Theorems 2-3: error ~ dx^omega / h). icspm is not stable at K = 0.35,
+ * h = 1.2 s0: test_icspm below. */
 static void test_convergence(int dim, const double *s0, int m)
 {
     static const char *const schemes[] = {"qsfdi", "lpmps", "lsmps", "lv", "schwaiger", "lv"};
@@ -141,6 +150,93 @@ static void test_convergence(int dim, const double *s0, int m)
             CHECK(e[m - 1] < (dim == 2 ? 3e-2 : 1e-1));
         }
     }
+}
+
+/* Interior rows whose diagonal is >= 0: a Laplacian row must have a negative diagonal, and
+ * e_i^T L e_i >= 0 puts L's field of values into the right half-plane. */
+static size_t rows_nonneg_diagonal(const problem *p)
+{
+    double *d = malloc(p->n * sizeof *d);
+    CHECK_INT(pst_op_diagonal(p->op, d), PST_OK);
+    const uint8_t *kind = pst_cloud_kinds_const(p->c);
+    size_t bad = 0;
+    for (size_t i = 0; i < p->n; ++i)
+        bad += kind[i] == PST_INTERIOR && !(d[i] < 0);
+    free(d);
+    return bad;
+}
+
+/* icspm (docs/schemes/icspm.md, "Poisson problems"). Its Laplacian is a kernel-derivative
+ * stencil whose checkerboard response is weak (test_cspm's lattice symbol) and shrinks fast
+ * with h/s0, so jitter and boundary truncation push eigenvalues into the right half-plane.
+ * 1. Where it is stable, h = 0.9 s0 and K = 0.2 (2D) / 0.1 (3D): GMRES(50) + Jacobi to 1e-10,
+ *    slope >= 1.8, and no interior row with a non-negative diagonal.
+ * 2. Where it is not, the QSFDI family's K = 0.35 at h = 1.2 s0 (s0 = 1/20, 361 unknowns):
+ *    full GMRES (restart 400 >= unknowns) solves the discrete system to 1e-10 and its solution
+ *    is still wrong by tens of per cent, against qsfdi's few per cent on the same cloud with
+ *    the same solver: the operator, not the solver, fails. GMRES(50) stops with PST_ENUMERIC
+ *    at the iteration limit (a clear status, finite u), not with a wrong "converged". */
+static void test_icspm(void)
+{
+    const double s2[3] = {1.0 / 20, 1.0 / 40, 1.0 / 80}, s3[3] = {1.0 / 6, 1.0 / 9, 1.0 / 12};
+    for (int dim = 2; dim <= 3; ++dim) {
+        const double *s0 = dim == 2 ? s2 : s3;
+        const double K = dim == 2 ? 0.2 : 0.1;
+        double e[3];
+        int iters[3];
+        for (int r = 0; r < 3; ++r) {
+            problem p = make_h(dim, s0[r], "icspm", K, 0.9, 3);
+            CHECK_INT(rows_nonneg_diagonal(&p), 0);
+            pst_op_store(p.op);
+            pst_solve_opts o = opts(PST_SOLVER_GMRES);
+            pst_solve_result res;
+            CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &res, NULL), PST_OK);
+            CHECK(res.converged && res.rel_residual <= 1e-10);
+            e[r] = error_eq15(&p, p.u);
+            iters[r] = res.iterations;
+            destroy(&p);
+        }
+        double sl = test_slope(s0, e, 3);
+        printf("%dD icspm     K = %.2f h = 0.9 s0 eq. 15 error: %.3e (%d it) %.3e (%d it) "
+               "%.3e (%d it)  slope %.2f\n",
+               dim, K, e[0], iters[0], e[1], iters[1], e[2], iters[2], sl);
+        CHECK(sl >= 1.8);
+        CHECK(e[2] < (dim == 2 ? 1e-2 : 5e-2));
+    }
+
+    double err[2];
+    static const char *const cmp[2] = {"icspm", "qsfdi"};
+    for (int k = 0; k < 2; ++k) {
+        problem p = make(2, 1.0 / 20, cmp[k], 0.35, 3);
+        pst_op_store(p.op);
+        pst_solve_opts o = opts(PST_SOLVER_GMRES);
+        o.restart = 400;
+        o.max_iter = 400;
+        pst_solve_result res;
+        CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &res, NULL), PST_OK);
+        CHECK(res.converged && res.rel_residual <= 1e-10);
+        err[k] = error_eq15(&p, p.u);
+        size_t bad = rows_nonneg_diagonal(&p);
+        printf("2D %-9s K = 0.35 h = 1.2 s0, s0 = 1/20, full GMRES: %d it, eq. 15 error %.3e, "
+               "%zu interior rows with diagonal >= 0\n",
+               cmp[k], res.iterations, err[k], bad);
+        if (k == 0) {
+            CHECK(bad > 0);
+            /* restarted GMRES: a clear non-convergence status */
+            memset(p.u, 0, p.n * sizeof *p.u);
+            o = opts(PST_SOLVER_GMRES);
+            o.max_iter = 1000;
+            char msg[PST_ERRLEN];
+            CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &res, msg), PST_ENUMERIC);
+            CHECK(!res.converged && res.iterations == 1000 && res.rel_residual > 1e-6);
+            CHECK(all_finite(p.u, p.n) && strstr(res.message, "iteration limit") != NULL);
+            printf("2D icspm     K = 0.35 h = 1.2 s0, GMRES(50): %s\n", res.message);
+        } else {
+            CHECK_INT(bad, 0);
+        }
+        destroy(&p);
+    }
+    CHECK(err[0] > 0.2 && err[1] < 0.05);
 }
 
 /* CG on brookshaw and cb: converges, is the AUTO choice, agrees with GMRES. */
@@ -213,7 +309,10 @@ static void test_apply_paths(void)
         printf("%-9s stored %d it, matrix-free %d it, max rel diff %.2e\n", schemes[k],
                r1.iterations, r2.iterations, d);
         CHECK_INT(r1.iterations, r2.iterations);
-        CHECK(d <= 1e-12);
+        /* The two paths' rows differ by rounding (the stored apply sums in SIMD partial sums);
+         * the solver amplifies that by the condition number (lv: 5e-11 measured), which stays
+         * far below the solve's own tolerance. */
+        CHECK(d <= 1e-9);
         free(uf);
         destroy(&p);
     }
@@ -402,6 +501,7 @@ int main(void)
     test_convergence(2, s2, 3);
     const double s3[3] = {1.0 / 6, 1.0 / 9, 1.0 / 12};
     test_convergence(3, s3, 3);
+    test_icspm();
     printf("test_solve: %.1f s\n", omp_get_wtime() - t0);
     return check_summary("test_solve");
 }
