@@ -4,7 +4,8 @@
 set -euo pipefail
 
 packages=(build-essential cmake pkg-config libopenblas-dev liblapacke-dev libhwloc-dev
-          libbenchmark-dev libhypre-dev libopenmpi-dev python3 python3-vtk9)
+          libbenchmark-dev libhypre-dev libopenmpi-dev python3 python3-vtk9
+          libcjson-dev)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -43,9 +43,10 @@ static void print_help(void)
     printf("pstencil %s — meshless Laplacian and div(M grad u) operators on particle clouds\n\n"
            "usage: pstencil [--threads N] [--quiet] COMMAND [ARGS]\n\n"
            "commands:\n"
-           "  run                 the main job on the built-in default scene: generate a 3D\n"
-           "                      jittered cloud, Morton-sort it, build neighbours, print\n"
-           "                      statistics and timings\n"
+           "  run [SCENE] [K=V]   run a scene file (default: the built-in scene, the QSFDI\n"
+           "                      Laplacian and gradient on a 3D cloud of 10^6 particles);\n"
+           "                      --plan prints what it would compute\n"
+           "  help scene          every scene key: type, default, units, meaning\n"
            "  cloud [OPTIONS]     generate a particle cloud and write it as CSV\n"
            "  neighbours FILE     read a CSV cloud, build its neighbour list, print statistics\n"
            "  apply [OPTIONS]     apply a scheme's operator to a field of a CSV cloud, write\n"
@@ -132,6 +133,8 @@ int main(int argc, char **argv)
     if (nargs == 0) {
         print_help();
         rc = CLI_USAGE;
+    } else if (strcmp(args[0], "help") == 0 && nargs > 1) {
+        rc = cli_help(&ctx, nargs - 1, args + 1);
     } else if (strcmp(args[0], "--help") == 0 || strcmp(args[0], "-h") == 0 ||
                strcmp(args[0], "help") == 0) {
         print_help();

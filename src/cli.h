@@ -51,5 +51,7 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv);
 int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv);
 int cli_apply(const cli_ctx *ctx, int argc, char **argv);
 int cli_stencil(const cli_ctx *ctx, int argc, char **argv);
+/* `pstencil help scene [--markdown]`: the scene keys as text or as docs/scenes.md. */
+int cli_help(const cli_ctx *ctx, int argc, char **argv);
 
 #endif

@@ -85,10 +85,43 @@ expect 1 "neighbours without file" -- "$exe" neighbours
 expect 1 "neighbours bad kernel" -- "$exe" neighbours "$work/c2.csv" --kernel gauss
 
 # The main job on a small version of the default scene.
-expect 0 "run (small)" -- "$exe" run --s0 0.05
-contains out "particles            9261 (3D)" "run particle count (21^3)"
-contains out "time neighbours" "run prints timings"
+# run: the built-in scene (coarsened by an override), plans, scene files, outputs, refusals
+scenes="$(cd "$(dirname "$0")/../scenes" && pwd)"
+expect 0 "run (built-in scene, small)" -- "$exe" run cloud.spacing=0.05
+contains out "9261 particles" "run particle count (21^3)"
+contains out "task laplacian (laplacian), rel_l2" "run reports the Laplacian's error"
+contains out "task gradient (gradient), rel_l2" "run reports the gradient's error"
 expect 0 "run --help" -- "$exe" run --help
+expect 0 "run --plan" -- "$exe" run --plan
+contains out "1030301 particles" "plan of the built-in scene"
+contains out "memory     about" "plan prints the memory estimate"
+expect 0 "help scene" -- "$exe" help scene
+contains out "cloud.spacing" "help scene lists the keys"
+expect 0 "run a scene file with outputs" -- "$exe" --quiet run "$scenes/qsfdi_test_c.json" \
+  cloud.spacing=0.05 "outputs.csv=$work/c.csv" "outputs.vtu=$work/c.vtu" \
+  "outputs.report=$work/c.json"
+check "--quiet run prints nothing" '[ ! -s "$work/out" ]'
+check "run wrote the CSV (441 rows + header)" '[ "$(wc -l < "$work/c.csv")" -eq 442 ]'
+check "run wrote the VTU" 'grep -q "<VTKFile type=\"UnstructuredGrid\"" "$work/c.vtu"'
+check "the report is JSON with counters, plan and solver" \
+  "python3 -c 'import json,sys; r=json.load(open(sys.argv[1])); assert r[\"counters\"][\"solves\"]==1 and r[\"tasks\"][0][\"solver\"][\"converged\"] and r[\"plan\"][\"particles\"]==441' '$work/c.json'"
+expect 3 "run: a solve that does not converge" -- "$exe" run "$scenes/qsfdi_test_c.json" \
+  cloud.spacing=0.05 tasks.0.max_iter=2 "outputs.report=$work/c2.json" "outputs.vtu=$work/c2.vtu"
+contains err "iteration limit" "run says why the solve failed"
+check "a failed solve still writes its report" '[ -s "$work/c2.json" ]'
+# Every example scene plans; the small ones run (outputs land in $work).
+for f in "$scenes"/*.json; do
+  expect 0 "run --plan $(basename "$f")" -- "$exe" run "$f" --plan
+done
+for f in qsfdi_test_a lv_table2 lv_mixed heat_3d_divergence spe10_layer85; do
+  expect 0 "run scenes/$f.json" -- sh -c "cd '$work' && '$(readlink -f "$exe")' run '$scenes/$f.json'"
+done
+expect 2 "run: missing scene file" -- "$exe" run "$work/none.json"
+expect 2 "run: unknown key" -- "$exe" run cloud.jiter=0.3
+contains err "did you mean 'cloud.jitter'" "run suggests the key"
+expect 1 "run: unknown option" -- "$exe" run --bogus
+expect 4 "run: a plan that does not fit is refused" -- "$exe" run cloud.spacing=0.0005
+contains err "GB available" "the refusal gives the estimate"
 
 # apply and stencil on a 21x21 lattice on [0,2]^2 (s0 = 0.1, h = 1.2 s0, all interior) with a
 # field u = x^2 + y^2, so that Lu = 4 away from the boundary, and a mobility column k = 1 + x. The centre particle (1,1) is id 220

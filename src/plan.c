@@ -1,0 +1,255 @@
+/* The planner (docs/running.md). Every decision here is one a user could make by
+ * hand; the planner makes it from the scene so that a run computes only what its outputs need:
+ *   - a constant mobility is a factor, not a per-particle array (no pairwise averaging);
+ *   - an operator that only feeds gradients, Hessians or interpolation gets no Laplacian rows
+ *     (for schemes whose derivative estimates do not use them);
+ *   - stored weights only for solves (many applies), and only when they fit in memory;
+ *   - CG only for a symmetrisable scheme without flux rows, GMRES otherwise;
+ *   - the memory estimate is checked before the cloud is generated. */
+#include "plan.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#define PLAN_PI 3.14159265358979323846
+
+/* Bytes the machine can give a run: MemAvailable from /proc/meminfo, else physical memory. */
+static double available_bytes(void)
+{
+    FILE *f = fopen("/proc/meminfo", "r");
+    if (f) {
+        char line[256];
+        while (fgets(line, sizeof line, f)) {
+            unsigned long long kb;
+            if (sscanf(line, "MemAvailable: %llu kB", &kb) == 1) {
+                fclose(f);
+                return (double)kb * 1024.0;
+            }
+        }
+        fclose(f);
+    }
+    return (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
+}
+
+size_t pst_plan_particles(const pst_scene *s)
+{
+    const sc_cloud *c = &s->cloud;
+    if (c->source == SC_CLOUD_FILE)
+        return 0;
+    size_t n[3] = {1, 1, 1}, total = 1;
+    for (int d = 0; d < s->dim; ++d) {
+        double cells = round((c->hi[d] - c->lo[d]) / c->spacing);
+        n[d] = cells < 0 ? 0 : (size_t)cells;
+        if (c->source == SC_CLOUD_LATTICE)
+            n[d] += 1; /* nodes, both ends included */
+        total *= n[d];
+    }
+    if (c->source == SC_CLOUD_CELL_CENTRED) /* one face particle per boundary cell face */
+        total += s->dim == 2 ? 2 * (n[0] + n[1]) : 2 * (n[0] * n[1] + n[1] * n[2] + n[0] * n[2]);
+    return total;
+}
+
+/* Outputs a task adds to the cloud, in doubles per particle. */
+static int task_fields(const sc_task *t, int dim)
+{
+    switch (t->type) {
+    case SC_TASK_GRADIENT: return dim;
+    case SC_TASK_HESSIAN: return dim == 2 ? 3 : 6;
+    case SC_TASK_INTERPOLATE: return 0;
+    default: return 1;
+    }
+}
+
+static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t errlen)
+{
+    const sc_task *t = &s->tasks[k];
+    const char *scheme = s->op.scheme;
+    int need = t->type == SC_TASK_GRADIENT      ? PST_SUPPORTS_GRADIENT
+               : t->type == SC_TASK_HESSIAN     ? PST_SUPPORTS_HESSIAN
+               : t->type == SC_TASK_INTERPOLATE ? PST_SUPPORTS_INTERPOLATE
+                                                : -1;
+    if (need >= 0 && !pst_scheme_supports(scheme, need)) {
+        snprintf(err, errlen, "task '%s': scheme '%s' has no %s", t->name, scheme,
+                 need == PST_SUPPORTS_GRADIENT  ? "gradient"
+                 : need == PST_SUPPORTS_HESSIAN ? "Hessian"
+                                                : "interpolation");
+        return PST_EINVAL;
+    }
+    if (t->type == SC_TASK_DIVERGENCE && s->mobility.type == SC_MOB_NONE) {
+        snprintf(err, errlen, "task '%s': a divergence task needs a mobility (mobility.type)",
+                 t->name);
+        return PST_EINVAL;
+    }
+    if (t->type == SC_TASK_LAPLACIAN && s->mobility.type != SC_MOB_NONE) {
+        snprintf(err, errlen, "task '%s': the scene has a mobility, so its operator is "
+                              "div(M grad u): use type 'divergence'", t->name);
+        return PST_EINVAL;
+    }
+    if (mobility && (t->type == SC_TASK_DIVERGENCE || t->type == SC_TASK_SOLVE) &&
+        !pst_scheme_supports(scheme, PST_SUPPORTS_MOBILITY)) {
+        snprintf(err, errlen, "task '%s': scheme '%s' discretises the plain Laplacian only; "
+                              "a variable mobility needs another scheme (e.g. lv)",
+                 t->name, scheme);
+        return PST_EINVAL;
+    }
+    if (t->type == SC_TASK_SOLVE && t->solver == PST_SOLVER_CG) {
+        int neumann = 0;
+        for (int g = 0; g < t->ngroups; ++g)
+            neumann |= t->groups[g].neumann;
+        if (neumann || !pst_scheme_supports(scheme, PST_SUPPORTS_SYMMETRIC) ||
+            (s->op.gradient != PST_GRAD_G1 && s->op.gradient != 0)) {
+            snprintf(err, errlen, "task '%s': CG needs a symmetrisable operator (brookshaw or "
+                                  "cb with gradient G1 and no Neumann rows); use gmres",
+                     t->name);
+            return PST_EINVAL;
+        }
+    }
+    return PST_OK;
+}
+
+int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen)
+{
+    memset(p, 0, sizeof *p);
+    const int dim = s->dim;
+    p->particles = particles;
+    p->kernel = s->op.kernel >= 0 ? s->op.kernel : pst_scheme_default_kernel(s->op.scheme);
+    p->support = pst_kernel_support(p->kernel);
+    double reach = p->support * s->cloud.h_ratio; /* in spacings */
+    p->neighbours = (dim == 2 ? PLAN_PI * reach * reach : 4.0 / 3.0 * PLAN_PI * pow(reach, 3)) - 1;
+
+    p->mobility_factor = 1;
+    switch (s->mobility.type) {
+    case SC_MOB_CONSTANT: p->mobility_factor = s->mobility.value; break;
+    case SC_MOB_EXPR: p->mobility_ncomp = s->mobility.ncomp; break;
+    case SC_MOB_SPE10: p->mobility_ncomp = dim; break;
+    default: break;
+    }
+
+    double doubles = dim + 1 + dim + 1; /* x, V, normals, id */
+    for (int f = 0; f < s->nfields; ++f)
+        doubles += 1;
+    doubles += p->mobility_ncomp;
+    double solver_vectors = 0, amg = 0;
+    for (int k = 0; k < s->ntasks; ++k) {
+        const sc_task *t = &s->tasks[k];
+        int st = check_task(s, k, p->mobility_ncomp > 0, err, errlen);
+        if (st != PST_OK)
+            return st;
+        doubles += task_fields(t, dim);
+        p->need_neighbours = 1;
+        if (t->type != SC_TASK_SOLVE || t->ngroups == 0) {
+            p->base_operator = 1;
+            if (t->type == SC_TASK_LAPLACIAN || t->type == SC_TASK_DIVERGENCE ||
+                t->type == SC_TASK_SOLVE ||
+                !pst_scheme_supports(s->op.scheme, PST_SUPPORTS_DERIVATIVES_ONLY))
+                p->base_laplacian = 1;
+        }
+        if (t->type == SC_TASK_SOLVE) {
+            int neumann = 0;
+            for (int g = 0; g < t->ngroups; ++g)
+                neumann |= t->groups[g].neumann;
+            int symmetric = pst_scheme_supports(s->op.scheme, PST_SUPPORTS_SYMMETRIC) &&
+                            (s->op.gradient == PST_GRAD_G1 || s->op.gradient == 0) && !neumann;
+            p->task_solver[k] = t->solver != PST_SOLVER_AUTO ? t->solver
+                                : symmetric                  ? PST_SOLVER_CG
+                                                             : PST_SOLVER_GMRES;
+            double vectors = p->task_solver[k] == PST_SOLVER_GMRES ? t->restart + 8 : 8;
+            solver_vectors = fmax(solver_vectors, vectors);
+            if (t->precond == PST_PREC_AMG) /* assembled low-order matrix + hierarchy, ~2x */
+                amg = fmax(amg, 2.0 * (12.0 * p->neighbours + 24.0));
+        }
+    }
+    double n = (double)particles;
+    p->bytes_cloud = n * (8.0 * doubles + 1);
+    p->bytes_neighbours = p->need_neighbours ? n * (8.0 + 4.0 * p->neighbours) : 0;
+    int nops = p->base_operator;
+    for (int k = 0; k < s->ntasks; ++k)
+        nops += s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].ngroups > 0;
+    /* the largest per-particle data of any scheme is about 32 doubles (3D quadratic fits) */
+    p->bytes_operators = nops * n * (1.0 + 8.0 * (dim == 2 ? 16 : 32));
+    p->bytes_solver = n * (8.0 * solver_vectors + amg);
+    p->bytes_available = available_bytes();
+    double without = p->bytes_cloud + p->bytes_neighbours + p->bytes_operators + p->bytes_solver;
+    double budget = s->memory_fraction * p->bytes_available;
+    /* Weights pay off for solves (hundreds of applies); a single apply is cheaper without. */
+    for (int k = 0; k < s->ntasks; ++k) {
+        const sc_task *t = &s->tasks[k];
+        if (t->type != SC_TASK_SOLVE)
+            continue;
+        double w = 8.0 * n * p->neighbours;
+        p->task_stored[k] = t->stored >= 0 ? t->stored : without + p->bytes_weights + w <= budget;
+        if (p->task_stored[k])
+            p->bytes_weights += w;
+    }
+    p->bytes_total = without + p->bytes_weights;
+    if (p->bytes_total > budget) {
+        snprintf(err, errlen, "the run needs about %.2f GB (cloud %.2f, neighbours %.2f, "
+                              "operators %.2f, weights %.2f, solver %.2f), more than %.0f %% of "
+                              "the %.2f GB available (limits.memory_fraction); use a coarser "
+                              "spacing or fewer tasks",
+                 p->bytes_total * 1e-9, p->bytes_cloud * 1e-9, p->bytes_neighbours * 1e-9,
+                 p->bytes_operators * 1e-9, p->bytes_weights * 1e-9, p->bytes_solver * 1e-9,
+                 100 * s->memory_fraction, p->bytes_available * 1e-9);
+        return PST_ENOMEM;
+    }
+    return PST_OK;
+}
+
+static const char *task_type_name(int type)
+{
+    static const char *const names[] = {"laplacian", "divergence", "gradient",
+                                        "hessian",   "interpolate", "solve"};
+    return names[type];
+}
+
+static const char *solver_name(int s)
+{
+    static const char *const names[] = {"auto", "CG", "GMRES", "BiCGSTAB"};
+    return names[s];
+}
+
+static const char *precond_name(int p)
+{
+    static const char *const names[] = {"none", "Jacobi", "AMG (hypre BoomerAMG)"};
+    return names[p];
+}
+
+void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
+{
+    fprintf(f, "plan for %s%s%s\n", s->path, s->title ? ": " : "", s->title ? s->title : "");
+    fprintf(f, "  cloud      %dD, %zu particles, h = %g s0\n", s->dim, p->particles,
+            s->cloud.h_ratio);
+    if (p->mobility_ncomp)
+        fprintf(f, "  mobility   %s per particle\n",
+                p->mobility_ncomp == 1 ? "scalar" : "diagonal tensor");
+    else if (s->mobility.type == SC_MOB_CONSTANT)
+        fprintf(f, "  mobility   constant %g: a factor on L, no per-particle array\n",
+                p->mobility_factor);
+    if (p->need_neighbours)
+        fprintf(f, "  neighbours kernel %s, support %gh, about %.0f per particle\n",
+                pst_kernel_name(p->kernel), p->support, p->neighbours);
+    if (p->base_operator)
+        fprintf(f, "  operator   %s%s\n", s->op.scheme,
+                p->base_laplacian ? "" : ", derivatives only (no Laplacian rows)");
+    for (int k = 0; k < s->ntasks; ++k) {
+        const sc_task *t = &s->tasks[k];
+        fprintf(f, "  task %-6d %s '%s'", k, task_type_name(t->type), t->name);
+        if (t->type == SC_TASK_SOLVE)
+            fprintf(f, ": %s + %s, rtol %g, %s operator%s", solver_name(p->task_solver[k]),
+                    precond_name(t->precond), t->rtol,
+                    p->task_stored[k] ? "stored" : "matrix-free",
+                    t->ngroups ? ", own boundary groups" : "");
+        else if (t->field)
+            fprintf(f, " of %s", t->field);
+        if (t->nexact && t->nnorms)
+            fprintf(f, ", %d error norm%s", t->nnorms, t->nnorms > 1 ? "s" : "");
+        fprintf(f, "\n");
+    }
+    fprintf(f, "  memory     about %.2f GB (cloud %.2f, neighbours %.2f, operators %.2f, "
+               "weights %.2f, solver %.2f) of %.2f GB available\n",
+            p->bytes_total * 1e-9, p->bytes_cloud * 1e-9, p->bytes_neighbours * 1e-9,
+            p->bytes_operators * 1e-9, p->bytes_weights * 1e-9, p->bytes_solver * 1e-9,
+            p->bytes_available * 1e-9);
+}

@@ -1,0 +1,61 @@
+/* The planner: from a scene's tasks and outputs, what must be computed and nothing more
+ * (docs/running.md), with a memory estimate checked before anything big is
+ * allocated. The runner (run.c) follows the plan and counts what it actually computed. */
+#ifndef PSTENCIL_PLAN_H
+#define PSTENCIL_PLAN_H
+
+#include "scene.h"
+
+#include <stdio.h>
+
+/* What a run computed: the runner increments these as it goes; a test compares them with
+ * what the scene asked for. */
+typedef struct {
+    long mobility_arrays;     /* per-particle mobility arrays filled                          */
+    long fields;              /* field expressions evaluated onto the cloud                   */
+    long neighbour_lists;
+    long laplacian_precomputes; /* operators whose Laplacian rows were precomputed            */
+    long derivative_operators;  /* operators built for derivatives only (no Laplacian rows)   */
+    long stored_weights;      /* pst_op_store calls                                           */
+    long applies;             /* L u outside solves                                           */
+    long gradients, hessians, interpolations, solves;
+    long norms;
+    long files;               /* output files written                                         */
+} pst_run_counters;
+
+typedef struct {
+    size_t particles;         /* exact for a file or a generated cloud                        */
+    double neighbours;        /* estimated neighbours per particle (j != i)                   */
+    int kernel;               /* the kernel the operators use                                 */
+    double support;           /* kernel support in units of h                                 */
+    /* Mobility as the operators see it: 0 = none (also a constant, folded into a factor),
+     * 1 = scalar per particle, dim = diagonal tensor per particle. */
+    int mobility_ncomp;
+    double mobility_factor;   /* L_M u = factor * L u for a constant mobility (else 1)         */
+    int need_neighbours;
+    /* Operators: the base operator (the cloud's own boundary kinds) serves every task except
+     * solves with boundary groups, which get one each. A base operator that only feeds
+     * gradients, Hessians and interpolation is built without Laplacian rows. */
+    int base_operator;        /* 1 when some task needs it                                     */
+    int base_laplacian;       /* 1 when it needs Laplacian rows                                */
+    int task_stored[SC_MAX_TASKS];  /* 1: stored weights, 0: matrix-free                      */
+    int task_solver[SC_MAX_TASKS];  /* pst_solver a solve task will use                        */
+    /* Memory estimate in bytes. */
+    double bytes_cloud, bytes_neighbours, bytes_operators, bytes_weights, bytes_solver;
+    double bytes_total, bytes_available;
+} pst_plan;
+
+/* Make the plan of scene `s` for a cloud of `particles` particles (pst_plan_particles gives
+ * the count of a generated cloud before generating it). Errors (PST_EINVAL, with the reason
+ * in err) for tasks the scheme cannot do (a Hessian from a scheme without one, CG on a
+ * non-symmetrisable operator, a divergence task without mobility, ...); PST_ENOMEM with the
+ * estimate when the plan does not fit in limits.memory_fraction of the available memory. */
+int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen);
+
+/* The number of particles the scene's generated cloud will have (0 for a file cloud). */
+size_t pst_plan_particles(const pst_scene *s);
+
+/* Print the plan as `pstencil run --plan` shows it. */
+void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s);
+
+#endif

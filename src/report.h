@@ -1,0 +1,36 @@
+/* The JSON report of a scene run and the run's output files (docs/running.md, "Outputs"). The
+ * report is a cJSON tree the runner fills as it goes; every file is written all or nothing. */
+#ifndef PSTENCIL_REPORT_H
+#define PSTENCIL_REPORT_H
+
+#include "plan.h"
+
+#include <cjson/cJSON.h>
+#include <stdio.h>
+
+/* A new report: program version, threads, the scene's path and title. */
+cJSON *report_begin(const pst_scene *s);
+/* Wall-clock seconds of a run phase, under "timers". */
+void report_timer(cJSON *report, const char *name, double seconds);
+/* An operator: scheme, kernel, per-phase timers and row status counts, under "operators". */
+void report_operator(cJSON *report, const pst_op *op);
+/* A task's name and type. */
+void report_task_header(cJSON *task, const sc_task *t);
+/* A solve's outcome: solver, converged, iterations, residual, message, residual history. */
+void report_solve(cJSON *task, const pst_solve_result *res);
+/* The plan's decisions and estimates, the counters and the cloud's size, at the end. */
+void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt,
+                   const pst_cloud *c);
+/* Write the scene's outputs: CSV and VTU of the cloud (only outputs.fields when given; the
+ * VTU carries the base operator's row status) and the JSON report. Counts the files. */
+int report_write_outputs(const pst_scene *s, const pst_cloud *c, const pst_op *base,
+                         cJSON *report, pst_run_counters *cnt, char *err, size_t errlen);
+/* An interpolation task's values at its points: "<csv stem>_<task>.csv" beside outputs.csv
+ * with columns x,y[,z],value,laplacian. */
+int report_write_points(const char *csv, const char *task, int dim, double *const pts[3],
+                        size_t m, const double *value, const double *lap, char *err,
+                        size_t errlen);
+/* A few human-readable lines: tasks, norms, solver outcomes, total time. */
+void report_summary(FILE *f, const cJSON *report);
+
+#endif

@@ -1,0 +1,22 @@
+/* The scene runner: follows the plan (plan.h), computes the tasks, writes the outputs (CSV,
+ * VTU, JSON report) and counts what it computed. docs/running.md. */
+#ifndef PSTENCIL_RUN_H
+#define PSTENCIL_RUN_H
+
+#include "plan.h"
+
+typedef struct {
+    int quiet;          /* no progress lines and no summary on stdout                      */
+    int plan_only;      /* print the plan and stop before allocating anything big           */
+} pst_run_opts;
+
+/* Run scene `s`. On success the counters and the plan are filled (either may be NULL) and,
+ * when `cloud` is not NULL, the cloud with every task's output field is handed to the caller
+ * (pst_cloud_destroy). Errors: the library's status (PST_EINPUT for bad expressions or data,
+ * PST_ENOMEM for a plan that does not fit, PST_ENUMERIC for a solve that did not converge —
+ * its outputs are still written, marked as not converged in the report) with the reason in
+ * err. */
+int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
+                  pst_run_counters *counters, pst_cloud **cloud, char *err, size_t errlen);
+
+#endif

@@ -1,0 +1,194 @@
+/* Scenes: what a run computes, read from a JSON file (docs/scenes.md) and checked against the
+ * parameter table (scene_params.c), with command-line key=value overrides.
+ *
+ * The loader turns the file into a pst_scene with every default filled in; the planner
+ * (plan.c) decides from it what must be computed, the runner (run.c) computes it. Every string
+ * in a scene is owned by the scene (pst_scene_free). */
+#ifndef PSTENCIL_SCENE_H
+#define PSTENCIL_SCENE_H
+
+#include "pstencil.h"
+
+#include <stddef.h>
+#include <stdio.h>
+
+enum { SC_MAX_TASKS = 32, SC_MAX_FIELDS = 32, SC_MAX_GROUPS = 8, SC_MAX_NORMS = 8 };
+
+typedef enum { SC_CLOUD_LATTICE, SC_CLOUD_CELL_CENTRED, SC_CLOUD_FILE } sc_cloud_source;
+
+typedef struct {
+    sc_cloud_source source;
+    char *file;              /* CSV cloud (source "file"), resolved against the scene's folder */
+    double lo[3], hi[3];     /* box of a generated cloud                                        */
+    double spacing;          /* s0                                                             */
+    double jitter;           /* K                                                              */
+    long seed;
+    int boundary_layer;      /* lattice: 1 = the outer layer is a Dirichlet boundary            */
+    double angle;            /* lattice rotation, degrees                                       */
+    double h_ratio;          /* h / s0 (generated clouds; a file keeps its own h unless set)    */
+    int h_ratio_set;         /* 1 when the scene gave h_ratio (a file's h is then replaced)     */
+} sc_cloud;
+
+typedef enum { SC_MOB_NONE, SC_MOB_CONSTANT, SC_MOB_EXPR, SC_MOB_SPE10 } sc_mobility_type;
+
+typedef struct {
+    sc_mobility_type type;
+    double value;            /* constant                                                       */
+    char *expr[3];           /* expression: expr[0] scalar, or one per axis (diagonal tensor)  */
+    int ncomp;               /* 1 (scalar) or dim (diagonal)                                   */
+    char *file;              /* SPE10: permx.geos or perm.txt, resolved against the folder     */
+    int layer, i0, j0;       /* SPE10 layer and the sub-block's first cell                     */
+} sc_mobility;
+
+typedef struct {
+    char *scheme;            /* a registered scheme name                                       */
+    int kernel;              /* pst_kernel, or -1 for the scheme's default                      */
+    int gradient;            /* pst_gradient (LV family)                                       */
+    int variant;
+    double cond_max, rank_tol;
+    int mobility_mean;       /* pst_mobility_mean                                              */
+} sc_operator;
+
+typedef enum {
+    SC_TASK_LAPLACIAN,       /* L u with no mobility: the Laplacian                             */
+    SC_TASK_DIVERGENCE,      /* L u with the scene's mobility: div(M grad u)                   */
+    SC_TASK_GRADIENT,
+    SC_TASK_HESSIAN,
+    SC_TASK_INTERPOLATE,     /* value (and Laplacian) at the points of a CSV file or a lattice  */
+    SC_TASK_SOLVE            /* L u = rhs with the boundary groups below                        */
+} sc_task_type;
+
+typedef enum { SC_NORM_REL_L2, SC_NORM_QSFDI11, SC_NORM_QSFDI11_NORMALISED, SC_NORM_LV78,
+               SC_NORM_LV95, SC_NORM_MAX_ABS, SC_NORM_MAX_REL, SC_NNORMS } sc_norm;
+
+typedef enum { SC_REGION_INTERIOR, SC_REGION_ALL, SC_REGION_BOX } sc_region_type;
+
+typedef enum { SC_SIDE_ALL, SC_SIDE_XLO, SC_SIDE_XHI, SC_SIDE_YLO, SC_SIDE_YHI, SC_SIDE_ZLO,
+               SC_SIDE_ZHI } sc_side;
+
+typedef struct {
+    sc_side where;           /* boundary particles on this side of the box (or all of them)    */
+    int neumann;             /* 0: Dirichlet u = value; 1: Neumann du/dn = value               */
+    char *value;             /* expression                                                     */
+} sc_group;
+
+typedef struct {
+    char *name;              /* output field name (default: the type, made unique)             */
+    sc_task_type type;
+    char *field;             /* the input field (not for solve)                                */
+    char *exact[6];          /* exact result expressions: 1 (scalar), dim (gradient), 3 / 6
+                                (Hessian xx,yy,xy / xx,yy,zz,xy,xz,yz); NULL when not given     */
+    int nexact;
+    /* interpolate: points from a CSV file (x,y[,z] columns) or a lattice box */
+    char *points_file;
+    double points_lo[3], points_hi[3], points_spacing;
+    /* solve */
+    char *rhs;               /* expression                                                     */
+    sc_group groups[SC_MAX_GROUPS];
+    int ngroups;             /* 0: every boundary particle is Dirichlet with u = exact          */
+    int solver, precond, amg_source, restart, max_iter;
+    double rtol;
+    int stored;              /* -1 auto (the planner decides), 0 matrix-free, 1 stored          */
+    /* errors */
+    int norms[SC_MAX_NORMS];
+    int nnorms;
+    sc_region_type region;
+    double region_lo[3], region_hi[3];
+} sc_task;
+
+typedef struct {
+    char *name;
+    char *expr;
+} sc_field;
+
+typedef struct {
+    char *csv, *vtu, *report; /* output paths (NULL: not written), relative to the working dir */
+    char *fields[SC_MAX_FIELDS];
+    int nfields;             /* 0: every field                                                  */
+} sc_outputs;
+
+typedef struct {
+    char *path;              /* the scene file ("(built-in)" for the default scene)           */
+    char *dir;               /* its folder: relative input paths are resolved against it       */
+    char *title;
+    int dim;
+    sc_cloud cloud;
+    sc_mobility mobility;
+    sc_operator op;
+    sc_field fields[SC_MAX_FIELDS];
+    int nfields;
+    sc_task tasks[SC_MAX_TASKS];
+    int ntasks;
+    sc_outputs out;
+    double memory_fraction;  /* refuse a plan above this fraction of the machine's memory      */
+} pst_scene;
+
+/* Read and check a scene. `text` is the file's content (or the built-in scene's), `path`
+ * names it in messages. Overrides are "key=value" strings with dotted keys
+ * ("cloud.jitter=0.3", "tasks.0.rtol=1e-8") applied before the checks. On failure returns
+ * PST_EINPUT (or PST_ENOMEM) with "PATH:LINE:COLUMN: key 'cloud.jiter': unknown key (did you
+ * mean 'cloud.jitter'?)"-style messages in err. */
+int pst_scene_parse(pst_scene *s, const char *text, const char *path, const char *const *overrides,
+                    int noverrides, char *err, size_t errlen);
+/* Read a scene file and parse it (PST_EIO when the file cannot be read). */
+int pst_scene_load(pst_scene *s, const char *path, const char *const *overrides, int noverrides,
+                   char *err, size_t errlen);
+/* The built-in default scene (scenes/default.json, compiled in). */
+int pst_scene_default(pst_scene *s, const char *const *overrides, int noverrides, char *err,
+                      size_t errlen);
+void pst_scene_free(pst_scene *s);
+
+/* The parameter table as help text (`pstencil help scene`) or as the markdown of
+ * docs/scenes.md. */
+void pst_scene_print_help(FILE *f, int markdown);
+
+/* ---- The parameter table (scene_params.c): every key a scene may hold, declared once. The
+ * loader checks scenes against it, the help text and docs/scenes.md are printed from it. ---- */
+
+typedef enum {
+    SC_T_INT,       /* a whole number                                                       */
+    SC_T_REAL,      /* a finite number                                                      */
+    SC_T_BOOL,
+    SC_T_STRING,
+    SC_T_ENUM,      /* a string among `values` (NULL values: a registered scheme name)       */
+    SC_T_EXPR,      /* an expression: a non-empty string, compiled by the runner            */
+    SC_T_EXPRS,     /* an expression or a list of expressions                               */
+    SC_T_VEC,       /* a list of dim numbers                                                */
+    SC_T_PATH,      /* a file name                                                          */
+    SC_T_OBJECT,
+    SC_T_LIST,      /* a list of `item`                                                     */
+    SC_T_ENUM_OR_OBJECT /* a string among `values`, or an object of the keys below it        */
+} sc_type;
+
+enum { SC_F_REQUIRED = 1, /* must be given (where it applies)                               */
+       SC_F_SELECTOR = 2  /* its value decides which sibling keys apply (`applies`)         */ };
+
+typedef struct {
+    const char *key;     /* dotted path: "cloud.spacing", "tasks[].rtol" (an item of a list),
+                            "fields.<name>" (any name in a map)                             */
+    sc_type type;
+    sc_type item;        /* SC_T_LIST: the type of an item                                  */
+    const char *values;  /* "a|b|c": an enum's values, or the values an integer may take   */
+    const char *def;     /* the default as JSON text (a vector's: one number for every
+                            axis); NULL for none                                          */
+    const char *units;   /* NULL for none                                                   */
+    char lo_kind;        /* lower bound of a number (of a list's or object's length): '['
+                            inclusive, '(' exclusive, 0 for none                           */
+    double lo, hi;
+    char hi_kind;        /* upper bound: ']' inclusive, ')' exclusive, 0 for none           */
+    const char *applies; /* "a|b": the values of the sibling selector for which the key
+                            applies (e.g. tasks[].rtol: "solve"); NULL: always           */
+    int flags;           /* SC_F_*                                                          */
+    const char *doc;     /* one sentence                                                    */
+} sc_param;
+
+extern const sc_param sc_params[];
+extern const int sc_nparams;
+
+/* The table entry of a table path ("tasks[].rtol"), or NULL. */
+const sc_param *sc_param_find(const char *key);
+
+/* The complete example scene of docs/scenes.md (the tests check that it loads). */
+const char *pst_scene_example(void);
+
+#endif

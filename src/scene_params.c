@@ -1,0 +1,475 @@
+/* The parameter table of scene files: every key once, with its type, default, units, range,
+ * the task (or cloud, mobility) types it applies to and one sentence of documentation. The
+ * loader (scene.c) checks scenes against it; `pstencil help scene` and docs/scenes.md are
+ * printed from it here, so the documentation cannot drift from what is accepted. */
+#include "scene.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#define ANY_TASK_BUT_SOLVE "laplacian|divergence|gradient|hessian|interpolate"
+#define GENERATED "lattice|cell_centred"
+
+/* Designated initialisers keep each row readable; unnamed members are 0 / NULL. */
+const sc_param sc_params[] = {
+    {.key = "title", .type = SC_T_STRING,
+     .doc = "A one-line description printed in reports (default: the scene file's path)."},
+    {.key = "dim", .type = SC_T_INT, .values = "2|3", .def = "2",
+     .doc = "Dimension of the cloud; every vector in the scene has this many components."},
+
+    {.key = "cloud", .type = SC_T_OBJECT, .doc = "The particle cloud."},
+    {.key = "cloud.source", .type = SC_T_ENUM, .values = "lattice|cell_centred|file",
+     .def = "\"lattice\"", .flags = SC_F_SELECTOR,
+     .doc = "A jittered node lattice, the Lukyanov-Vuik cell-centred layout with face "
+            "particles, or a CSV file (docs/clouds.md)."},
+    {.key = "cloud.file", .type = SC_T_PATH, .applies = "file", .flags = SC_F_REQUIRED,
+     .doc = "The CSV cloud, relative to the scene file's folder."},
+    {.key = "cloud.lo", .type = SC_T_VEC, .def = "0", .units = "length", .applies = GENERATED,
+     .doc = "Lower corner of the box."},
+    {.key = "cloud.hi", .type = SC_T_VEC, .def = "1", .units = "length", .applies = GENERATED,
+     .doc = "Upper corner of the box; hi - lo must be a whole number of spacings on every "
+            "axis."},
+    {.key = "cloud.spacing", .type = SC_T_REAL, .def = "0.05", .units = "length",
+     .lo_kind = '(', .lo = 0,
+     .doc = "Lattice spacing s0; for a file cloud it only scales h_ratio."},
+    {.key = "cloud.jitter", .type = SC_T_REAL, .def = "0", .units = "s0", .lo_kind = '[',
+     .lo = 0, .hi = 1, .hi_kind = ')', .applies = GENERATED,
+     .doc = "K: each coordinate of a jittered particle moves by K*delta*s0, delta uniform in "
+            "[-1, 1]."},
+    {.key = "cloud.seed", .type = SC_T_INT, .def = "1", .lo_kind = '[', .lo = 0,
+     .applies = GENERATED,
+     .doc = "Seed of the counter-based jitter RNG (the same cloud for every thread count)."},
+    {.key = "cloud.boundary_layer", .type = SC_T_BOOL, .def = "true", .applies = "lattice",
+     .doc = "Keep the outer layer of the lattice unjittered and make it the Dirichlet "
+            "boundary."},
+    {.key = "cloud.angle", .type = SC_T_REAL, .def = "0", .units = "degrees", .lo_kind = '[',
+     .lo = -360, .hi = 360, .hi_kind = ']', .applies = "lattice",
+     .doc = "Rotation of the lattice about the box centre (3D: about the z axis)."},
+    {.key = "cloud.h_ratio", .type = SC_T_REAL, .def = "1.2", .units = "s0", .lo_kind = '(',
+     .lo = 0,
+     .doc = "Smoothing length h = h_ratio*s0; a file cloud keeps its own h unless this is "
+            "given."},
+
+    {.key = "mobility", .type = SC_T_OBJECT,
+     .doc = "The mobility M of div(M grad u) (tasks of type divergence and solve)."},
+    {.key = "mobility.type", .type = SC_T_ENUM, .values = "none|constant|expression|spe10",
+     .def = "\"none\"", .flags = SC_F_SELECTOR,
+     .doc = "none (M = 1), a constant, expressions of x, y, z, or SPE10 permeability."},
+    {.key = "mobility.value", .type = SC_T_REAL, .lo_kind = '(', .lo = 0,
+     .applies = "constant", .flags = SC_F_REQUIRED, .doc = "The constant scalar mobility."},
+    {.key = "mobility.expression", .type = SC_T_EXPRS, .applies = "expression",
+     .flags = SC_F_REQUIRED,
+     .doc = "A scalar mobility, or a list of dim expressions: the diagonal of a tensor."},
+    {.key = "mobility.file", .type = SC_T_PATH, .applies = "spe10", .flags = SC_F_REQUIRED,
+     .doc = "SPE10 permx.geos (layers 84, 85) or perm.txt (Tarbert), relative to the scene "
+            "file's folder (docs/spe10.md)."},
+    {.key = "mobility.layer", .type = SC_T_INT, .values = "0|84|85", .def = "85",
+     .applies = "spe10", .doc = "The SPE10 layer: 84 or 85 (permx.geos), 0 (perm.txt)."},
+    {.key = "mobility.i0", .type = SC_T_INT, .def = "0", .units = "cells", .lo_kind = '[',
+     .lo = 0, .hi = 59, .hi_kind = ']', .applies = "spe10",
+     .doc = "First cell along x of the block of the layer mapped onto the cloud's box."},
+    {.key = "mobility.j0", .type = SC_T_INT, .def = "0", .units = "cells", .lo_kind = '[',
+     .lo = 0, .hi = 219, .hi_kind = ']', .applies = "spe10",
+     .doc = "First cell along y of that block."},
+
+    {.key = "operator", .type = SC_T_OBJECT, .doc = "The discretisation."},
+    {.key = "operator.scheme", .type = SC_T_ENUM, .def = "\"qsfdi\"",
+     .doc = "A registered scheme (docs/operators.md)."},
+    {.key = "operator.kernel", .type = SC_T_ENUM,
+     .values = "default|cubic|quintic|wendland2|wendland4", .def = "\"default\"",
+     .doc = "The smoothing kernel; default is the scheme's own."},
+    {.key = "operator.gradient", .type = SC_T_ENUM, .values = "G1|G2|G3|G4", .def = "\"G1\"",
+     .doc = "Kernel-gradient variant of the Lukyanov-Vuik family (LV eqs. 15-18)."},
+    {.key = "operator.variant", .type = SC_T_INT, .def = "0", .lo_kind = '[', .lo = 0,
+     .hi = 2147483647.0, .hi_kind = ']',
+     .doc = "Scheme variant (lsmps: 0 type B, 1 type A; 0 for the others)."},
+    {.key = "operator.cond_max", .type = SC_T_REAL, .def = "1e10", .lo_kind = '(', .lo = 1,
+     .doc = "Rows whose moment matrix has a larger condition estimate are flagged "
+            "ill-conditioned."},
+    {.key = "operator.rank_tol", .type = SC_T_REAL, .def = "1e-13", .lo_kind = '(', .lo = 0,
+     .doc = "Below 1/cond of rank_tol a moment matrix is rank-deficient and the row falls "
+            "back."},
+    {.key = "operator.mobility_mean", .type = SC_T_ENUM, .values = "arithmetic|harmonic",
+     .def = "\"arithmetic\"",
+     .doc = "Pair mobility of the Lukyanov-Vuik family: arithmetic m_I + m_J (the paper's) or "
+            "twice the harmonic mean (TPFA's; for discontinuous, high-contrast mobility)."},
+
+    {.key = "fields", .type = SC_T_OBJECT, .hi = SC_MAX_FIELDS, .hi_kind = ']',
+     .doc = "Named input fields sampled at the particles."},
+    {.key = "fields.<name>", .type = SC_T_EXPR,
+     .doc = "A field: its name (a C identifier, not a CSV column name) and its expression of "
+            "x, y, z."},
+
+    {.key = "tasks", .type = SC_T_LIST, .item = SC_T_OBJECT, .hi = SC_MAX_TASKS,
+     .hi_kind = ']', .doc = "What to compute, in order."},
+    {.key = "tasks[].type", .type = SC_T_ENUM,
+     .values = "laplacian|divergence|gradient|hessian|interpolate|solve",
+     .flags = SC_F_REQUIRED | SC_F_SELECTOR,
+     .doc = "Laplacian, div(M grad u) with the scene's mobility, gradient, Hessian, "
+            "interpolation at points, or a solve of div(M grad u) = rhs."},
+    {.key = "tasks[].name", .type = SC_T_STRING,
+     .doc = "Name of the task's output field (a C identifier; default: the type, with _2, _3, "
+            "... when repeated)."},
+    {.key = "tasks[].field", .type = SC_T_STRING, .applies = ANY_TASK_BUT_SOLVE,
+     .flags = SC_F_REQUIRED, .doc = "The input field, declared in fields."},
+    {.key = "tasks[].exact", .type = SC_T_EXPRS,
+     .doc = "The exact result: one expression, dim for a gradient, 3 (xx, yy, xy) or 6 (xx, "
+            "yy, zz, xy, xz, yz) for a Hessian."},
+    {.key = "tasks[].norms", .type = SC_T_LIST, .item = SC_T_ENUM,
+     .values = "rel_l2|qsfdi11|qsfdi11_normalised|lv78|lv95|max_abs|max_rel",
+     .hi = SC_NNORMS, .hi_kind = ']',
+     .doc = "Error norms against exact (default with exact: rel_l2 and max_abs)."},
+    {.key = "tasks[].region", .type = SC_T_ENUM_OR_OBJECT, .values = "interior|all",
+     .def = "\"interior\"",
+     .doc = "Where errors are measured: interior particles, all, or an object {lo, hi}."},
+    {.key = "tasks[].region.lo", .type = SC_T_VEC, .units = "length", .flags = SC_F_REQUIRED,
+     .doc = "Lower corner of the error box."},
+    {.key = "tasks[].region.hi", .type = SC_T_VEC, .units = "length", .flags = SC_F_REQUIRED,
+     .doc = "Upper corner of the error box."},
+    {.key = "tasks[].points", .type = SC_T_OBJECT, .applies = "interpolate",
+     .flags = SC_F_REQUIRED,
+     .doc = "The interpolation points: {file} or a lattice {lo, hi, spacing}."},
+    {.key = "tasks[].points.file", .type = SC_T_PATH,
+     .doc = "A CSV file with x, y[, z] columns, relative to the scene file's folder."},
+    {.key = "tasks[].points.lo", .type = SC_T_VEC, .units = "length",
+     .doc = "Lower corner of the point lattice."},
+    {.key = "tasks[].points.hi", .type = SC_T_VEC, .units = "length",
+     .doc = "Upper corner of the point lattice."},
+    {.key = "tasks[].points.spacing", .type = SC_T_REAL, .units = "length", .lo_kind = '(',
+     .lo = 0, .doc = "Spacing of the point lattice."},
+    {.key = "tasks[].rhs", .type = SC_T_EXPR, .applies = "solve", .flags = SC_F_REQUIRED,
+     .doc = "Right-hand side g of div(M grad u) = g."},
+    {.key = "tasks[].boundary", .type = SC_T_LIST, .item = SC_T_OBJECT, .applies = "solve",
+     .hi = SC_MAX_GROUPS, .hi_kind = ']',
+     .doc = "Boundary groups; a boundary particle takes the first group that matches it "
+            "(default: Dirichlet u = exact everywhere)."},
+    {.key = "tasks[].boundary[].where", .type = SC_T_ENUM,
+     .values = "all|xlo|xhi|ylo|yhi|zlo|zhi", .def = "\"all\"",
+     .doc = "The boundary particles on this side of the box, or all of them."},
+    {.key = "tasks[].boundary[].type", .type = SC_T_ENUM, .values = "dirichlet|neumann",
+     .def = "\"dirichlet\"", .doc = "u = value, or du/dn = value (outward normal)."},
+    {.key = "tasks[].boundary[].value", .type = SC_T_EXPR, .flags = SC_F_REQUIRED,
+     .doc = "The boundary value."},
+    {.key = "tasks[].solver", .type = SC_T_ENUM, .values = "auto|cg|gmres|bicgstab",
+     .def = "\"auto\"", .applies = "solve",
+     .doc = "Krylov method; auto is CG when the operator is symmetrisable, else GMRES."},
+    {.key = "tasks[].precond", .type = SC_T_ENUM, .values = "none|jacobi|amg",
+     .def = "\"jacobi\"", .applies = "solve", .doc = "Preconditioner."},
+    {.key = "tasks[].amg_source", .type = SC_T_ENUM, .values = "brookshaw|own",
+     .def = "\"brookshaw\"", .applies = "solve",
+     .doc = "The matrix AMG is built on: the Brookshaw M-matrix or the scheme's own stencil."},
+    {.key = "tasks[].restart", .type = SC_T_INT, .def = "50", .lo_kind = '[', .lo = 1,
+     .hi = 2147483647.0, .hi_kind = ']', .applies = "solve",
+     .doc = "GMRES restart length."},
+    {.key = "tasks[].max_iter", .type = SC_T_INT, .def = "5000", .lo_kind = '[', .lo = 1,
+     .hi = 2147483647.0, .hi_kind = ']', .applies = "solve", .doc = "Iteration limit."},
+    {.key = "tasks[].rtol", .type = SC_T_REAL, .def = "1e-10", .lo_kind = '(', .lo = 0,
+     .hi = 1, .hi_kind = ')', .applies = "solve",
+     .doc = "Stop when ||b - L u|| <= rtol ||b||."},
+    {.key = "tasks[].operator", .type = SC_T_ENUM, .values = "auto|stored|matrix_free",
+     .def = "\"auto\"", .applies = "solve",
+     .doc = "Apply stored weights or matrix-free; auto lets the planner decide."},
+
+    {.key = "outputs", .type = SC_T_OBJECT,
+     .doc = "What to write; paths are relative to the working directory."},
+    {.key = "outputs.csv", .type = SC_T_PATH, .doc = "The cloud and the fields as CSV."},
+    {.key = "outputs.vtu", .type = SC_T_PATH, .doc = "The same as a ParaView .vtu file."},
+    {.key = "outputs.report", .type = SC_T_PATH,
+     .doc = "The run as JSON: sizes, timings, solver results and error norms."},
+    {.key = "outputs.fields", .type = SC_T_LIST, .item = SC_T_STRING, .hi = SC_MAX_FIELDS,
+     .hi_kind = ']',
+     .doc = "The fields and task outputs written to csv and vtu (default: all of them)."},
+
+    {.key = "limits", .type = SC_T_OBJECT, .doc = "Resource limits."},
+    {.key = "limits.memory_fraction", .type = SC_T_REAL, .def = "0.8", .lo_kind = '(',
+     .lo = 0, .hi = 1, .hi_kind = ']',
+     .doc = "Refuse a plan whose memory estimate exceeds this fraction of the machine's "
+            "memory."},
+};
+const int sc_nparams = (int)(sizeof sc_params / sizeof sc_params[0]);
+
+const sc_param *sc_param_find(const char *key)
+{
+    for (int i = 0; i < sc_nparams; ++i)
+        if (strcmp(sc_params[i].key, key) == 0)
+            return &sc_params[i];
+    return NULL;
+}
+
+/* ---- documentation ------------------------------------------------------------------------- */
+
+/* Every section of a scene, tasks of every type; loaded by the tests, so it stays valid. */
+static const char example[] =
+    "{\n"
+    "  \"title\": \"Poisson problem and operator errors on a 2D jittered lattice\",\n"
+    "  \"dim\": 2,\n"
+    "  \"cloud\": {\n"
+    "    \"source\": \"lattice\",\n"
+    "    \"lo\": [0, 0], \"hi\": [1, 1],\n"
+    "    \"spacing\": 0.02,\n"
+    "    \"jitter\": 0.3,\n"
+    "    \"seed\": 7,\n"
+    "    \"boundary_layer\": true,\n"
+    "    \"h_ratio\": 1.5\n"
+    "  },\n"
+    "  \"mobility\": { \"type\": \"expression\", \"expression\": [\"1 + x\", \"1 + y\"] },\n"
+    "  \"operator\": { \"scheme\": \"qsfdi\", \"kernel\": \"quintic\" },\n"
+    "  \"fields\": {\n"
+    "    \"u\": \"sin(pi*x)*sin(pi*y)\",\n"
+    "    \"v\": \"x^2 + y^2\"\n"
+    "  },\n"
+    "  \"tasks\": [\n"
+    "    { \"type\": \"laplacian\", \"field\": \"v\", \"exact\": \"4\" },\n"
+    "    { \"type\": \"divergence\", \"name\": \"flux\", \"field\": \"v\",\n"
+    "      \"exact\": \"4 + 4*x + 4*y\", \"norms\": [\"rel_l2\", \"lv78\", \"max_abs\"] },\n"
+    "    { \"type\": \"gradient\", \"field\": \"u\",\n"
+    "      \"exact\": [\"pi*cos(pi*x)*sin(pi*y)\", \"pi*sin(pi*x)*cos(pi*y)\"],\n"
+    "      \"region\": { \"lo\": [0.1, 0.1], \"hi\": [0.9, 0.9] } },\n"
+    "    { \"type\": \"hessian\", \"field\": \"v\", \"exact\": [\"2\", \"2\", \"0\"],\n"
+    "      \"norms\": [\"max_abs\"], \"region\": \"all\" },\n"
+    "    { \"type\": \"interpolate\", \"field\": \"u\", \"exact\": \"sin(pi*x)*sin(pi*y)\",\n"
+    "      \"points\": { \"lo\": [0.05, 0.05], \"hi\": [0.95, 0.95], \"spacing\": 0.1 } },\n"
+    "    { \"type\": \"solve\", \"name\": \"p\", \"rhs\": \"4 + 4*x + 4*y\",\n"
+    "      \"exact\": \"x^2 + y^2\",\n"
+    "      \"boundary\": [\n"
+    "        { \"where\": \"xlo\", \"type\": \"neumann\", \"value\": \"-2*x\" },\n"
+    "        { \"where\": \"all\", \"type\": \"dirichlet\", \"value\": \"x^2 + y^2\" }\n"
+    "      ],\n"
+    "      \"solver\": \"gmres\", \"precond\": \"jacobi\", \"restart\": 50, \"max_iter\": 2000,\n"
+    "      \"rtol\": 1e-10, \"operator\": \"stored\", \"norms\": [\"rel_l2\", \"max_rel\"] }\n"
+    "  ],\n"
+    "  \"outputs\": {\n"
+    "    \"csv\": \"poisson.csv\",\n"
+    "    \"vtu\": \"poisson.vtu\",\n"
+    "    \"report\": \"poisson.json\",\n"
+    "    \"fields\": [\"u\", \"v\", \"laplacian\", \"flux\", \"p\"]\n"
+    "  },\n"
+    "  \"limits\": { \"memory_fraction\": 0.5 }\n"
+    "}\n";
+
+const char *pst_scene_example(void) { return example; }
+
+/* Hand-written paragraphs of docs/scenes.md, kept here so that the generated file is whole. */
+static const char *const intro[] = {
+    "A scene is a JSON file that describes a whole run: the particle cloud and its smoothing "
+    "length, the mobility, the scheme and kernel, input fields given by expressions, the tasks "
+    "(operators, interpolation, solves), the error norms against exact solutions, and the "
+    "outputs. The built-in scene is scenes/default.json.",
+    "Every key is declared once in a table (src/scene_params.c) from which this page and "
+    "`pstencil help scene` are generated. A scene is checked against it before anything runs: "
+    "unknown keys, wrong types, out-of-range values, vectors without dim components, missing "
+    "required keys and keys that do not apply (rtol on a laplacian task) are errors that name "
+    "the key and its line and column, e.g. `scene.json:7:5: key 'cloud.jiter': unknown key "
+    "(did you mean 'cloud.jitter'?)`. Columns count characters from 1.",
+    "In the key column, `tasks[]` stands for any item of the list and `fields.<name>` for any "
+    "name. Overrides are `KEY=VALUE` strings applied to the file before the checks, with list "
+    "items numbered from 0: `cloud.jitter=0.3`, `tasks.0.rtol=1e-8`, `fields.v=x*y`, "
+    "`cloud.lo=[0,0]`. A value that is valid JSON is taken as JSON, anything else as a string; "
+    "an override may create any key of the table, and an error in an override names it.",
+    "Expressions are strings in x, y (and z in 3D), docs/expressions.md. Input files "
+    "(cloud.file, mobility.file, tasks[].points.file) are relative to the scene file's folder, "
+    "outputs to the working directory.",
+};
+
+static const char *type_name(const sc_param *p)
+{
+    switch (p->type) {
+    case SC_T_INT: return "int";
+    case SC_T_REAL: return "real";
+    case SC_T_BOOL: return "bool";
+    case SC_T_STRING: return "string";
+    case SC_T_ENUM: return "enum";
+    case SC_T_EXPR: return "expression";
+    case SC_T_EXPRS: return "expression or list";
+    case SC_T_VEC: return "vector (dim)";
+    case SC_T_PATH: return "path";
+    case SC_T_OBJECT: return "object";
+    case SC_T_ENUM_OR_OBJECT: return "enum or object";
+    case SC_T_LIST: break;
+    }
+    return p->item == SC_T_OBJECT ? "list of objects"
+           : p->item == SC_T_ENUM ? "list of enums"
+                                  : "list of strings";
+}
+
+/* Print `s`, with '|' escaped in markdown table cells. */
+static void put_cell(FILE *f, const char *s, int markdown)
+{
+    for (; *s; ++s) {
+        if (markdown && *s == '|')
+            fputc('\\', f);
+        fputc(*s, f);
+    }
+}
+
+/* "a|b" as "`a`, `b`" (markdown) or "a, b". */
+static void put_values(FILE *f, const char *values, int markdown)
+{
+    const char *q = values;
+    for (int first = 1; *q; first = 0) {
+        size_t n = strcspn(q, "|");
+        fprintf(f, "%s%s%.*s%s", first ? "" : ", ", markdown ? "`" : "", (int)n, q,
+                markdown ? "`" : "");
+        q += n + (q[n] == '|');
+    }
+}
+
+static void put_allowed(FILE *f, const sc_param *p, int markdown)
+{
+    if (p->type == SC_T_ENUM && !p->values) {
+        for (int i = 0; i < pst_scheme_count(); ++i)
+            fprintf(f, "%s%s%s%s", i ? ", " : "", markdown ? "`" : "", pst_scheme_name(i),
+                    markdown ? "`" : "");
+        return;
+    }
+    if (p->values) {
+        put_values(f, p->values, markdown);
+        return;
+    }
+    if (p->type == SC_T_LIST || p->type == SC_T_OBJECT) {
+        if (p->hi_kind)
+            fprintf(f, "at most %d %s", (int)p->hi, p->type == SC_T_LIST ? "items" : "entries");
+        return;
+    }
+    if (p->lo_kind && p->hi_kind)
+        fprintf(f, "%c%.15g, %.15g%c", p->lo_kind, p->lo, p->hi, p->hi_kind);
+    else if (p->lo_kind)
+        fprintf(f, "%s %.15g", p->lo_kind == '[' ? ">=" : ">", p->lo);
+    else if (p->hi_kind)
+        fprintf(f, "%s %.15g", p->hi_kind == ']' ? "<=" : "<", p->hi);
+}
+
+static void put_default(FILE *f, const sc_param *p, int markdown)
+{
+    if (p->flags & SC_F_REQUIRED)
+        fputs("required", f);
+    else if (p->def)
+        fprintf(f, "%s%s%s%s", markdown ? "`" : "", p->def, markdown ? "`" : "",
+                p->type == SC_T_VEC ? " (every axis)" : "");
+    else
+        fputs("none", f);
+}
+
+/* The selector that decides whether `p` applies, as "tasks[].type" etc. */
+static void put_applies(FILE *f, const sc_param *p, int markdown)
+{
+    if (!p->applies)
+        return;
+    const char *dot = strrchr(p->key, '.');
+    size_t parent = dot ? (size_t)(dot - p->key) : 0;
+    for (int i = 0; i < sc_nparams; ++i) {
+        const sc_param *s = &sc_params[i];
+        const char *sdot = strrchr(s->key, '.');
+        if ((s->flags & SC_F_SELECTOR) && sdot && (size_t)(sdot - s->key) == parent &&
+            strncmp(s->key, p->key, parent) == 0) {
+            fprintf(f, "%s%s%s = ", markdown ? "`" : "", s->key, markdown ? "`" : "");
+            put_values(f, p->applies, markdown);
+            return;
+        }
+    }
+}
+
+/* Words of `s` wrapped at 92 columns, each line indented by `indent` spaces. */
+static void put_wrapped(FILE *f, const char *s, int indent)
+{
+    int col = 0;
+    while (*s) {
+        size_t n = strcspn(s, " ");
+        if (col > indent && col + 1 + (int)n > 92) {
+            fputc('\n', f);
+            col = 0;
+        }
+        if (col == 0)
+            col = fprintf(f, "%*s", indent, "");
+        else
+            col += fprintf(f, " ");
+        col += fprintf(f, "%.*s", (int)n, s);
+        s += n;
+        s += strspn(s, " ");
+    }
+    fputc('\n', f);
+}
+
+static void print_markdown(FILE *f)
+{
+    fputs("# Scene files\n\n"
+          "<!-- Generated by `pstencil help scene --markdown` from src/scene_params.c; "
+          "test_scene checks that this file matches. Edit the table, not this file. -->\n\n",
+          f);
+    for (size_t k = 0; k < sizeof intro / sizeof intro[0]; ++k) {
+        put_wrapped(f, intro[k], 0);
+        fputc('\n', f);
+    }
+    fputs("## Keys\n\n"
+          "| key | type | default | units | allowed | applies when | description |\n"
+          "|---|---|---|---|---|---|---|\n",
+          f);
+    for (int i = 0; i < sc_nparams; ++i) {
+        const sc_param *p = &sc_params[i];
+        fprintf(f, "| `%s` | %s | ", p->key, type_name(p));
+        put_default(f, p, 1);
+        fprintf(f, " | %s | ", p->units ? p->units : "");
+        put_allowed(f, p, 1);
+        fputs(" | ", f);
+        put_applies(f, p, 1);
+        fputs(" | ", f);
+        put_cell(f, p->doc, 1);
+        fputs(" |\n", f);
+    }
+    fputs("\n## Example\n\n"
+          "Every section of a scene and a task of every type:\n\n```json\n",
+          f);
+    fputs(example, f);
+    fputs("```\n\n"
+          "- The cloud is a 51 x 51 lattice jittered by 0.3 s0 inside an unjittered Dirichlet "
+          "layer, h = 1.5 s0.\n"
+          "- The mobility is the diagonal tensor diag(1 + x, 1 + y); it enters the divergence "
+          "task and the solve, not the laplacian task.\n"
+          "- Tasks without a name are named after their type: `laplacian`, `gradient`, "
+          "`hessian`, `interpolate`.\n"
+          "- The laplacian task gives no norms, so it gets rel_l2 and max_abs; the gradient "
+          "task measures its errors only inside [0.1, 0.9]^2.\n"
+          "- The solve makes the particles of the x = 0 side Neumann (du/dn = -2x, which is 0 "
+          "there) and every other boundary particle Dirichlet: the first matching group "
+          "wins.\n"
+          "- outputs.fields picks the columns of poisson.csv and poisson.vtu; poisson.json "
+          "holds the timings, the solver's result and the norms.\n",
+          f);
+}
+
+static void print_text(FILE *f)
+{
+    fputs("Scene files (docs/scenes.md)\n\n", f);
+    for (size_t k = 0; k < sizeof intro / sizeof intro[0]; ++k) {
+        put_wrapped(f, intro[k], 0);
+        fputc('\n', f);
+    }
+    fputs("Keys:\n\n", f);
+    for (int i = 0; i < sc_nparams; ++i) {
+        const sc_param *p = &sc_params[i];
+        fprintf(f, "%s\n    %s, default ", p->key, type_name(p));
+        put_default(f, p, 0);
+        if (p->units)
+            fprintf(f, ", units %s", p->units);
+        if (p->values || p->lo_kind || p->hi_kind || p->type == SC_T_ENUM) {
+            fputs(", allowed: ", f);
+            put_allowed(f, p, 0);
+        }
+        if (p->applies) {
+            fputs(", only when ", f);
+            put_applies(f, p, 0);
+        }
+        fputc('\n', f);
+        put_wrapped(f, p->doc, 4);
+    }
+    fputs("\n'pstencil help scene --markdown' prints this as docs/scenes.md, with an example.\n",
+          f);
+}
+
+void pst_scene_print_help(FILE *f, int markdown)
+{
+    if (markdown)
+        print_markdown(f);
+    else
+        print_text(f);
+}

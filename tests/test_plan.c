@@ -1,0 +1,260 @@
+/* The planner and the scene runner: a run computes what its scene asks for and nothing more
+ * (the counters), the answers do not change when unneeded work is skipped, the plan's
+ * decisions (stored weights, solver, mobility factor, derivatives-only operator), a run that
+ * cannot fit is refused before allocating, and bad expressions are clear errors. */
+#include "check.h"
+#include "plan.h"
+#include "run.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const base_scene =
+    "{ \"dim\": 2,\n"
+    "  \"cloud\": { \"source\": \"lattice\", \"lo\": [0, 0], \"hi\": [1, 1], \"spacing\": 0.05,\n"
+    "             \"jitter\": 0.3, \"seed\": 3, \"boundary_layer\": true, \"h_ratio\": 1.2 },\n"
+    "  \"operator\": { \"scheme\": \"qsfdi\" },\n"
+    "  \"fields\": { \"u\": \"sin(6*x + 8*y)\" },\n"
+    "  \"tasks\": [] }";
+
+/* Parse the base scene with overrides; exits the test on a parse failure. */
+static pst_scene scene(const char *const *ov, int nov)
+{
+    pst_scene s;
+    char err[1024];
+    int st = pst_scene_parse(&s, base_scene, "test.json", ov, nov, err, sizeof err);
+    if (st != PST_OK) {
+        printf("scene: %s\n", err);
+        exit(1);
+    }
+    return s;
+}
+
+static pst_cloud *run(const pst_scene *s, pst_run_counters *cnt, pst_plan *plan, int expect)
+{
+    pst_run_opts o = {.quiet = 1};
+    pst_cloud *c = NULL;
+    char err[1024];
+    int st = pst_run_scene(s, &o, plan, cnt, &c, err, sizeof err);
+    if (st != expect)
+        printf("run: status %d (%s)\n", st, err);
+    CHECK_INT(st, expect);
+    return c;
+}
+
+/* Field `name` of c in input order (the runner sorts the cloud). */
+static double *field(pst_cloud *c, const char *name)
+{
+    const double *f = pst_cloud_field_by_name(c, name);
+    CHECK(f != NULL);
+    if (!f)
+        exit(1);
+    double *out = malloc(pst_cloud_size(c) * sizeof *out);
+    pst_cloud_to_input_order(c, f, out);
+    return out;
+}
+
+static double max_diff(const double *a, const double *b, size_t n)
+{
+    double d = 0;
+    for (size_t i = 0; i < n; ++i)
+        d = fmax(d, fabs(a[i] - b[i]));
+    return d;
+}
+
+/* A gradient-only scene builds no Laplacian rows (qsfdi's derivatives do not need them), does
+ * no apply, no Hessian, no solve; adding a Laplacian task changes nothing in the gradient. */
+static void test_only_what_is_asked(void)
+{
+    const char *grad_only[] = {"tasks=[{\"type\":\"gradient\",\"field\":\"u\","
+                               "\"exact\":[\"6*cos(6*x+8*y)\",\"8*cos(6*x+8*y)\"]}]"};
+    pst_scene s = scene(grad_only, 1);
+    pst_run_counters k;
+    pst_plan p;
+    pst_cloud *c1 = run(&s, &k, &p, PST_OK);
+    CHECK_INT(p.base_operator, 1);
+    CHECK_INT(p.base_laplacian, 0);
+    CHECK_INT(k.laplacian_precomputes, 0);
+    CHECK_INT(k.derivative_operators, 1);
+    CHECK_INT(k.gradients, 1);
+    CHECK_INT(k.applies + k.hessians + k.interpolations + k.solves + k.stored_weights, 0);
+    CHECK_INT(k.mobility_arrays, 0);
+    CHECK_INT(k.fields, 1);
+    CHECK_INT(k.norms, 2); /* the default norms: rel_l2, max_abs */
+    pst_scene_free(&s);
+
+    const char *both[] = {"tasks=[{\"type\":\"gradient\",\"field\":\"u\"},"
+                          "{\"type\":\"laplacian\",\"field\":\"u\"}]"};
+    s = scene(both, 1);
+    pst_cloud *c2 = run(&s, &k, &p, PST_OK);
+    CHECK_INT(p.base_laplacian, 1);
+    CHECK_INT(k.laplacian_precomputes, 1);
+    CHECK_INT(k.derivative_operators, 0);
+    CHECK_INT(k.applies, 1);
+    CHECK_INT(k.norms, 0); /* no exact solution given: no norms */
+    size_t n = pst_cloud_size(c1);
+    for (int a = 0; a < 2; ++a) {
+        const char *name = a ? "gradient_y" : "gradient_x";
+        double *g1 = field(c1, name), *g2 = field(c2, name);
+        double d = max_diff(g1, g2, n);
+        printf("gradient %s: skipped rows vs full operator differ by %.1e\n", name, d);
+        CHECK(d == 0); /* same code on the same data: bit for bit */
+        free(g1);
+        free(g2);
+    }
+    pst_cloud_destroy(c1);
+    pst_cloud_destroy(c2);
+    pst_scene_free(&s);
+}
+
+/* A constant mobility is a factor: no per-particle array, and the result is c times the
+ * Laplacian (to rounding). A mobility expression fills an array. */
+static void test_mobility_factor(void)
+{
+    const char *lap[] = {"tasks=[{\"type\":\"laplacian\",\"field\":\"u\"}]",
+                         "operator.scheme=lv"};
+    pst_scene s = scene(lap, 2);
+    pst_run_counters k;
+    pst_plan p;
+    pst_cloud *c1 = run(&s, &k, &p, PST_OK);
+    pst_scene_free(&s);
+    const char *div[] = {"tasks=[{\"type\":\"divergence\",\"field\":\"u\"}]",
+                         "operator.scheme=lv", "mobility.type=constant", "mobility.value=2.5"};
+    s = scene(div, 4);
+    pst_cloud *c2 = run(&s, &k, &p, PST_OK);
+    CHECK_INT(k.mobility_arrays, 0);
+    CHECK(p.mobility_factor == 2.5);
+    pst_scene_free(&s);
+    const char *expr[] = {"tasks=[{\"type\":\"divergence\",\"field\":\"u\"}]",
+                          "operator.scheme=lv", "mobility.type=expression",
+                          "mobility.expression=2.5 + 0*x"};
+    s = scene(expr, 4);
+    pst_cloud *c3 = run(&s, &k, &p, PST_OK);
+    CHECK_INT(k.mobility_arrays, 1);
+    pst_scene_free(&s);
+    size_t n = pst_cloud_size(c1);
+    double *l1 = field(c1, "laplacian"), *l2 = field(c2, "divergence"),
+           *l3 = field(c3, "divergence"), scale = 0;
+    for (size_t i = 0; i < n; ++i) {
+        l1[i] *= 2.5;
+        scale = fmax(scale, fabs(l1[i]));
+    }
+    double d12 = max_diff(l1, l2, n) / scale, d13 = max_diff(l1, l3, n) / scale;
+    printf("constant mobility: factor vs 2.5 L %.1e, per-particle array vs 2.5 L %.1e\n", d12,
+           d13);
+    CHECK(d12 <= 1e-15);
+    CHECK(d13 <= 1e-13);
+    free(l1);
+    free(l2);
+    free(l3);
+    pst_cloud_destroy(c1);
+    pst_cloud_destroy(c2);
+    pst_cloud_destroy(c3);
+}
+
+/* Solves: the plan stores the weights (many applies), picks CG for cb and GMRES for qsfdi,
+ * and the solution matches the exact one to the scheme's accuracy. */
+static void test_solve_plan(void)
+{
+    const char *solve[] = {
+        "tasks=[{\"type\":\"solve\",\"rhs\":\"-100*sin(6*x+8*y)\",\"exact\":\"sin(6*x+8*y)\","
+        "\"rtol\":1e-10}]"};
+    pst_scene s = scene(solve, 1);
+    pst_run_counters k;
+    pst_plan p;
+    pst_cloud *c = run(&s, &k, &p, PST_OK);
+    CHECK_INT(p.task_stored[0], 1);
+    CHECK_INT(p.task_solver[0], PST_SOLVER_GMRES);
+    CHECK_INT(k.solves, 1);
+    CHECK_INT(k.stored_weights, 1);
+    CHECK_INT(k.applies, 0);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+
+    const char *cb[] = {solve[0], "operator.scheme=cb", "tasks.0.operator=matrix_free"};
+    s = scene(cb, 3);
+    c = run(&s, &k, &p, PST_OK);
+    CHECK_INT(p.task_solver[0], PST_SOLVER_CG);
+    CHECK_INT(p.task_stored[0], 0);
+    CHECK_INT(k.stored_weights, 0);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+
+    /* A Neumann group makes cb non-symmetrisable: the plan switches to GMRES. */
+    const char *neu[] = {"tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"1 + x\","
+                         "\"boundary\":[{\"where\":\"xhi\",\"type\":\"neumann\",\"value\":\"1\"},"
+                         "{\"where\":\"all\",\"type\":\"dirichlet\",\"value\":\"1 + x\"}]}]",
+                         "operator.scheme=lv"};
+    s = scene(neu, 2);
+    c = run(&s, &k, &p, PST_OK);
+    CHECK_INT(p.task_solver[0], PST_SOLVER_GMRES);
+    double *u = field(c, "solve");
+    size_t n = pst_cloud_size(c);
+    double *xi = malloc(n * sizeof *xi), worst = 0;
+    pst_cloud_to_input_order(c, pst_cloud_coord_const(c, 0), xi);
+    for (size_t i = 0; i < n; ++i)
+        worst = fmax(worst, fabs(u[i] - (1 + xi[i])));
+    printf("lv, linear solution with a Neumann side: max error %.1e\n", worst);
+    CHECK(worst <= 1e-8); /* lv is exact for linear fields, Neumann rows included */
+    free(u);
+    free(xi);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+}
+
+/* Refusals: a plan that does not fit is refused before the cloud exists; a scheme without a
+ * Hessian, CG on qsfdi, a Laplacian task with a mobility, a bad expression. */
+static void test_refusals(void)
+{
+    pst_run_opts o = {.quiet = 1};
+    char err[1024];
+    pst_cloud *c = NULL;
+    const char *huge[] = {"tasks=[{\"type\":\"laplacian\",\"field\":\"u\"}]",
+                          "cloud.spacing=0.00002"};
+    pst_scene s = scene(huge, 2);
+    CHECK_INT(pst_run_scene(&s, &o, NULL, NULL, &c, err, sizeof err), PST_ENOMEM);
+    CHECK(strstr(err, "GB") && strstr(err, "available"));
+    CHECK(c == NULL);
+    printf("refused: %s\n", err);
+    pst_scene_free(&s);
+
+    const struct {
+        const char *ov[3];
+        int n, status;
+        const char *words;
+    } bad[] = {
+        {{"tasks=[{\"type\":\"hessian\",\"field\":\"u\"}]", "operator.scheme=lv"}, 2,
+         PST_EINVAL, "has no Hessian"},
+        {{"tasks=[{\"type\":\"solve\",\"rhs\":\"1\",\"exact\":\"0\",\"solver\":\"cg\"}]"}, 1,
+         PST_EINVAL, "CG needs"},
+        {{"tasks=[{\"type\":\"laplacian\",\"field\":\"u\"}]", "mobility.type=constant",
+          "mobility.value=2"}, 3, PST_EINVAL, "use type 'divergence'"},
+        {{"tasks=[{\"type\":\"divergence\",\"field\":\"u\"}]", "mobility.type=expression",
+          "mobility.expression=1+x"}, 3, PST_EINVAL, "plain Laplacian only"},
+        {{"tasks=[{\"type\":\"laplacian\",\"field\":\"u\",\"exact\":\"sinn(x)\"}]"}, 1,
+         PST_EINPUT, "unknown function 'sinn'"},
+        {{"fields.v=log(x - 2)", "tasks=[{\"type\":\"laplacian\",\"field\":\"v\"}]"}, 2,
+         PST_EINPUT, "not finite"},
+        {{"tasks=[{\"type\":\"laplacian\",\"field\":\"u\",\"exact\":\"0\","
+          "\"norms\":[\"lv95\"]}]"}, 1, PST_ENUMERIC, "relative to the exact value"},
+    };
+    for (size_t q = 0; q < sizeof bad / sizeof bad[0]; ++q) {
+        s = scene(bad[q].ov, bad[q].n);
+        int st = pst_run_scene(&s, &o, NULL, NULL, &c, err, sizeof err);
+        printf("refused (%d): %s\n", st, err);
+        CHECK_INT(st, bad[q].status);
+        CHECK(strstr(err, bad[q].words) != NULL);
+        CHECK(c == NULL);
+        pst_scene_free(&s);
+    }
+}
+
+int main(void)
+{
+    test_only_what_is_asked();
+    test_mobility_factor();
+    test_solve_plan();
+    test_refusals();
+    return check_summary("test_plan");
+}
