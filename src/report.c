@@ -262,9 +262,12 @@ void report_summary(FILE *f, const cJSON *report)
                 cJSON_GetStringValue(cJSON_GetObjectItem(t, "scheme")),
                 cJSON_GetStringValue(cJSON_GetObjectItem(t, "kernel")),
                 cJSON_GetNumberValue(cJSON_GetObjectItem(ph, "precompute")));
-        cJSON_ArrayForEach(st, cJSON_GetObjectItem(t, "row_status"))
-            if (st->valuedouble > 0)
-                fprintf(f, " %s %.0f", st->string, st->valuedouble);
+        if (!cJSON_IsTrue(cJSON_GetObjectItem(t, "laplacian_rows")))
+            fprintf(f, " none (derivatives only)");
+        else
+            cJSON_ArrayForEach(st, cJSON_GetObjectItem(t, "row_status"))
+                if (st->valuedouble > 0)
+                    fprintf(f, " %s %.0f", st->string, st->valuedouble);
         fprintf(f, "\n");
     }
     cJSON_ArrayForEach(t, cJSON_GetObjectItem(report, "tasks")) {

@@ -113,9 +113,12 @@ check "a failed solve still writes its report" '[ -s "$work/c2.json" ]'
 for f in "$scenes"/*.json; do
   expect 0 "run --plan $(basename "$f")" -- "$exe" run "$f" --plan
 done
-for f in qsfdi_test_a lv_table2 lv_mixed heat_3d_divergence spe10_layer85; do
+for f in qsfdi_test_a lv_table2 lv_mixed heat_3d_divergence spe10_layer85 qsfdi_interpolate; do
   expect 0 "run scenes/$f.json" -- sh -c "cd '$work' && '$(readlink -f "$exe")' run '$scenes/$f.json'"
 done
+contains out "rows: none (derivatives only)" "interpolation and Hessian need no Laplacian rows"
+expect 0 "run scenes/lv_patch_2d.json" -- "$exe" run "$scenes/lv_patch_2d.json"
+contains out "max_abs [0-9.]*e-1[1-6]" "the heterogeneous patch test holds to rounding"
 expect 2 "run: missing scene file" -- "$exe" run "$work/none.json"
 expect 2 "run: unknown key" -- "$exe" run cloud.jiter=0.3
 contains err "did you mean 'cloud.jitter'" "run suggests the key"
