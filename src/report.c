@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 cJSON *report_begin(const pst_scene *s)
 {
@@ -23,6 +24,13 @@ cJSON *report_begin(const pst_scene *s)
 void report_timer(cJSON *report, const char *name, double seconds)
 {
     cJSON_AddNumberToObject(cJSON_GetObjectItem(report, "timers"), name, seconds);
+}
+
+void report_peak_memory(cJSON *report)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    cJSON_AddNumberToObject(report, "peak_rss_bytes", 1024.0 * (double)ru.ru_maxrss);
 }
 
 void report_operator(cJSON *report, const pst_op *op)

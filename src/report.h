@@ -12,6 +12,8 @@
 cJSON *report_begin(const pst_scene *s);
 /* Wall-clock seconds of a run phase, under "timers". */
 void report_timer(cJSON *report, const char *name, double seconds);
+/* The process's peak resident memory so far (bytes), as "peak_rss_bytes". */
+void report_peak_memory(cJSON *report);
 /* An operator: scheme, kernel, per-phase timers and row status counts, under "operators". */
 void report_operator(cJSON *report, const pst_op *op);
 /* A task's name and type. */

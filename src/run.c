@@ -15,6 +15,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 typedef struct {
     const pst_scene *s;
@@ -640,6 +641,16 @@ static int run_solve(run_state *r, int k, cJSON *tj)
 
 /* ---- the run ----------------------------------------------------------------------------- */
 
+/* User + system CPU time of the process: with the wall-clock total it shows the parallel
+ * efficiency of a run. */
+static double cpu_seconds(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return (double)(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+           1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
+
 static int run_tasks(run_state *r)
 {
     const pst_scene *s = r->s;
@@ -702,6 +713,8 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
 {
     run_state r = {.s = s, .o = o, .err = err, .errlen = errlen};
     err[0] = '\0';
+    if (o->report)
+        *o->report = NULL;
     if (cloud)
         *cloud = NULL;
     int st = pst_plan_make(&r.plan, s, pst_plan_particles(s), err, errlen);
@@ -713,13 +726,15 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
     }
     r.report = report_begin(s);
     r.tasks = cJSON_AddArrayToObject(r.report, "tasks");
-    double t0 = omp_get_wtime();
+    double t0 = omp_get_wtime(), cpu0 = cpu_seconds();
     if (st == PST_OK)
         st = build(&r);
     if (st == PST_OK)
         st = run_tasks(&r);
     if (st == PST_OK) {
         report_timer(r.report, "total", omp_get_wtime() - t0);
+        report_timer(r.report, "cpu", cpu_seconds() - cpu0);
+        report_peak_memory(r.report);
         report_finish(r.report, &r.plan, &r.cnt, r.c);
         st = report_write_outputs(s, r.c, r.base, r.report, &r.cnt, err, errlen);
     }
@@ -731,7 +746,10 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
         *plan = r.plan;
     if (counters)
         *counters = r.cnt;
-    cJSON_Delete(r.report);
+    if (o->report && (st == PST_OK || (st == PST_ENUMERIC && r.solve_failed)))
+        *o->report = r.report;
+    else
+        cJSON_Delete(r.report);
     pst_op_destroy(r.base);
     pst_nlist_destroy(r.nl);
     if (cloud && (st == PST_OK || (st == PST_ENUMERIC && r.solve_failed)))

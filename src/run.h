@@ -8,6 +8,9 @@
 typedef struct {
     int quiet;          /* no progress lines and no summary on stdout                      */
     int plan_only;      /* print the plan and stop before allocating anything big           */
+    /* When not NULL, receives the run's JSON report (docs/running.md; cJSON_Delete it), also
+     * after a solve that did not converge; NULL after any other failure. */
+    struct cJSON **report;
 } pst_run_opts;
 
 /* Run scene `s`. On success the counters and the plan are filled (either may be NULL) and,
