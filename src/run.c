@@ -96,7 +96,10 @@ static int make_cloud(run_state *r)
     char msg[PST_ERRLEN];
     int st;
     if (sc->source == SC_CLOUD_FILE) {
-        st = pst_cloud_read_csv(&r->c, sc->file, msg);
+        size_t len = strlen(sc->file);
+        int vtu = len > 4 && strcmp(sc->file + len - 4, ".vtu") == 0;
+        st = vtu ? pst_cloud_read_vtu(&r->c, sc->file, msg)
+                 : pst_cloud_read_csv(&r->c, sc->file, msg);
         if (st == PST_OK && pst_cloud_dim(r->c) != s->dim)
             return fail(r, PST_EINPUT, "%s: cloud.file %s is %dD, the scene is %dD", s->path,
                         sc->file, pst_cloud_dim(r->c), s->dim);
@@ -353,32 +356,82 @@ static int run_estimate(run_state *r, int k, cJSON *tj)
     return task_norms(r, k, tj, ncomp, out, NULL, 0);
 }
 
-/* The points of an interpolation task: a lattice box, or the x, y[, z] columns of a CSV. */
+/* A whole token as a finite number. */
+static int parse_number(const char *tok, double *v)
+{
+    char *end;
+    *v = strtod(tok, &end);
+    return end != tok && *end == '\0' && isfinite(*v);
+}
+
+/* The x, y[, z] columns of a CSV file (any other columns are ignored) into pts[d][k]. */
+static int read_points_csv(run_state *r, const char *path, double *pts[3], size_t *m)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return fail(r, PST_EIO, "%s: cannot open the points file", path);
+    char line[4096];
+    int col[3] = {-1, -1, -1}, ncols = 0, st = PST_OK;
+    if (fgets(line, sizeof line, f)) {
+        for (char *tok = strtok(line, ",\r\n"); tok; tok = strtok(NULL, ",\r\n"), ++ncols)
+            for (int d = 0; d < 3; ++d)
+                if (strcmp(tok, (const char *[]){"x", "y", "z"}[d]) == 0)
+                    col[d] = ncols;
+    }
+    for (int d = 0; d < r->s->dim && st == PST_OK; ++d)
+        if (col[d] < 0)
+            st = fail(r, PST_EINPUT, "%s:1: the header has no column '%c'", path, "xyz"[d]);
+    size_t cap = 1024, n = 0;
+    for (int d = 0; d < 3 && st == PST_OK; ++d)
+        if (!(pts[d] = calloc(cap, sizeof(double))))
+            st = fail(r, PST_ENOMEM, "out of memory for the points");
+    for (long lineno = 2; st == PST_OK && fgets(line, sizeof line, f); ++lineno) {
+        if (line[strspn(line, " \r\n")] == '\0')
+            continue;
+        if (n == cap) {
+            cap *= 2;
+            for (int d = 0; d < 3 && st == PST_OK; ++d) {
+                double *grown = realloc(pts[d], cap * sizeof(double));
+                if (!grown)
+                    st = fail(r, PST_ENOMEM, "out of memory for the points");
+                else
+                    pts[d] = grown;
+            }
+        }
+        int c = 0;
+        for (char *tok = strtok(line, ",\r\n"); tok && st == PST_OK; tok = strtok(NULL, ",\r\n"), ++c)
+            for (int d = 0; d < r->s->dim; ++d)
+                if (c == col[d] && !parse_number(tok, &pts[d][n]))
+                    st = fail(r, PST_EINPUT, "%s:%ld: column %c: '%s' is not a finite number",
+                              path, lineno, "xyz"[d], tok);
+        if (st == PST_OK && c != ncols)
+            st = fail(r, PST_EINPUT, "%s:%ld: %d columns, the header has %d", path, lineno, c,
+                      ncols);
+        ++n;
+    }
+    fclose(f);
+    *m = n;
+    return st;
+}
+
+/* The points of an interpolation task: the x, y[, z] columns of a CSV, or a lattice box. */
 static int task_points(run_state *r, const sc_task *t, double *pts[3], size_t *m)
 {
+    if (t->points_file)
+        return read_points_csv(r, t->points_file, pts, m);
+    pst_lattice_opts lo;
+    pst_lattice_defaults(&lo);
+    lo.dim = r->s->dim;
+    for (int d = 0; d < 3; ++d) {
+        lo.lo[d] = t->points_lo[d];
+        lo.hi[d] = t->points_hi[d];
+    }
+    lo.s0 = t->points_spacing;
     pst_cloud *pc = NULL;
     char msg[PST_ERRLEN];
-    int st;
-    if (t->points_file) {
-        st = pst_cloud_read_csv(&pc, t->points_file, msg);
-    } else {
-        pst_lattice_opts lo;
-        pst_lattice_defaults(&lo);
-        lo.dim = r->s->dim;
-        for (int d = 0; d < 3; ++d) {
-            lo.lo[d] = t->points_lo[d];
-            lo.hi[d] = t->points_hi[d];
-        }
-        lo.s0 = t->points_spacing;
-        st = pst_cloud_lattice(&pc, &lo, msg);
-    }
+    int st = pst_cloud_lattice(&pc, &lo, msg);
     if (st != PST_OK)
         return fail(r, st, "%s: task '%s': points: %s", r->s->path, t->name, msg);
-    if (pst_cloud_dim(pc) != r->s->dim) {
-        pst_cloud_destroy(pc);
-        return fail(r, PST_EINPUT, "%s: task '%s': the points are %dD", r->s->path, t->name,
-                    pst_cloud_dim(pc));
-    }
     *m = pst_cloud_size(pc);
     for (int d = 0; d < 3; ++d) {
         pts[d] = malloc((*m ? *m : 1) * sizeof(double));

@@ -105,6 +105,22 @@ check "run wrote the CSV (441 rows + header)" '[ "$(wc -l < "$work/c.csv")" -eq 
 check "run wrote the VTU" 'grep -q "<VTKFile type=\"UnstructuredGrid\"" "$work/c.vtu"'
 check "the report is JSON with counters, plan and solver" \
   "python3 -c 'import json,sys; r=json.load(open(sys.argv[1])); assert r[\"counters\"][\"solves\"]==1 and r[\"tasks\"][0][\"solver\"][\"converged\"] and r[\"plan\"][\"particles\"]==441' '$work/c.json'"
+# A scene on a VTU cloud (the one just written) with interpolation at the points of a CSV.
+printf 'id,x,y\n0,0.3,0.4\n1,0.5,0.5\n' > "$work/pts.csv"
+cat > "$work/vtu_scene.json" <<EOF
+{ "dim": 2, "cloud": { "source": "file", "file": "c.vtu", "spacing": 0.05, "h_ratio": 1.2 },
+  "fields": { "w": "x*x + y*y" },
+  "tasks": [ { "type": "laplacian", "field": "w", "exact": "4", "norms": ["max_abs"] },
+             { "type": "interpolate", "name": "at", "field": "w", "points": { "file": "pts.csv" },
+               "exact": "x*x + y*y", "norms": ["max_abs"] } ],
+  "outputs": { "csv": "$work/vtu_out.csv" } }
+EOF
+expect 0 "run a scene on a VTU cloud with CSV points" -- "$exe" run "$work/vtu_scene.json"
+contains out "441 particles" "the VTU cloud has the written particles"
+check "interpolation values written beside outputs.csv" '[ "$(wc -l < "$work/vtu_out_at.csv")" -eq 3 ]'
+printf 'x,y\n0.3,abc\n' > "$work/pts.csv"
+expect 2 "run: a bad points file" -- "$exe" run "$work/vtu_scene.json"
+contains err "pts.csv:2: column y" "the points error names file, line and column"
 expect 3 "run: a solve that does not converge" -- "$exe" run "$scenes/qsfdi_test_c.json" \
   cloud.spacing=0.05 tasks.0.max_iter=2 "outputs.report=$work/c2.json" "outputs.vtu=$work/c2.vtu"
 contains err "iteration limit" "run says why the solve failed"

@@ -499,6 +499,558 @@ static void test_failures(void)
     pst_cloud_destroy(c);
 }
 
+/* ---- reading (pst_cloud_read_vtu) -------------------------------------------------------- */
+
+static int same_bits(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* The cloud read back against the one written: particle ids[i] of `r` is particle i of `c`
+ * (the file is in input order), every value bit for bit. */
+static void check_same_cloud(pst_cloud *c, pst_cloud *r)
+{
+    CHECK(r != NULL);
+    if (!r)
+        return;
+    size_t n = pst_cloud_size(c);
+    int dim = pst_cloud_dim(c), mob = pst_cloud_mobility_ncomp(c);
+    CHECK_INT(pst_cloud_size(r), n);
+    CHECK_INT(pst_cloud_dim(r), dim);
+    CHECK_INT(pst_cloud_mobility_ncomp(r), mob);
+    CHECK_INT(pst_cloud_nfields(r), pst_cloud_nfields(c));
+    CHECK_INT(pst_cloud_h_is_uniform(r), pst_cloud_h_is_uniform(c));
+    if (pst_cloud_size(r) != n || pst_cloud_dim(r) != dim || pst_cloud_mobility_ncomp(r) != mob ||
+        pst_cloud_nfields(r) != pst_cloud_nfields(c))
+        return;
+    for (size_t k = 0; k < pst_cloud_nfields(c); ++k)
+        CHECK(!strcmp(pst_cloud_field_name(r, k), pst_cloud_field_name(c, k)));
+    size_t bad = 0;
+    for (size_t i = 0; i < n; ++i) {
+        size_t j = (size_t)pst_cloud_ids(c)[i];
+        bad += pst_cloud_ids(r)[j] != (int64_t)j;
+        for (int d = 0; d < dim; ++d) {
+            bad += !same_bits(pst_cloud_coord(r, d)[j], pst_cloud_coord(c, d)[i]);
+            bad += !same_bits(pst_cloud_normal(r, d)[j], pst_cloud_normal(c, d)[i]);
+        }
+        bad += !same_bits(pst_cloud_volume(r)[j], pst_cloud_volume(c)[i]);
+        const double *hc = pst_cloud_h_array(c), *hr = pst_cloud_h_array(r);
+        bad += !same_bits(hr ? hr[j] : pst_cloud_h_uniform(r), hc ? hc[i] : pst_cloud_h_uniform(c));
+        bad += pst_cloud_kinds(r)[j] != pst_cloud_kinds(c)[i];
+        for (int m = 0; m < mob; ++m)
+            bad += !same_bits(pst_cloud_mobility(r, m)[j], pst_cloud_mobility(c, m)[i]);
+        for (size_t k = 0; k < pst_cloud_nfields(c); ++k)
+            bad += !same_bits(pst_cloud_field(r, k)[j], pst_cloud_field(c, k)[i]);
+    }
+    CHECK_INT(bad, 0);
+}
+
+static unsigned char *slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    long l = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *b = malloc((size_t)l + 1);
+    *len = b ? fread(b, 1, (size_t)l, f) : 0;
+    fclose(f);
+    return b;
+}
+
+static void spit(const char *path, const void *buf, size_t len)
+{
+    FILE *f = fopen(path, "wb");
+    CHECK(f != NULL);
+    if (!f)
+        return;
+    CHECK_INT(fwrite(buf, 1, len, f), len);
+    fclose(f);
+}
+
+/* Write and read back: every layout, bit for bit, with the input order restored. */
+static void test_read_roundtrip(void)
+{
+    static const int cases[][4] = {/* dim, mobility, per-particle h, status */
+                                   {2, 2, 1, 1}, {2, 1, 0, 0}, {2, 0, 1, 0}, {3, 3, 1, 1},
+                                   {3, 1, 0, 1}, {3, 0, 0, 0}};
+    char err[PST_ERRLEN] = "";
+    for (size_t t = 0; t < sizeof cases / sizeof *cases; ++t) {
+        pst_cloud *c = make_cloud(cases[t][0], cases[t][1], cases[t][2]), *r = NULL;
+        uint8_t *status = cases[t][3] ? make_status(c) : NULL;
+        CHECK_INT(pst_cloud_write_vtu(c, path_of("rt.vtu"), status, err), PST_OK);
+        CHECK_INT(pst_cloud_read_vtu(&r, path_of("rt.vtu"), err), PST_OK);
+        check_same_cloud(c, r);
+        pst_cloud_destroy(r);
+        free(status);
+        pst_cloud_destroy(c);
+    }
+    /* no optional array at all: kind interior, normals 0, no mobility, no fields */
+    pst_cloud *c, *r = NULL;
+    CHECK_INT(pst_cloud_create(&c, 3, 4), PST_OK);
+    for (size_t i = 0; i < 4; ++i)
+        for (int d = 0; d < 3; ++d)
+            pst_cloud_coord(c, d)[i] = (double)((i >> d) & 1) + 0.5 * (double)d;
+    CHECK_INT(pst_cloud_write_vtu(c, path_of("plain.vtu"), NULL, err), PST_OK);
+    CHECK_INT(pst_cloud_read_vtu(&r, path_of("plain.vtu"), err), PST_OK);
+    check_same_cloud(c, r);
+    pst_cloud_destroy(r);
+    pst_cloud_destroy(c);
+
+    /* an empty cloud reads back empty (2D: no z differs from 0) */
+    CHECK_INT(pst_cloud_create(&c, 3, 0), PST_OK);
+    CHECK_INT(pst_cloud_write_vtu(c, path_of("empty.vtu"), NULL, err), PST_OK);
+    CHECK_INT(pst_cloud_read_vtu(&r, path_of("empty.vtu"), err), PST_OK);
+    CHECK(r && pst_cloud_size(r) == 0 && pst_cloud_dim(r) == 2);
+    pst_cloud_destroy(r);
+    pst_cloud_destroy(c);
+
+    /* the file's ids decide the order: reverse them in the file, and row k becomes particle
+     * n-1-k (the particle with id k in the written cloud) */
+    c = make_cloud(2, 2, 1);
+    CHECK_INT(pst_cloud_write_vtu(c, path_of("ids.vtu"), NULL, err), PST_OK);
+    vtu_file v;
+    CHECK(parse(&v, path_of("ids.vtu")));
+    size_t n = pst_cloud_size(c);
+    if (v.ok) {
+        unsigned char *id = v.buf + (v.data - v.buf) + find(&v, "id")->offset + 8;
+        for (size_t k = 0; k < n; ++k)
+            for (int b = 0; b < 8; ++b)
+                id[8 * k + (size_t)b] = (unsigned char)((uint64_t)(n - 1 - k) >> (8 * b));
+        spit(path_of("ids.vtu"), v.buf, v.len);
+    }
+    free(v.buf);
+    CHECK_INT(pst_cloud_read_vtu(&r, path_of("ids.vtu"), err), PST_OK);
+    if (r) {
+        size_t bad = 0;
+        for (size_t i = 0; i < n; ++i) {
+            size_t j = n - 1 - (size_t)pst_cloud_ids(c)[i];
+            bad += !same_bits(pst_cloud_coord(r, 0)[j], pst_cloud_coord(c, 0)[i]);
+            bad += !same_bits(pst_cloud_coord(r, 1)[j], pst_cloud_coord(c, 1)[i]);
+            bad += !same_bits(pst_cloud_h_array(r)[j], pst_cloud_h_array(c)[i]);
+            bad += !same_bits(pst_cloud_mobility(r, 1)[j], pst_cloud_mobility(c, 1)[i]);
+            bad += !same_bits(pst_cloud_field(r, 0)[j], pst_cloud_field(c, 0)[i]);
+            bad += pst_cloud_ids(r)[j] != (int64_t)j;
+        }
+        CHECK_INT(bad, 0);
+    }
+    pst_cloud_destroy(r);
+    pst_cloud_destroy(c);
+}
+
+/* A hand-written ascii file: 2D (every z is 0), ids 2, 0, 1, Int32 kinds, Float32 h, a
+ * comment, single quotes, a hex float, an ignored status and an ignored Cells section. */
+static const char ascii_vtu[] =
+    "<?xml version=\"1.0\"?>\n"
+    "<!-- written by hand -->\n"
+    "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+    "  <UnstructuredGrid>\n"
+    "    <Piece NumberOfPoints=\"3\" NumberOfCells=\"0\">\n"
+    "      <PointData Scalars=\"V\">\n"
+    "        <DataArray type=\"Float64\" Name=\"V\" format=\"ascii\">0.5 0.25 1e-3</DataArray>\n"
+    "        <DataArray type=\"Float32\" Name=\"h\" format=\"ascii\">0.5 0.5 0.5</DataArray>\n"
+    "        <DataArray type=\"Int32\" Name=\"kind\" format=\"ascii\">0 2 1</DataArray>\n"
+    "        <DataArray type=\"Int64\" Name=\"id\" format=\"ascii\">2 0 1</DataArray>\n"
+    "        <DataArray type=\"Float64\" Name=\"normal\" NumberOfComponents=\"3\" "
+    "format=\"ascii\">0 0 0  1 0 0  0 -1 7</DataArray>\n"
+    "        <DataArray type=\"Float64\" Name=\"M\" NumberOfComponents=\"3\" "
+    "format=\"ascii\">1 2 3 4 5 6 7 8 9</DataArray>\n"
+    "        <DataArray type=\"UInt8\" Name=\"status\" format=\"ascii\">9 9 9</DataArray>\n"
+    "        <DataArray type=\"Float64\" Name=\"T\" format='ascii'>\n"
+    "          -1.5\n"
+    "          2.5 0x1p-3\n"
+    "        </DataArray>\n"
+    "      </PointData>\n"
+    "      <Points>\n"
+    "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n"
+    "          0 0 0 1 0 0 0 1 0\n"
+    "          <InformationKey name=\"L2_NORM_RANGE\" location=\"vtkDataArray\" length=\"2\">\n"
+    "            <Value index=\"0\">0</Value><Value index=\"1\">1</Value>\n"
+    "          </InformationKey>\n"
+    "        </DataArray>\n"
+    "      </Points>\n"
+    "      <Cells><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+    "</DataArray></Cells>\n"
+    "    </Piece>\n"
+    "  </UnstructuredGrid>\n"
+    "</VTKFile>\n";
+
+/* The ascii file with the first `from` replaced by `to`, written as `name`. */
+static const char *ascii_variant(const char *name, const char *from, const char *to)
+{
+    static char buf[sizeof ascii_vtu + 512];
+    const char *at = from ? strstr(ascii_vtu, from) : NULL;
+    CHECK(!from || at);
+    if (!at)
+        snprintf(buf, sizeof buf, "%s", ascii_vtu);
+    else
+        snprintf(buf, sizeof buf, "%.*s%s%s", (int)(at - ascii_vtu), ascii_vtu, to,
+                 at + strlen(from));
+    spit(path_of(name), buf, strlen(buf));
+    return path_of(name);
+}
+
+static void b64_encode(const unsigned char *in, size_t len, char *out)
+{
+    static const char tab[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    size_t o = 0;
+    for (size_t i = 0; i < len; i += 3) {
+        unsigned v = (unsigned)in[i] << 16 | (i + 1 < len ? (unsigned)in[i + 1] << 8 : 0) |
+                     (i + 2 < len ? in[i + 2] : 0);
+        out[o++] = tab[v >> 18 & 63];
+        out[o++] = tab[v >> 12 & 63];
+        out[o++] = i + 1 < len ? tab[v >> 6 & 63] : '=';
+        out[o++] = i + 2 < len ? tab[v & 63] : '=';
+    }
+    out[o] = '\0';
+}
+
+/* count values of `size` bytes (little- or big-endian) after a byte-count header of hs bytes */
+static size_t block(unsigned char *out, int hs, int big, const void *vals, size_t count,
+                    int size)
+{
+    uint64_t bytes = (uint64_t)count * (uint64_t)size;
+    for (int b = 0; b < hs; ++b)
+        out[big ? hs - 1 - b : b] = (unsigned char)(bytes >> (8 * b));
+    const unsigned char *v = vals;
+    for (size_t k = 0; k < count; ++k)
+        for (int b = 0; b < size; ++b) {
+            /* the host is little-endian (x86-64, aarch64) */
+            out[hs + k * (size_t)size + (size_t)b] =
+                v[k * (size_t)size + (size_t)(big ? size - 1 - b : b)];
+        }
+    return (size_t)hs + (size_t)bytes;
+}
+
+static void test_read_formats(void)
+{
+    char err[PST_ERRLEN] = "";
+    pst_cloud *r = NULL;
+
+    /* ascii */
+    CHECK_INT(pst_cloud_read_vtu(&r, ascii_variant("ascii.vtu", NULL, NULL), err), PST_OK);
+    CHECK(r != NULL);
+    if (r) {
+        CHECK_INT(pst_cloud_size(r), 3);
+        CHECK_INT(pst_cloud_dim(r), 2);
+        CHECK(pst_cloud_h_is_uniform(r) && pst_cloud_h_uniform(r) == 0.5);
+        CHECK_INT(pst_cloud_mobility_ncomp(r), 2);
+        CHECK_INT(pst_cloud_nfields(r), 1);
+        CHECK(!strcmp(pst_cloud_field_name(r, 0), "T"));
+        /* particle id[k] = row k: rows 0, 1, 2 are particles 2, 0, 1 */
+        static const double x[3] = {1, 0, 0}, y[3] = {0, 1, 0}, V[3] = {0.25, 1e-3, 0.5},
+                            ny[3] = {0, -1, 0}, mx[3] = {4, 7, 1}, my[3] = {5, 8, 2},
+                            T[3] = {2.5, 0.125, -1.5};
+        static const int kind[3] = {2, 1, 0};
+        for (size_t i = 0; i < 3; ++i) {
+            CHECK(pst_cloud_coord(r, 0)[i] == x[i] && pst_cloud_coord(r, 1)[i] == y[i]);
+            CHECK(pst_cloud_volume(r)[i] == V[i]);
+            CHECK_INT(pst_cloud_kinds(r)[i], kind[i]);
+            CHECK(pst_cloud_normal(r, 1)[i] == ny[i]);
+            CHECK(pst_cloud_mobility(r, 0)[i] == mx[i] && pst_cloud_mobility(r, 1)[i] == my[i]);
+            CHECK(pst_cloud_field(r, 0)[i] == T[i]);
+            CHECK_INT(pst_cloud_ids(r)[i], i);
+        }
+        CHECK_INT(pst_cloud_validate(r), PST_OK);
+    }
+    pst_cloud_destroy(r);
+
+    /* inline base64 ("binary"), UInt32 headers, Float32 points, 3D, a scalar mobility */
+    {
+        const float pts[9] = {0, 0, 0, 1, 0, 0.5f, 0, 1, -0.25f};
+        const double V[3] = {1, 2, 3}, h[3] = {0.1, 0.2, 0.3}, m[3] = {4, 5, 6};
+        const uint8_t kind[3] = {1, 0, 2};
+        unsigned char raw[128];
+        char b64[5][200];
+        block(raw, 4, 0, pts, 9, 4);
+        b64_encode(raw, 4 + 36, b64[0]);
+        block(raw, 4, 0, V, 3, 8);
+        b64_encode(raw, 4 + 24, b64[1]);
+        block(raw, 4, 0, h, 3, 8);
+        b64_encode(raw, 4 + 24, b64[2]);
+        block(raw, 4, 0, m, 3, 8);
+        b64_encode(raw, 4 + 24, b64[3]);
+        block(raw, 4, 0, kind, 3, 1);
+        b64_encode(raw, 4 + 3, b64[4]);
+        char file[2048];
+        snprintf(file, sizeof file,
+                 "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+                 "header_type=\"UInt32\"><UnstructuredGrid><Piece NumberOfPoints=\"3\">"
+                 "<PointData>"
+                 "<DataArray type=\"Float64\" Name=\"V\" format=\"binary\">\n  %s\n</DataArray>"
+                 "<DataArray type=\"Float64\" Name=\"h\" format=\"binary\">%s</DataArray>"
+                 "<DataArray type=\"Float64\" Name=\"m\" format=\"binary\">%s</DataArray>"
+                 "<DataArray type=\"UInt8\" Name=\"kind\" format=\"binary\">%s</DataArray>"
+                 "</PointData><Points>"
+                 "<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"binary\">%s"
+                 "</DataArray></Points></Piece></UnstructuredGrid></VTKFile>\n",
+                 b64[1], b64[2], b64[3], b64[4], b64[0]);
+        spit(path_of("b64.vtu"), file, strlen(file));
+        CHECK_INT(pst_cloud_read_vtu(&r, path_of("b64.vtu"), err), PST_OK);
+        CHECK(r && pst_cloud_dim(r) == 3 && pst_cloud_size(r) == 3);
+        for (size_t i = 0; r && i < 3; ++i) {
+            for (int d = 0; d < 3; ++d)
+                CHECK(pst_cloud_coord(r, d)[i] == (double)pts[3 * i + (size_t)d]);
+            CHECK(pst_cloud_volume(r)[i] == V[i] && pst_cloud_h_array(r)[i] == h[i]);
+            CHECK(pst_cloud_mobility(r, 0)[i] == m[i]);
+            CHECK_INT(pst_cloud_kinds(r)[i], kind[i]);
+        }
+        pst_cloud_destroy(r);
+
+        /* the same data as a PolyData with Verts, appended raw, BigEndian, UInt32 headers */
+        unsigned char app[512];
+        size_t off[4], at = 0;
+        off[0] = at;
+        at += block(app + at, 4, 1, V, 3, 8);
+        off[1] = at;
+        at += block(app + at, 4, 1, h, 3, 8);
+        off[2] = at;
+        at += block(app + at, 4, 1, pts, 9, 4);
+        off[3] = at;
+        const int32_t conn[3] = {0, 1, 2};
+        at += block(app + at, 4, 1, conn, 3, 4);
+        int head = snprintf(
+            file, sizeof file,
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" "
+            "byte_order=\"BigEndian\">\n<PolyData><Piece NumberOfPoints=\"3\" NumberOfVerts=\"3\">"
+            "<PointData><DataArray type=\"Float64\" Name=\"V\" format=\"appended\" "
+            "offset=\"%zu\"/><DataArray type=\"Float64\" Name=\"h\" format=\"appended\" "
+            "offset=\"%zu\"/></PointData><Points><DataArray type=\"Float32\" "
+            "NumberOfComponents=\"3\" format=\"appended\" offset=\"%zu\"/></Points>"
+            "<Verts><DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" "
+            "offset=\"%zu\"/></Verts></Piece></PolyData>\n"
+            "<AppendedData encoding=\"raw\">\n _",
+            off[0], off[1], off[2], off[3]);
+        memcpy(file + head, app, at);
+        static const char tail[] = "\n</AppendedData>\n</VTKFile>\n";
+        memcpy(file + head + at, tail, sizeof tail - 1);
+        spit(path_of("poly.vtp"), file, (size_t)head + at + sizeof tail - 1);
+        CHECK_INT(pst_cloud_read_vtu(&r, path_of("poly.vtp"), err), PST_OK);
+        if (*err && !r)
+            fprintf(stderr, "  %s\n", err);
+        CHECK(r && pst_cloud_dim(r) == 3 && pst_cloud_size(r) == 3);
+        for (size_t i = 0; r && i < 3; ++i) {
+            CHECK(pst_cloud_coord(r, 2)[i] == (double)pts[3 * i + 2]);
+            CHECK(pst_cloud_volume(r)[i] == V[i] && pst_cloud_h_array(r)[i] == h[i]);
+            CHECK_INT(pst_cloud_kinds(r)[i], PST_INTERIOR);
+        }
+        pst_cloud_destroy(r);
+    }
+}
+
+/* One failing read: the status, *out NULL, the path and every `want` in the message. */
+static void expect_fail(const char *path, int status, const char *want1, const char *want2)
+{
+    char err[PST_ERRLEN] = "";
+    pst_cloud *r = (pst_cloud *)&err; /* must be reset to NULL */
+    int st = pst_cloud_read_vtu(&r, path, err);
+    CHECK_INT(st, status);
+    CHECK(r == NULL);
+    int ok = strncmp(err, path, strlen(path)) == 0 && (!want1 || strstr(err, want1)) &&
+             (!want2 || strstr(err, want2));
+    CHECK(ok);
+    if (!ok)
+        fprintf(stderr, "  message: %s\n  wanted:  '%s' and '%s'\n", err, want1 ? want1 : "",
+                want2 ? want2 : "");
+    if (st == PST_OK)
+        pst_cloud_destroy(r);
+}
+
+static void test_read_errors(void)
+{
+    char err[PST_ERRLEN] = "";
+    expect_fail(path_of("no_such.vtu"), PST_EIO, "cannot open", NULL);
+    /* structure */
+    expect_fail(ascii_variant("e.vtu", "byte_order", "compressor=\"vtkZLibDataCompressor\" bo"),
+                PST_EINPUT, ":3:1: compressed VTU is not supported: write it uncompressed (e.g. "
+                            "ParaView: Save Data, uncheck compression)", NULL);
+    expect_fail(ascii_variant("e.vtu", "\"UnstructuredGrid\"", "\"ImageData\""), PST_EINPUT,
+                ":3:1: unsupported dataset type \"ImageData\"", NULL);
+    expect_fail(ascii_variant("e.vtu", "</Piece>", "</Piece><Piece NumberOfPoints=\"1\"/>"),
+                PST_EINPUT, "more than one Piece", NULL);
+    expect_fail(ascii_variant("e.vtu", "</PointData>", "</Pointdata>"), PST_EINPUT,
+                ":18:7: malformed XML: unexpected end tag </Pointdata>", NULL);
+    expect_fail(ascii_variant("e.vtu", "</VTKFile>\n", ""), PST_EINPUT,
+                ":3:1: truncated file: <VTKFile> is not closed", NULL);
+    expect_fail(ascii_variant("e.vtu", "format=\"ascii\">0.5", "format=\"ascii>0.5"),
+                PST_EINPUT, ":7:", "attribute");
+    expect_fail(ascii_variant("e.vtu", "type=\"Int32\"", "type=\"String\""), PST_EINPUT,
+                ":9:9: array 'kind': unsupported type \"String\"", NULL);
+    expect_fail(ascii_variant("e.vtu", "Name=\"h\"", "Name=\"hh\""), PST_EINPUT,
+                "missing PointData array 'h'", NULL);
+    expect_fail(ascii_variant("e.vtu", "Name=\"V\"", "Name=\"W\""), PST_EINPUT,
+                "missing PointData array 'V'", NULL);
+    expect_fail(ascii_variant("e.vtu", "Name=\"T\"", "Name=\"T-1\""), PST_EINPUT,
+                ":14:9: PointData array 'T-1' cannot be a field", NULL);
+    expect_fail(ascii_variant("e.vtu", "Name=\"T\"", "Name=\"nx\""), PST_EINPUT,
+                "array 'nx' cannot be a field", NULL);
+    expect_fail(ascii_variant("e.vtu", "Name=\"T\"", "Name=\"V\""), PST_EINPUT,
+                "two PointData arrays are named 'V'", NULL);
+    expect_fail(ascii_variant("e.vtu", "Name=\"T\"", "Name=\"T\" NumberOfComponents=\"3\""),
+                PST_EINPUT, "array 'T' has 3 components: only 'normal' and 'M'", NULL);
+    expect_fail(ascii_variant("e.vtu", "Name=\"status\"", "Name=\"m\""), PST_EINPUT,
+                "both 'm' and 'M'", NULL);
+    expect_fail(ascii_variant("e.vtu", "0.5 0.25 1e-3", "0.5 0.25"), PST_EINPUT,
+                ":7:9: array 'V' holds 2 values, expected 3", NULL);
+    expect_fail(ascii_variant("e.vtu", "0.5 0.25 1e-3", "0.5 0.25 1e-3x"), PST_EINPUT,
+                "array 'V': value 3: cannot parse '1e-3x'", NULL);
+    /* values: named by array and point (the file's row) */
+    expect_fail(ascii_variant("e.vtu", "0.5 0.25 1e-3", "0.5 nan 1e-3"), PST_EINPUT,
+                "array 'V', point 1: value nan is not finite", NULL);
+    expect_fail(ascii_variant("e.vtu", "0 1 0\n", "0 inf 0\n"), PST_EINPUT,
+                "array 'Points', point 2, component 1: value inf is not finite", NULL);
+    expect_fail(ascii_variant("e.vtu", "0.5 0.25 1e-3", "0.5 0.25 -1e-3"), PST_EINPUT,
+                "array 'V', point 2: volume V = -0.001 must be > 0", NULL);
+    expect_fail(ascii_variant("e.vtu", "0.5 0.5 0.5", "0.5 0 0.5"), PST_EINPUT,
+                "array 'h', point 1: smoothing length h = 0 must be > 0", NULL);
+    expect_fail(ascii_variant("e.vtu", "0 2 1<", "0 3 1<"), PST_EINPUT,
+                "array 'kind', point 1: unknown kind 3", NULL);
+    expect_fail(ascii_variant("e.vtu", "1 2 3 4 5 6", "1 2 3 4 -5 6"), PST_EINPUT,
+                "array 'M', point 1: mobility -5 must be > 0", NULL);
+    expect_fail(ascii_variant("e.vtu", "2 0 1<", "2 0 0<"), PST_EINPUT,
+                "array 'id', point 2: id 0 also at point 1", "permutation");
+    expect_fail(ascii_variant("e.vtu", "2 0 1<", "2 0 3<"), PST_EINPUT,
+                "array 'id', point 2: id 3 is not in 0..2", NULL);
+    expect_fail(ascii_variant("e.vtu", "0 0 0 1 0 0 0 1 0", "0 0 0 1 0 0 1 0 0"), PST_EINPUT,
+                "array 'Points', point 2: duplicate particle: same coordinates as point 1",
+                NULL);
+
+    /* binary appended data: byte counts, offsets and truncation */
+    pst_cloud *c = make_cloud(2, 1, 1);
+    CHECK_INT(pst_cloud_write_vtu(c, path_of("w.vtu"), NULL, err), PST_OK);
+    pst_cloud_destroy(c);
+    vtu_file v;
+    CHECK(parse(&v, path_of("w.vtu")));
+    if (v.ok) {
+        size_t head = (size_t)(v.data - v.buf);
+        const parsed_array *h = find(&v, "h");
+        spit(path_of("trunc.vtu"), v.buf, head + h->offset + 20); /* cut inside h */
+        expect_fail(path_of("trunc.vtu"), PST_EINPUT, "truncated file: no </AppendedData>",
+                    NULL);
+        /* cut inside the Points with the closing tags kept: the Points run past the block,
+         * the Cells start beyond it (the Points are decoded first) */
+        const parsed_array *pts = find(&v, "Points");
+        size_t cut = head + pts->offset + 20, rest = strlen("\n  </AppendedData>\n</VTKFile>\n");
+        unsigned char *b = malloc(cut + rest);
+        memcpy(b, v.buf, cut);
+        memcpy(b + cut, v.buf + v.len - rest, rest);
+        spit(path_of("trunc.vtu"), b, cut + rest);
+        free(b);
+        char want[96];
+        snprintf(want, sizeof want, "appended data offset %llu (array 'Points'): truncated",
+                 (unsigned long long)pts->offset);
+        expect_fail(path_of("trunc.vtu"), PST_EINPUT, want, "only 15 left");
+        snprintf(want, sizeof want, "appended data offset %llu (array 'h')",
+                 (unsigned long long)h->offset);
+        /* a wrong byte count */
+        v.buf[head + h->offset] ^= 8;
+        spit(path_of("count.vtu"), v.buf, v.len);
+        expect_fail(path_of("count.vtu"), PST_EINPUT, want, "byte count");
+        v.buf[head + h->offset] ^= 8;
+        /* a NaN in the data */
+        memset(v.buf + head + h->offset + 8 + 8 * 5, 0xFF, 8);
+        spit(path_of("nan.vtu"), v.buf, v.len);
+        expect_fail(path_of("nan.vtu"), PST_EINPUT, "array 'h', point 5: value ",
+                    "nan is not finite");
+    }
+    free(v.buf);
+    /* invalid base64, and a block shorter than its header says */
+    expect_fail(ascii_variant("e.vtu", "Name=\"V\" format=\"ascii\">0.5 0.25 1e-3",
+                              "Name=\"V\" format=\"binary\">GAAAAA*AAAAAAA"),
+                PST_EINPUT, ":7:9: array 'V': invalid base64 at character 7", NULL);
+    expect_fail(ascii_variant("e.vtu", "Name=\"V\" format=\"ascii\">0.5 0.25 1e-3",
+                              "Name=\"V\" format=\"binary\">GAAAAAAAAAAAAOA/"),
+                PST_EINPUT, "array 'V': binary data holds 8 bytes after the header, the header "
+                            "says 24", NULL);
+}
+
+/* A deterministic mutation fuzz: byte flips, bit flips, structural characters, truncations and
+ * cut-out ranges of valid files. Every read returns PST_OK with a valid cloud or PST_EINPUT
+ * naming the file; the sanitizer build catches any out-of-bounds access or leak. */
+static void fuzz_file(const char *name, int rounds, uint64_t seed)
+{
+    size_t len = 0;
+    unsigned char *orig = slurp(path_of(name), &len), *buf = malloc(len + 16);
+    CHECK(orig && buf && len > 0);
+    if (!orig || !buf || !len) {
+        free(orig);
+        free(buf);
+        return;
+    }
+    /* where the XML ends (the interesting part): before '_' or the whole file */
+    const unsigned char *us = memchr(orig, '_', len);
+    size_t xml = us ? (size_t)(us - orig) + 1 : len;
+    uint64_t s = seed;
+#define RND() (s = s * 6364136223846793005ULL + 1442695040888963407ULL, s >> 33)
+    static const char special[] = "<>/=\"' _0129-.\n&!?xe+";
+    int ok = 0, input = 0, other = 0;
+    const char *p = path_of("fuzz.vtu");
+    for (int t = 0; t < rounds; ++t) {
+        memcpy(buf, orig, len);
+        size_t n = len;
+        int nmut = 1 + (int)(RND() % 3);
+        for (int m = 0; m < nmut && n > 0; ++m) {
+            size_t at = RND() % 2 ? RND() % (xml < n ? xml : n) : RND() % n;
+            switch (RND() % 6) {
+            case 0:
+                buf[at] = (unsigned char)RND();
+                break;
+            case 1:
+                buf[at] ^= (unsigned char)(1u << (RND() % 8));
+                break;
+            case 2:
+                buf[at] = (unsigned char)special[RND() % (sizeof special - 1)];
+                break;
+            case 3:
+                n = at; /* truncate */
+                break;
+            case 4: { /* cut out a range */
+                size_t k = 1 + RND() % 16;
+                if (at + k > n)
+                    k = n - at;
+                memmove(buf + at, buf + at + k, n - at - k);
+                n -= k;
+                break;
+            }
+            default: /* a digit run: a bigger count or offset */
+                buf[at] = (unsigned char)('0' + RND() % 10);
+                break;
+            }
+        }
+        spit(p, buf, n);
+        char err[PST_ERRLEN] = "";
+        pst_cloud *r = NULL;
+        int st = pst_cloud_read_vtu(&r, p, err);
+        if (st == PST_OK) {
+            ++ok;
+            other += r == NULL || pst_cloud_validate(r) != PST_OK;
+        } else {
+            ++input;
+            other += st != PST_EINPUT || r != NULL || strncmp(err, p, strlen(p)) != 0;
+        }
+        pst_cloud_destroy(r);
+    }
+#undef RND
+    CHECK_INT(other, 0);
+    CHECK(input > rounds / 4); /* most mutations are caught */
+    printf("  fuzz %s: %d mutations, %d read, %d refused\n", name, rounds, ok, input);
+    free(orig);
+    free(buf);
+}
+
+static void test_read_fuzz(void)
+{
+    char err[PST_ERRLEN] = "";
+    pst_cloud *c = make_cloud(2, 2, 1);
+    uint8_t *status = make_status(c);
+    CHECK_INT(pst_cloud_write_vtu(c, path_of("fz_raw.vtu"), status, err), PST_OK);
+    free(status);
+    pst_cloud_destroy(c);
+    fuzz_file("fz_raw.vtu", 3000, 1);
+    ascii_variant("fz_ascii.vtu", NULL, NULL);
+    fuzz_file("fz_ascii.vtu", 1500, 2);
+    fuzz_file("b64.vtu", 1000, 3);
+    fuzz_file("poly.vtp", 1000, 4);
+}
+
 static void cleanup(void)
 {
     DIR *d = opendir(dir);
@@ -524,6 +1076,10 @@ int main(void)
     test_layouts();
     test_exact_bytes();
     test_failures();
+    test_read_roundtrip();
+    test_read_formats();
+    test_read_errors();
+    test_read_fuzz();
     cleanup();
     return check_summary("test_vtu");
 }

@@ -4,6 +4,11 @@ Debian package python3-vtk9): tests/vtu_dump writes 2D and 3D clouds whose value
 functions of position (see vtu_dump.c); this script reads each file and checks the number of
 points and cells, the array names, types and component counts in order, and every value.
 It also checks that the file has the same bytes for 1 and 3 OpenMP threads.
+The other direction: VTK's vtkXMLUnstructuredGridWriter writes 2D and 3D clouds (V, h as
+Float32, kind, a permuted id, normal and a field u) uncompressed in appended raw and base64,
+inline binary (base64) and ascii, with UInt32 and UInt64 headers; `vtu_dump --read` reads each
+with pst_cloud_read_vtu and prints the cloud, which must match (exactly, except ascii). A
+zlib-compressed file must be refused with the advice to write it uncompressed.
 
 Usage: vtu_roundtrip.py VTU_DUMP WORKDIR
 """
@@ -140,6 +145,117 @@ def check_cloud(exe, dim, workdir):
         print("%s: %d points, arrays %s: ok" % (tag, n, ",".join(names)))
 
 
+# ---- the other direction: VTK writes, pst_cloud_read_vtu reads (vtu_dump --read) ----------
+
+def vtk_cloud(dim):
+    """A small cloud as a vtkUnstructuredGrid (one VTK_VERTEX per point) with V (Float64),
+    h (Float32), kind (UInt8), id (a permutation, vtkIdType), normal, and a field u; returns the
+    grid and the expected rows of vtu_dump --read (particle id[k] = file row k)."""
+    side = 5
+    n = side ** dim
+    pts = vtk.vtkPoints()
+    pts.SetDataTypeToDouble()
+    arrays = {}
+    for name, cls, comps in (("V", vtk.vtkDoubleArray, 1), ("h", vtk.vtkFloatArray, 1),
+                             ("kind", vtk.vtkUnsignedCharArray, 1), ("id", vtk.vtkIdTypeArray, 1),
+                             ("normal", vtk.vtkDoubleArray, 3), ("u", vtk.vtkDoubleArray, 1)):
+        a = cls()
+        a.SetName(name)
+        a.SetNumberOfComponents(comps)
+        arrays[name] = a
+    expect = [None] * n
+    for k in range(n):
+        idx = [(k // side ** d) % side for d in range(dim)]
+        p = [0.25 * i + 0.01 * math.sin(k + d) for d, i in enumerate(idx)]
+        if dim == 2:
+            p.append(0.0)
+        pts.InsertNextPoint(p)
+        pid = (7 * k + 3) % n          # n is not a multiple of 7
+        V = 1.0 / (k + 3)
+        h = 0.5 + k / 64.0             # exact in Float32
+        kind = k % 3
+        nrm = [math.cos(k), math.sin(k), 0.0 if dim == 2 else 0.5]
+        u = math.exp(-k / 7.0)
+        arrays["V"].InsertNextValue(V)
+        arrays["h"].InsertNextValue(h)
+        arrays["kind"].InsertNextValue(kind)
+        arrays["id"].InsertNextValue(pid)
+        arrays["normal"].InsertNextTuple3(*nrm)
+        arrays["u"].InsertNextValue(u)
+        expect[pid] = p[:dim] + [V, h, kind] + nrm[:dim] + [u]
+    grid = vtk.vtkUnstructuredGrid()
+    grid.SetPoints(pts)
+    grid.Allocate(n)
+    for k in range(n):
+        ids = vtk.vtkIdList()
+        ids.InsertNextId(k)
+        grid.InsertNextCell(vtk.VTK_VERTEX, ids)
+    for name in ("V", "h", "kind", "id", "normal", "u"):
+        grid.GetPointData().AddArray(arrays[name])
+    return grid, expect
+
+
+def check_read(exe, dim, workdir):
+    grid, expect = vtk_cloud(dim)
+    modes = (("appended-raw", "raw", 8), ("appended-raw-uint32", "raw", 4),
+             ("appended-base64", "b64", 4), ("binary", "binary", 4), ("binary-uint64", "binary", 8),
+             ("ascii", "ascii", 4))
+    for tag, mode, header in modes:
+        path = os.path.join(workdir, "vtk%dd_%s.vtu" % (dim, tag))
+        w = vtk.vtkXMLUnstructuredGridWriter()
+        w.SetFileName(path)
+        w.SetInputData(grid)
+        w.SetCompressorTypeToNone()
+        w.SetHeaderTypeToUInt64() if header == 8 else w.SetHeaderTypeToUInt32()
+        if mode in ("raw", "b64"):
+            w.SetDataModeToAppended()
+            w.SetEncodeAppendedData(mode == "b64")
+        elif mode == "binary":
+            w.SetDataModeToBinary()
+        else:
+            w.SetDataModeToAscii()
+        check(w.Write() == 1, "%dD %s: VTK could not write %s" % (dim, tag, path))
+        what = "%dD %s" % (dim, tag)
+        res = subprocess.run([exe, "--read", path], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+        check(res.returncode == 0, "%s: vtu_dump --read failed: %s" % (what, res.stderr.strip()))
+        if res.returncode != 0:
+            continue
+        lines = res.stdout.splitlines()
+        n, got_dim = (int(v) for v in lines[0].split(","))
+        check(n == len(expect) and got_dim == dim, "%s: read n=%d dim=%d, expected n=%d dim=%d"
+              % (what, n, got_dim, len(expect), dim))
+        axes = "xyz"[:dim]
+        header_want = ",".join(list(axes) + ["V", "h", "kind"] + ["n" + a for a in axes] + ["u"])
+        check(lines[1] == header_want, "%s: columns %s, expected %s" % (what, lines[1], header_want))
+        # ascii goes through VTK's decimal printing: near; binary modes: exact
+        tol = 1e-6 if mode == "ascii" else 0.0
+        bad = None
+        for i, line in enumerate(lines[2:]):
+            got = [float(v) for v in line.split(",")]
+            want = expect[i] if i < len(expect) else []
+            if len(got) != len(want) or any(abs(g - e) > tol * max(1.0, abs(e))
+                                             for g, e in zip(got, want)):
+                bad = (i, got, want)
+                break
+        check(bad is None and len(lines) == 2 + len(expect),
+              "%s: particle %s: got %s, expected %s" % ((what,) + (bad or ("count", "", ""))))
+        if bad is None:
+            print("%s: VTK wrote, pst_cloud_read_vtu read %d particles: ok" % (what, n))
+    # and a compressed file is refused with the advice
+    path = os.path.join(workdir, "vtk%dd_zlib.vtu" % dim)
+    w = vtk.vtkXMLUnstructuredGridWriter()
+    w.SetFileName(path)
+    w.SetInputData(grid)
+    w.SetDataModeToBinary()
+    w.SetCompressorTypeToZLib()
+    w.Write()
+    res = subprocess.run([exe, "--read", path], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True)
+    check(res.returncode == 1 and "compressed VTU is not supported" in res.stderr,
+          "%dD zlib: expected a refusal, got %d: %s" % (dim, res.returncode, res.stderr.strip()))
+
+
 def main():
     if len(sys.argv) != 3:
         sys.exit("usage: vtu_roundtrip.py VTU_DUMP WORKDIR")
@@ -148,6 +264,8 @@ def main():
     print("VTK %s (%s)" % (vtk.vtkVersion.GetVTKVersion(), sys.executable))
     for dim in (2, 3):
         check_cloud(exe, dim, workdir)
+    for dim in (2, 3):
+        check_read(exe, dim, workdir)
     if failures:
         sys.exit("vtu_roundtrip: %d failure(s)" % len(failures))
     print("vtu_roundtrip: ok")
