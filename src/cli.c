@@ -46,6 +46,8 @@ static void print_help(void)
            "  run [SCENE] [K=V]   run a scene file (default: the built-in scene, the QSFDI\n"
            "                      Laplacian and gradient on a 3D cloud of 10^6 particles);\n"
            "                      --plan prints what it would compute\n"
+           "  sweep SWEEP.json    run a scene over a grid of key values: a CSV row per run\n"
+           "                      and task, a summary with means and convergence slopes\n"
            "  help scene          every scene key: type, default, units, meaning\n"
            "  cloud [OPTIONS]     generate a particle cloud and write it as CSV\n"
            "  neighbours FILE     read a CSV cloud, build its neighbour list, print statistics\n"
@@ -144,6 +146,8 @@ int main(int argc, char **argv)
         rc = CLI_OK;
     } else if (strcmp(args[0], "run") == 0) {
         rc = cli_run(&ctx, nargs - 1, args + 1);
+    } else if (strcmp(args[0], "sweep") == 0) {
+        rc = cli_sweep(&ctx, nargs - 1, args + 1);
     } else if (strcmp(args[0], "cloud") == 0) {
         rc = cli_cloud(&ctx, nargs - 1, args + 1);
     } else if (strcmp(args[0], "neighbours") == 0 || strcmp(args[0], "neighbors") == 0) {

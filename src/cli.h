@@ -46,6 +46,8 @@ int cli_neighbour_report(const cli_ctx *ctx, pst_cloud *c, pst_kernel kernel, do
 
 /* The commands. argv[0] is the first argument after the command name. */
 int cli_run(const cli_ctx *ctx, int argc, char **argv);
+/* `pstencil sweep SWEEP.json [--resume] [--plan]` (docs/sweeps.md). */
+int cli_sweep(const cli_ctx *ctx, int argc, char **argv);
 int cli_cloud(const cli_ctx *ctx, int argc, char **argv);
 int cli_neighbours(const cli_ctx *ctx, int argc, char **argv);
 int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv);

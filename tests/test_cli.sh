@@ -142,6 +142,44 @@ expect 1 "run: unknown option" -- "$exe" run --bogus
 expect 4 "run: a plan that does not fit is refused" -- "$exe" run cloud.spacing=0.0005
 contains err "GB available" "the refusal gives the estimate"
 
+# sweep: a scene over a grid of key values, a CSV row per (run, task), a summary, --resume
+cat > "$work/sw.json" <<SWEEP
+{ "scene": { "dim": 2,
+    "cloud": { "source": "lattice", "spacing": 0.1, "jitter": 0.2, "boundary_layer": true },
+    "fields": { "u": "sin(6*x + 8*y)" },
+    "tasks": [ { "type": "laplacian", "field": "u", "exact": "-100*sin(6*x + 8*y)" } ] },
+  "grid": { "operator.scheme": ["qsfdi", "lpmps"], "cloud.spacing": [0.1, 0.05],
+            "cloud.seed": { "from": 1, "count": 2 } },
+  "output": { "csv": "$work/sw.csv", "summary": "$work/sw.summary.json" } }
+SWEEP
+expect 0 "sweep" -- "$exe" sweep "$work/sw.json"
+contains out "8 combinations, 8 run" "sweep counts its runs"
+check "sweep CSV: header + 8 rows" '[ "$(wc -l < "$work/sw.csv")" -eq 9 ]'
+check "sweep CSV header" \
+  '[ "$(head -n 1 "$work/sw.csv" | cut -d, -f1-5)" = "operator.scheme,cloud.spacing,cloud.seed,dim,particles" ]'
+check "sweep summary: groups, fits, machine" \
+  "python3 -c 'import json,sys; s=json.load(open(sys.argv[1])); assert len(s[\"groups\"])==4 and len(s[\"fits\"])==4 and s[\"machine\"][\"cores\"]>=1' '$work/sw.summary.json'"
+cp "$work/sw.csv" "$work/sw_before.csv"
+expect 0 "sweep --resume" -- "$exe" sweep "$work/sw.json" --resume
+contains out "0 run, 8 kept" "sweep --resume reruns nothing"
+check "sweep --resume keeps the CSV bytes" 'cmp -s "$work/sw.csv" "$work/sw_before.csv"'
+# brookshaw has no gradient: its 4 runs fail, the sweep goes on, exit 16 + 4
+sed -e 's/"lpmps"\]/"lpmps", "brookshaw"]/' -e 's/"type": "laplacian"/"type": "gradient"/' \
+  -e 's/"exact": "-100\*sin(6\*x + 8\*y)"/"exact": ["6*cos(6*x+8*y)", "8*cos(6*x+8*y)"]/' \
+  "$work/sw.json" > "$work/swf.json"
+expect 20 "sweep: 4 failed runs (exit 16 + 4)" -- "$exe" --quiet sweep "$work/swf.json"
+contains err "4 of 12 runs failed" "sweep says how many runs failed"
+check "failed rows in the CSV" '[ "$(grep -c ",failed," "$work/sw.csv")" -eq 4 ]'
+sed 's/"cloud.seed"/"cloud.sed"/' "$work/sw.json" > "$work/swbad.json"
+expect 2 "sweep: bad key" -- "$exe" sweep "$work/swbad.json"
+contains err "swbad.json:6:13: key 'grid.cloud.sed': unknown scene key" "sweep names the bad key"
+expect 2 "sweep: missing file" -- "$exe" sweep "$work/none.json"
+expect 1 "sweep without a file" -- "$exe" sweep
+expect 0 "sweep --help" -- "$exe" sweep --help
+for f in "$scenes"/sweeps/*.json; do
+  expect 0 "sweep --plan $(basename "$f")" -- "$exe" --quiet sweep "$f" --plan
+done
+
 # apply and stencil on a 21x21 lattice on [0,2]^2 (s0 = 0.1, h = 1.2 s0, all interior) with a
 # field u = x^2 + y^2, so that Lu = 4 away from the boundary, and a mobility column k = 1 + x. The centre particle (1,1) is id 220
 # (x runs fastest), a whole 1.0 from the box: beyond any kernel's reach (3h = 0.36).

@@ -1,0 +1,129 @@
+/* `pstencil sweep SWEEP.json [--resume] [--plan]`: run a scene over a grid of key values, one
+ * CSV row per (run, task) and a summary JSON (docs/sweeps.md). The machine (hwloc) and the
+ * compiler flags are probed here, where hwloc and the flags' definition are linked, and handed
+ * to the summary. */
+#include "cli.h"
+#include "sweep.h"
+
+#include <cjson/cJSON.h>
+#include <hwloc.h>
+#include <omp.h>
+#include <stdio.h>
+#include <string.h>
+
+static void sweep_help(void)
+{
+    printf("usage: pstencil sweep SWEEP.json [--resume] [--plan]\n\n"
+           "Run a scene for every combination of the sweep file's grid of key values (the\n"
+           "last key fastest), each run quiet, and write one CSV row per (run, task) after\n"
+           "every run, then a summary JSON: means and standard deviations over the repeat\n"
+           "key (cloud.seed) and convergence slopes against the resolution key\n"
+           "(cloud.spacing). docs/sweeps.md describes the file and the outputs.\n\n"
+           "  --resume    keep the runs of an existing CSV whose rows are ok or not-converged,\n"
+           "              rerun the rest (the CSV's header must be this sweep's)\n"
+           "  --plan      parse and plan every combination, print the count, run nothing\n\n"
+           "exit codes: 0 every run ok (not-converged solves included), 1 usage, 2 bad sweep\n"
+           "file or CSV, 4 a combination's plan does not fit (--plan), 16 + N when N runs\n"
+           "failed (N capped at 100), the CSV and summary written all the same\n");
+}
+
+static void add_cache(cJSON *m, hwloc_topology_t topo, hwloc_obj_type_t type, const char *name)
+{
+    int n = hwloc_get_nbobjs_by_type(topo, type);
+    hwloc_obj_t o = n > 0 ? hwloc_get_obj_by_type(topo, type, 0) : NULL;
+    char key[32];
+    snprintf(key, sizeof key, "%s_bytes", name);
+    if (o)
+        cJSON_AddNumberToObject(m, key, (double)o->attr->cache.size);
+    else
+        cJSON_AddNullToObject(m, key);
+    snprintf(key, sizeof key, "%s_count", name);
+    cJSON_AddNumberToObject(m, key, n > 0 ? n : 0);
+}
+
+/* {"machine": {cores, hardware_threads, l2_bytes, l3_bytes, ..., openmp_threads},
+ *  "compiler_flags": "...", "build_type": "...", "pstencil": "..."} */
+static cJSON *machine_info(void)
+{
+    cJSON *root = cJSON_CreateObject();
+    cJSON *m = cJSON_AddObjectToObject(root, "machine");
+    hwloc_topology_t topo;
+    if (hwloc_topology_init(&topo) == 0 && hwloc_topology_load(topo) == 0) {
+        cJSON_AddNumberToObject(m, "packages", hwloc_get_nbobjs_by_type(topo, HWLOC_OBJ_PACKAGE));
+        cJSON_AddNumberToObject(m, "cores", hwloc_get_nbobjs_by_type(topo, HWLOC_OBJ_CORE));
+        cJSON_AddNumberToObject(m, "hardware_threads",
+                                hwloc_get_nbobjs_by_type(topo, HWLOC_OBJ_PU));
+        add_cache(m, topo, HWLOC_OBJ_L1CACHE, "l1d");
+        add_cache(m, topo, HWLOC_OBJ_L2CACHE, "l2");
+        add_cache(m, topo, HWLOC_OBJ_L3CACHE, "l3");
+        hwloc_topology_destroy(topo);
+    }
+    cJSON_AddNumberToObject(m, "openmp_threads", omp_get_max_threads());
+    cJSON_AddStringToObject(root, "compiler_flags", PSTENCIL_C_FLAGS);
+    cJSON_AddStringToObject(root, "build_type", PSTENCIL_BUILD_TYPE);
+    cJSON_AddStringToObject(root, "pstencil", pst_version());
+    return root;
+}
+
+int cli_sweep(const cli_ctx *ctx, int argc, char **argv)
+{
+    const char *path = NULL;
+    int resume = 0, plan = 0;
+    for (int i = 0; i < argc; ++i) {
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+            sweep_help();
+            return CLI_OK;
+        } else if (strcmp(argv[i], "--resume") == 0) {
+            resume = 1;
+        } else if (strcmp(argv[i], "--plan") == 0) {
+            plan = 1;
+        } else if (argv[i][0] == '-' || path) {
+            fprintf(stderr, "pstencil sweep: unexpected argument '%s'\n"
+                            "Try 'pstencil sweep --help'.\n", argv[i]);
+            return CLI_USAGE;
+        } else {
+            path = argv[i];
+        }
+    }
+    if (!path) {
+        fprintf(stderr, "pstencil sweep: no sweep file\nTry 'pstencil sweep --help'.\n");
+        return CLI_USAGE;
+    }
+    pst_sweep sw;
+    char err[2 * PST_ERRLEN + 1024];
+    int st = pst_sweep_load(&sw, path, err, sizeof err);
+    if (st != PST_OK)
+        return cli_fail(st, "sweep", err);
+    if (plan) {
+        size_t bad = 0;
+        st = pst_sweep_check(&sw, &bad, err, sizeof err);
+        if (!ctx->quiet || st != PST_OK)
+            printf("%s: %zu combinations of %d keys, %zu do not parse or plan\n", path,
+                   sw.ncombos, sw.nkeys, bad);
+        pst_sweep_free(&sw);
+        return st == PST_OK ? CLI_OK : cli_fail(st, "sweep --plan", err);
+    }
+    cJSON *machine = machine_info();
+    pst_sweep_opts o = {.resume = resume, .quiet = ctx->quiet, .machine = machine};
+    pst_sweep_stats stats;
+    st = pst_sweep_run(&sw, &o, &stats, err, sizeof err);
+    cJSON_Delete(machine);
+    if (st != PST_OK) {
+        pst_sweep_free(&sw);
+        return cli_fail(st, "sweep", err);
+    }
+    if (!ctx->quiet) {
+        printf("%s: %zu combinations, %ld run, %ld kept from the CSV, %ld failed, %ld with a "
+               "solve that did not converge\n", path, sw.ncombos, stats.runs, stats.skipped,
+               stats.failed, stats.not_converged);
+        if (stats.dropped)
+            printf("  %ld rows of the old CSV match no combination and were dropped\n",
+                   stats.dropped);
+        printf("  wrote %s (%zu rows) and %s\n", sw.csv, stats.rows, sw.summary);
+    }
+    if (stats.failed)
+        fprintf(stderr, "pstencil: sweep: %ld of %zu runs failed (status failed in %s)\n",
+                stats.failed, sw.ncombos, sw.csv);
+    pst_sweep_free(&sw);
+    return stats.failed ? 16 + (int)(stats.failed < 100 ? stats.failed : 100) : CLI_OK;
+}

@@ -1,0 +1,94 @@
+/* Sweeps (docs/sweeps.md): a scene run over the Cartesian product of lists of key values, one
+ * CSV row per (run, task) written all or nothing after every run, resumable, and a summary
+ * JSON (means, standard deviations, convergence slopes) computed from the CSV alone. */
+#ifndef PSTENCIL_SWEEP_H
+#define PSTENCIL_SWEEP_H
+
+#include <stddef.h>
+
+struct cJSON;
+
+enum { SW_MAX_KEYS = 16, SW_MAX_GRIDS = 16, SW_MAX_OVERRIDES = 64 };
+
+typedef struct {
+    char *path;              /* the sweep file (messages)                                       */
+    char *scene_text;        /* the scene: a file's text, or the inline object's text padded so
+                                that its lines and columns are the sweep file's                */
+    char *scene_path;        /* the name the scene is parsed under (its folder resolves inputs) */
+    int nkeys;
+    char *keys[SW_MAX_KEYS]; /* grid keys, in grid order (CSV columns)                          */
+    int ngrids;              /* "grid" is one object (1) or a list of objects, the union of
+                                their products; every object has the same keys in order        */
+    int nvalues[SW_MAX_GRIDS][SW_MAX_KEYS];
+    char **values[SW_MAX_GRIDS][SW_MAX_KEYS]; /* JSON text of each value                      */
+    int noverrides;
+    char *overrides[SW_MAX_OVERRIDES]; /* fixed "key=json" overrides                           */
+    char *csv, *summary;     /* output paths, relative to the working directory                 */
+    char *slope_key, *repeat_key;
+    size_t ncombos;          /* runs in the whole sweep                                         */
+} pst_sweep;
+
+/* Read and check a sweep. `text` is the file's content, `path` names it in messages and
+ * resolves a "scene" given as a file name. Errors (PST_EINPUT, PST_EIO for an unreadable
+ * scene file, PST_ENOMEM) are "PATH:LINE:COLUMN: key 'grid.cloud.spaing': ..." in err. The
+ * scene itself must parse with the fixed overrides. */
+int pst_sweep_parse(pst_sweep *sw, const char *text, const char *path, char *err,
+                    size_t errlen);
+int pst_sweep_load(pst_sweep *sw, const char *path, char *err, size_t errlen);
+void pst_sweep_free(pst_sweep *sw);
+
+/* The grid values of combination k (0 <= k < ncombos) as JSON texts (nkeys of them), in the
+ * order of the runs: grid after grid, the last key fastest. */
+void pst_sweep_combo(const pst_sweep *sw, size_t k, const char *vals[SW_MAX_KEYS]);
+
+/* Parse and plan every combination without running it (`pstencil sweep --plan`): PST_OK when
+ * all do, else the first failure's status with "combination K (key=value ...): reason" in
+ * err. *nfailed (may be NULL) counts the failing combinations. */
+int pst_sweep_check(const pst_sweep *sw, size_t *nfailed, char *err, size_t errlen);
+
+typedef struct {
+    int resume;                   /* keep the runs of an existing CSV (ok or not-converged)    */
+    int quiet;                    /* no progress bar                                           */
+    const struct cJSON *machine;  /* members copied into the summary (NULL: none)             */
+} pst_sweep_opts;
+
+typedef struct {
+    long runs;                    /* scene runs made by this call                              */
+    long skipped;                 /* combinations kept from the CSV (--resume)                 */
+    long failed;                  /* combinations whose rows are failed                        */
+    long not_converged;           /* combinations with a solve that did not converge           */
+    long dropped;                 /* rows of the old CSV that match no combination (--resume)  */
+    size_t rows;                  /* CSV rows written                                          */
+} pst_sweep_stats;
+
+/* Run the sweep: every combination (or those --resume does not keep), the CSV after each, the
+ * summary at the end. PST_OK when the files are written, whatever the runs did (stats says);
+ * PST_EIO / PST_EINPUT (a CSV whose header differs, on resume) with the reason in err. */
+int pst_sweep_run(const pst_sweep *sw, const pst_sweep_opts *o, pst_sweep_stats *stats,
+                  char *err, size_t errlen);
+
+/* The CSV's columns after the grid keys. */
+extern const char *const pst_sweep_columns[];
+extern const int pst_sweep_ncolumns;
+
+/* A CSV file as strings: cell[r * ncols + c], row 0 the header. */
+typedef struct {
+    size_t nrows;            /* data rows, without the header */
+    int ncols;
+    char **cell;
+} pst_csv_table;
+
+/* Read an RFC 4180 CSV (quoted cells, doubled quotes, CRLF or LF). Every row must have the
+ * header's number of cells. PST_EIO / PST_EINPUT / PST_ENOMEM with "PATH:LINE: ..." in err. */
+int pst_csv_read(const char *path, pst_csv_table *t, char *err, size_t errlen);
+void pst_csv_table_free(pst_csv_table *t);
+
+/* The summary of a sweep CSV: groups (grid keys except repeat_key, per task: counts, means and
+ * standard deviations of the norms and times, mean iterations) and convergence fits (grid
+ * keys except slope_key and repeat_key, per task and norm: least-squares slope of log(mean
+ * norm) against log(slope_key), its standard error, the points). A function of the table
+ * alone; NULL when out of memory or when the header is not a sweep's. cJSON_Delete it. */
+struct cJSON *pst_sweep_summary(const pst_csv_table *t, const char *slope_key,
+                                const char *repeat_key);
+
+#endif

@@ -1,0 +1,430 @@
+/* Sweeps (src/sweep.c, docs/sweeps.md): a tiny 2D sweep runs, its CSV has the header and the
+ * rows it should, the summary has its groups and a qsfdi convergence slope of second order,
+ * --resume reruns nothing and leaves the same bytes (and reruns exactly what is missing or
+ * failed), failing combinations become failed rows, the summary recomputed from the CSV equals
+ * the one written, errors in sweep files name the key and its position, and every sweep file
+ * of scenes/sweeps parses and plans. */
+#define _POSIX_C_SOURCE 200809L /* mkdtemp */
+#include "check.h"
+#include "sweep.h"
+
+#include "pstencil.h"
+
+#include <cjson/cJSON.h>
+#include <dirent.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static char dir[256];
+
+static char *slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *s = malloc((size_t)n + 1);
+    size_t got = fread(s, 1, (size_t)n, f);
+    fclose(f);
+    s[got] = '\0';
+    if (len)
+        *len = got;
+    return s;
+}
+
+static void spit(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "wb");
+    fputs(text, f);
+    fclose(f);
+}
+
+/* A sweep over an inline scene: the direct Laplacian of sin(6x + 8y) on a lightly jittered
+ * lattice; `grid` and `tasks` are spliced in. Outputs go to dir/NAME.csv, NAME.summary.json. */
+static char *sweep_text(const char *name, const char *grid, const char *tasks)
+{
+    static char buf[4096];
+    snprintf(buf, sizeof buf,
+             "{\n"
+             "  \"scene\": {\n"
+             "    \"dim\": 2,\n"
+             "    \"cloud\": { \"source\": \"lattice\", \"lo\": [0, 0], \"hi\": [1, 1],\n"
+             "               \"spacing\": 0.05, \"jitter\": 0.05, \"seed\": 1,\n"
+             "               \"boundary_layer\": true, \"h_ratio\": 1.2 },\n"
+             "    \"operator\": { \"scheme\": \"qsfdi\" },\n"
+             "    \"fields\": { \"u\": \"sin(6*x + 8*y)\" },\n"
+             "    \"tasks\": %s\n"
+             "  },\n"
+             "  \"grid\": %s,\n"
+             "  \"output\": { \"csv\": \"%s/%s.csv\", \"summary\": \"%s/%s.summary.json\" }\n"
+             "}\n",
+             tasks, grid, dir, name, dir, name);
+    return buf;
+}
+
+static const char *lap_task =
+    "[ { \"type\": \"laplacian\", \"name\": \"lap\", \"field\": \"u\",\n"
+    "      \"exact\": \"-100*sin(6*x + 8*y)\", \"norms\": [\"rel_l2\", \"max_abs\"] } ]";
+
+static int parse(pst_sweep *sw, const char *name, const char *text, char *err, size_t errlen)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s.json", dir, name);
+    spit(path, text);
+    return pst_sweep_parse(sw, text, path, err, errlen);
+}
+
+static const cJSON *find_fit(const cJSON *sum, const char *scheme, const char *norm)
+{
+    const cJSON *f;
+    cJSON_ArrayForEach(f, cJSON_GetObjectItem(sum, "fits"))
+    {
+        const cJSON *k = cJSON_GetObjectItem(f, "key");
+        if (strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(k, "operator.scheme")), scheme) == 0 &&
+            strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(f, "norm")), norm) == 0)
+            return f;
+    }
+    return NULL;
+}
+
+/* The summary in the file without what the CSV does not hold, against the one from the CSV. */
+static void check_summary_from_csv(const char *name, const pst_sweep *sw)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s.summary.json", dir, name);
+    char *text = slurp(path, NULL);
+    cJSON *written = text ? cJSON_Parse(text) : NULL;
+    free(text);
+    CHECK(written != NULL);
+    cJSON_DeleteItemFromObject(written, "machine");
+    cJSON_DeleteItemFromObject(written, "compiler_flags");
+    cJSON_DeleteItemFromObject(written, "sweep");
+    cJSON_DeleteItemFromObject(written, "csv");
+    pst_csv_table t;
+    char err[1024];
+    snprintf(path, sizeof path, "%s/%s.csv", dir, name);
+    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    cJSON *again = pst_sweep_summary(&t, sw->slope_key, sw->repeat_key);
+    CHECK(again != NULL);
+    CHECK(cJSON_Compare(written, again, 1));
+    cJSON_Delete(again);
+    cJSON_Delete(written);
+    pst_csv_table_free(&t);
+}
+
+static void test_tiny_sweep(void)
+{
+    const char *grid = "{ \"operator.scheme\": [\"qsfdi\", \"lpmps\"],\n"
+                       "    \"cloud.spacing\": [0.1, 0.05, 0.025],\n"
+                       "    \"cloud.seed\": { \"from\": 1, \"count\": 2 } }";
+    pst_sweep sw;
+    char err[2048];
+    int st = parse(&sw, "tiny", sweep_text("tiny", grid, lap_task), err, sizeof err);
+    if (st != PST_OK)
+        printf("parse: %s\n", err);
+    CHECK_INT(st, PST_OK);
+    if (st != PST_OK)
+        return;
+    CHECK_INT(sw.ncombos, 12);
+    CHECK_INT(sw.nkeys, 3);
+    const char *vals[SW_MAX_KEYS];
+    pst_sweep_combo(&sw, 0, vals); /* the last key fastest */
+    CHECK(strcmp(vals[0], "\"qsfdi\"") == 0 && strcmp(vals[1], "0.1") == 0 &&
+          strcmp(vals[2], "1") == 0);
+    pst_sweep_combo(&sw, 1, vals);
+    CHECK(strcmp(vals[1], "0.1") == 0 && strcmp(vals[2], "2") == 0);
+    pst_sweep_combo(&sw, 11, vals);
+    CHECK(strcmp(vals[0], "\"lpmps\"") == 0 && strcmp(vals[1], "0.025") == 0);
+
+    cJSON *machine = cJSON_Parse("{\"machine\": {\"cores\": 2}, \"compiler_flags\": \"-O3\"}");
+    pst_sweep_opts o = {.quiet = 1, .machine = machine};
+    pst_sweep_stats s;
+    st = pst_sweep_run(&sw, &o, &s, err, sizeof err);
+    if (st != PST_OK)
+        printf("run: %s\n", err);
+    CHECK_INT(st, PST_OK);
+    CHECK_INT(s.runs, 12);
+    CHECK_INT(s.failed, 0);
+    CHECK_INT(s.skipped, 0);
+    CHECK_INT(s.rows, 12);
+
+    /* the CSV: header and one row per (run, task) */
+    char path[512];
+    snprintf(path, sizeof path, "%s/tiny.csv", dir);
+    pst_csv_table t;
+    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    CHECK_INT(t.nrows, 12);
+    CHECK_INT(t.ncols, 3 + pst_sweep_ncolumns);
+    CHECK(strcmp(t.cell[0], "operator.scheme") == 0 && strcmp(t.cell[1], "cloud.spacing") == 0 &&
+          strcmp(t.cell[2], "cloud.seed") == 0 && strcmp(t.cell[3], "dim") == 0);
+    CHECK(strcmp(t.cell[t.ncols - 1], "message") == 0);
+    CHECK(strcmp(t.cell[t.ncols - 2], "status") == 0);
+    char *bytes = slurp(path, NULL);
+    const char *header = "operator.scheme,cloud.spacing,cloud.seed,dim,particles,"
+                                  "neighbours_estimate,task,type,rel_l2,qsfdi11,"
+                                  "qsfdi11_normalised,lv78,lv95,max_abs,max_rel,iterations,"
+                                  "converged,rel_residual,t_cloud,t_neighbours,t_geometry,"
+                                  "t_moments,t_inversion,t_weights,t_precompute,t_task,t_total,"
+                                  "cpu,peak_rss_bytes,memory_estimate,rows_ok,rows_fallback,"
+                                  "rows_ill_conditioned,rows_rank_deficient,rows_too_few,status,"
+                                  "message\n";
+    CHECK(bytes && strncmp(bytes, header, strlen(header)) == 0);
+    /* row 1: qsfdi, s0 0.1, seed 1: 11 x 11 particles, a Laplacian task, ok, no solver cells */
+    char **r1 = t.cell + t.ncols;
+    CHECK(strcmp(r1[0], "qsfdi") == 0 && strcmp(r1[1], "0.1") == 0 && strcmp(r1[2], "1") == 0);
+    CHECK(strcmp(r1[4], "121") == 0);
+    CHECK(strcmp(r1[6], "lap") == 0 && strcmp(r1[7], "laplacian") == 0);
+    CHECK(r1[8][0] != '\0' && r1[9][0] == '\0'); /* rel_l2 measured, qsfdi11 not asked for */
+    CHECK(r1[15][0] == '\0');                    /* iterations: not a solve */
+    CHECK(strcmp(r1[t.ncols - 2], "ok") == 0);
+    pst_csv_table_free(&t);
+
+    /* the summary: 2 schemes x 3 spacings groups, fits per scheme and norm */
+    snprintf(path, sizeof path, "%s/tiny.summary.json", dir);
+    char *text = slurp(path, NULL);
+    cJSON *sum = text ? cJSON_Parse(text) : NULL;
+    free(text);
+    CHECK(sum != NULL);
+    CHECK_INT(cJSON_GetArraySize(cJSON_GetObjectItem(sum, "groups")), 6);
+    CHECK_INT(cJSON_GetArraySize(cJSON_GetObjectItem(sum, "fits")), 4);
+    const cJSON *g0 = cJSON_GetArrayItem(cJSON_GetObjectItem(sum, "groups"), 0);
+    CHECK_INT(cJSON_GetNumberValue(cJSON_GetObjectItem(g0, "count")), 2);
+    CHECK(cJSON_GetObjectItem(cJSON_GetObjectItem(g0, "key"), "cloud.seed") == NULL);
+    CHECK(cJSON_IsNumber(cJSON_GetObjectItem(cJSON_GetObjectItem(g0, "std"), "rel_l2")));
+    CHECK(cJSON_IsNumber(cJSON_GetObjectItem(cJSON_GetObjectItem(g0, "mean"), "t_total")));
+    const cJSON *fq = find_fit(sum, "qsfdi", "rel_l2"), *fl = find_fit(sum, "lpmps", "rel_l2");
+    CHECK(fq && fl);
+    if (fq && fl) {
+        double slope = cJSON_GetNumberValue(cJSON_GetObjectItem(fq, "slope"));
+        double se = cJSON_GetNumberValue(cJSON_GetObjectItem(fq, "stderr"));
+        printf("qsfdi rel_l2 slope %.3f +- %.3f, lpmps %.3f\n", slope, se,
+               cJSON_GetNumberValue(cJSON_GetObjectItem(fl, "slope")));
+        CHECK(slope > 1.5 && slope < 2.5);
+        CHECK(se >= 0 && se < 0.3);
+        CHECK_INT(cJSON_GetNumberValue(cJSON_GetObjectItem(fq, "points")), 3);
+    }
+    CHECK(cJSON_GetObjectItem(sum, "machine") != NULL);
+    cJSON_Delete(sum);
+    check_summary_from_csv("tiny", &sw);
+
+    /* --resume: nothing reruns, the same bytes */
+    snprintf(path, sizeof path, "%s/tiny.csv", dir);
+    o.resume = 1;
+    CHECK_INT(pst_sweep_run(&sw, &o, &s, err, sizeof err), PST_OK);
+    CHECK_INT(s.runs, 0);
+    CHECK_INT(s.skipped, 12);
+    size_t len2;
+    char *bytes2 = slurp(path, &len2);
+    CHECK(bytes && bytes2 && strcmp(bytes, bytes2) == 0);
+    free(bytes2);
+    check_summary_from_csv("tiny", &sw);
+
+    /* --resume after losing the last 5 rows (an interrupted sweep): 5 runs */
+    char *cut = bytes;
+    for (int line = 0; line < 1 + 7; ++line)
+        cut = strchr(cut, '\n') + 1;
+    *cut = '\0';
+    spit(path, bytes);
+    CHECK_INT(pst_sweep_run(&sw, &o, &s, err, sizeof err), PST_OK);
+    CHECK_INT(s.runs, 5);
+    CHECK_INT(s.skipped, 7);
+    CHECK_INT(s.rows, 12);
+
+    /* --resume with another sweep's header: refused, the file untouched */
+    spit(path, "a,b\n1,2\n");
+    st = pst_sweep_run(&sw, &o, &s, err, sizeof err);
+    CHECK_INT(st, PST_EINPUT);
+    CHECK(strstr(err, "header") != NULL);
+    bytes2 = slurp(path, NULL);
+    CHECK(bytes2 && strcmp(bytes2, "a,b\n1,2\n") == 0);
+    free(bytes2);
+    free(bytes);
+    cJSON_Delete(machine);
+    pst_sweep_free(&sw);
+}
+
+/* A scheme that cannot do the task (brookshaw has no gradient) and a value out of range give
+ * failed rows with their messages; the sweep goes on; --resume reruns exactly those. */
+static void test_failures(void)
+{
+    const char *grid = "{ \"operator.scheme\": [\"qsfdi\", \"brookshaw\"],\n"
+                       "    \"cloud.jitter\": [0.1, 1.5] }";
+    const char *tasks =
+        "[ { \"type\": \"gradient\", \"name\": \"g\", \"field\": \"u\",\n"
+        "    \"exact\": [\"6*cos(6*x + 8*y)\", \"8*cos(6*x + 8*y)\"] } ]";
+    pst_sweep sw;
+    char err[2048];
+    int st = parse(&sw, "fail", sweep_text("fail", grid, tasks), err, sizeof err);
+    CHECK_INT(st, PST_OK);
+    if (st != PST_OK) {
+        printf("parse: %s\n", err);
+        return;
+    }
+    size_t nbad = 0;
+    CHECK_INT(pst_sweep_check(&sw, &nbad, err, sizeof err), PST_EINPUT);
+    CHECK_INT(nbad, 3);
+    CHECK(strstr(err, "combination 1") != NULL && strstr(err, "cloud.jitter") != NULL);
+    pst_sweep_opts o = {.quiet = 1};
+    pst_sweep_stats s;
+    CHECK_INT(pst_sweep_run(&sw, &o, &s, err, sizeof err), PST_OK);
+    CHECK_INT(s.runs, 2); /* the jitter 1.5 combinations do not parse: not run */
+    CHECK_INT(s.failed, 3);
+    CHECK_INT(s.rows, 4);
+    char path[512];
+    snprintf(path, sizeof path, "%s/fail.csv", dir);
+    pst_csv_table t;
+    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    CHECK_INT(t.nrows, 4);
+    const char *want[4] = {"ok", "failed", "failed", "failed"};
+    for (size_t r = 1; r <= t.nrows && r <= 4; ++r)
+        CHECK(strcmp(t.cell[r * (size_t)t.ncols + t.ncols - 2], want[r - 1]) == 0);
+    if (t.nrows >= 3) {
+        const char *m1 = t.cell[2 * (size_t)t.ncols + t.ncols - 1];
+        const char *m2 = t.cell[3 * (size_t)t.ncols + t.ncols - 1];
+        printf("failed rows: '%s' | '%s'\n", m1, m2);
+        CHECK(strstr(m1, "cloud.jitter") != NULL);
+        CHECK(strstr(m2, "brookshaw") != NULL || strstr(m2, "gradient") != NULL);
+        /* a failed run still names its task */
+        CHECK(strcmp(t.cell[3 * (size_t)t.ncols + 2 + 3], "g") == 0);
+    }
+    pst_csv_table_free(&t);
+    check_summary_from_csv("fail", &sw);
+    o.resume = 1;
+    CHECK_INT(pst_sweep_run(&sw, &o, &s, err, sizeof err), PST_OK);
+    CHECK_INT(s.skipped, 1);
+    CHECK_INT(s.failed, 3);
+    CHECK_INT(s.runs, 1);
+    pst_sweep_free(&sw);
+}
+
+/* Errors name the key and its line and column in the sweep file. */
+static void test_errors(void)
+{
+    pst_sweep sw;
+    char err[2048];
+    const char *bad_key = "{ \"cloud.spaing\": [0.1, 0.05] }";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", bad_key, lap_task), err, sizeof err),
+              PST_EINPUT);
+    printf("bad key: %s\n", err);
+    CHECK(strstr(err, "bad.json:12:13: key 'grid.cloud.spaing': unknown scene key") != NULL);
+    const char *empty = "{ \"cloud.spacing\": [] }";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", empty, lap_task), err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "empty list") != NULL);
+    const char *scalar = "{ \"cloud.spacing\": 0.1 }";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", scalar, lap_task), err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "key 'grid.cloud.spacing'") != NULL);
+    /* an error inside the inline scene has the sweep file's line and column */
+    const char *bad_task = "[ { \"type\": \"laplacian\", \"feld\": \"u\" } ]";
+    const char *grid = "{ \"cloud.spacing\": [0.1] }";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", grid, bad_task), err, sizeof err), PST_EINPUT);
+    printf("inline scene: %s\n", err);
+    CHECK(strstr(err, "bad.json:9:39: key 'tasks.0.feld': unknown key") != NULL);
+    /* a list of grids must share their keys */
+    const char *two = "[ { \"cloud.spacing\": [0.1] }, { \"cloud.seed\": [1] } ]";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", two, lap_task), err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "same order") != NULL);
+    /* a missing scene file */
+    CHECK_INT(parse(&sw, "bad", "{ \"scene\": \"none.json\", \"grid\": {\"cloud.seed\": [1]} }",
+                    err, sizeof err),
+              PST_EIO);
+    CHECK(strstr(err, "none.json") != NULL);
+    CHECK_INT(pst_sweep_load(&sw, "/nonexistent/sweep.json", err, sizeof err), PST_EIO);
+    /* a list of grids: the union of their products */
+    const char *union2 = "[ { \"cloud.spacing\": [0.1, 0.05], \"cloud.seed\": [1] },\n"
+                         "  { \"cloud.spacing\": [0.025], \"cloud.seed\": {\"from\": 3, "
+                         "\"count\": 3} } ]";
+    CHECK_INT(parse(&sw, "union", sweep_text("union", union2, lap_task), err, sizeof err), PST_OK);
+    CHECK_INT(sw.ncombos, 5);
+    const char *vals[SW_MAX_KEYS];
+    pst_sweep_combo(&sw, 4, vals);
+    CHECK(strcmp(vals[0], "0.025") == 0 && strcmp(vals[1], "5") == 0);
+    pst_sweep_free(&sw);
+}
+
+/* Quoted cells (RFC 4180) read back. */
+static void test_csv_quoting(void)
+{
+    char path[512], err[1024];
+    snprintf(path, sizeof path, "%s/q.csv", dir);
+    spit(path, "a,b,c\r\n\"x, y\",\"say \"\"hi\"\"\",\"two\nlines\"\r\n,,\n");
+    pst_csv_table t;
+    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    CHECK_INT(t.nrows, 2);
+    CHECK(strcmp(t.cell[3], "x, y") == 0 && strcmp(t.cell[4], "say \"hi\"") == 0 &&
+          strcmp(t.cell[5], "two\nlines") == 0 && strcmp(t.cell[6], "") == 0);
+    pst_csv_table_free(&t);
+    spit(path, "a,b\n1\n");
+    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, ":2:") != NULL);
+}
+
+/* Every sweep file of scenes/sweeps parses and every combination plans. */
+static void test_sweep_files(void)
+{
+    const char *sd = PSTENCIL_SOURCE_DIR "/scenes/sweeps";
+    DIR *d = opendir(sd);
+    CHECK(d != NULL);
+    if (!d)
+        return;
+    struct dirent *e;
+    int files = 0;
+    while ((e = readdir(d))) {
+        size_t n = strlen(e->d_name);
+        if (n < 6 || strcmp(e->d_name + n - 5, ".json") != 0)
+            continue;
+        char path[1024], err[4096];
+        snprintf(path, sizeof path, "%s/%s", sd, e->d_name);
+        pst_sweep sw;
+        int st = pst_sweep_load(&sw, path, err, sizeof err);
+        if (st != PST_OK)
+            printf("%s: %s\n", e->d_name, err);
+        CHECK_INT(st, PST_OK);
+        if (st != PST_OK)
+            continue;
+        size_t bad = 0;
+        st = pst_sweep_check(&sw, &bad, err, sizeof err);
+        if (st != PST_OK)
+            printf("%s: %s\n", e->d_name, err);
+        CHECK_INT(st, PST_OK);
+        printf("%-28s %5zu runs, %zu keys\n", e->d_name, sw.ncombos, (size_t)sw.nkeys);
+        pst_sweep_free(&sw);
+        ++files;
+    }
+    closedir(d);
+    CHECK(files >= 7);
+}
+
+static void rm_dir(void)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    while (d && (e = readdir(d))) {
+        if (e->d_name[0] == '.')
+            continue;
+        char p[512];
+        snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
+        unlink(p);
+    }
+    if (d)
+        closedir(d);
+    rmdir(dir);
+}
+
+int main(void)
+{
+    snprintf(dir, sizeof dir, "/tmp/pst_sweep_XXXXXX");
+    if (!mkdtemp(dir)) {
+        printf("mkdtemp failed\n");
+        return 1;
+    }
+    test_tiny_sweep();
+    test_failures();
+    test_errors();
+    test_csv_quoting();
+    test_sweep_files();
+    rm_dir();
+    return check_summary("test_sweep");
+}
