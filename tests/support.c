@@ -1,11 +1,15 @@
 /* Fixtures shared by the operator tests; see support.h. */
+#define _POSIX_C_SOURCE 200809L /* mkdtemp, opendir */
+
 #include "support.h"
 
+#include <dirent.h>
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 pst_cloud *test_lattice(int dim, double lo, double hi, double s0, double h_ratio, double K,
                         uint64_t seed, int boundary_layer)
@@ -225,4 +229,29 @@ double test_slope(const double *s, const double *e, int m)
         sxy += x * y;
     }
     return (m * sxy - sx * sy) / (m * sxx - sx * sx);
+}
+
+int test_scratch_dir(char *dir, size_t size, const char *prefix)
+{
+    snprintf(dir, size, "/tmp/%s_XXXXXX", prefix);
+    if (!mkdtemp(dir)) {
+        perror("mkdtemp");
+        return -1;
+    }
+    return 0;
+}
+
+void test_remove_dir(const char *dir)
+{
+    DIR *d = opendir(dir);
+    char p[1024];
+    for (struct dirent *e; d && (e = readdir(d));) {
+        if (e->d_name[0] == '.')
+            continue;
+        snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
+        unlink(p);
+    }
+    if (d)
+        closedir(d);
+    rmdir(dir);
 }

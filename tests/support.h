@@ -91,4 +91,9 @@ double test_slope(const double *s, const double *e, int m);
 test_paths test_compare_paths(pst_op *op, const double *u, const double *y_free,
                               double *y_stored);
 
+/* A fresh scratch folder "/tmp/PREFIX_XXXXXX" written into dir; 0, or -1 after a message. */
+int test_scratch_dir(char *dir, size_t size, const char *prefix);
+/* Remove the files of a scratch folder, then the folder (it holds no subfolders). */
+void test_remove_dir(const char *dir);
+
 #endif

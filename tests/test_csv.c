@@ -4,6 +4,7 @@
 #define _POSIX_C_SOURCE 200809L /* mkdtemp, setrlimit, opendir */
 
 #include "check.h"
+#include "support.h"
 #include "pstencil.h"
 
 #include <dirent.h>
@@ -323,28 +324,10 @@ static void test_write_failures(void)
     pst_cloud_destroy(c);
 }
 
-static void cleanup(void)
-{
-    DIR *d = opendir(dir);
-    char p[512];
-    for (struct dirent *e; d && (e = readdir(d));) {
-        if (e->d_name[0] == '.')
-            continue;
-        snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
-        unlink(p);
-    }
-    if (d)
-        closedir(d);
-    rmdir(dir);
-}
-
 int main(void)
 {
-    snprintf(dir, sizeof dir, "/tmp/pst_test_csv_XXXXXX");
-    if (!mkdtemp(dir)) {
-        perror("mkdtemp");
+    if (test_scratch_dir(dir, sizeof dir, "pst_test_csv") != 0)
         return 1;
-    }
     check_round_trip(2, 1);
     check_round_trip(3, 3);
     check_round_trip(2, 2);
@@ -352,6 +335,6 @@ int main(void)
     test_long_line();
     test_bad_input();
     test_write_failures();
-    cleanup();
+    test_remove_dir(dir);
     return check_summary("test_csv");
 }

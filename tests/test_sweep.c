@@ -6,6 +6,7 @@
  * of scenes/sweeps parses and plans. */
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #include "check.h"
+#include "support.h"
 #include "sweep.h"
 
 #include "pstencil.h"
@@ -397,34 +398,15 @@ static void test_sweep_files(void)
     CHECK(files >= 7);
 }
 
-static void rm_dir(void)
-{
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    while (d && (e = readdir(d))) {
-        if (e->d_name[0] == '.')
-            continue;
-        char p[512];
-        snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
-        unlink(p);
-    }
-    if (d)
-        closedir(d);
-    rmdir(dir);
-}
-
 int main(void)
 {
-    snprintf(dir, sizeof dir, "/tmp/pst_sweep_XXXXXX");
-    if (!mkdtemp(dir)) {
-        printf("mkdtemp failed\n");
+    if (test_scratch_dir(dir, sizeof dir, "pst_sweep") != 0)
         return 1;
-    }
     test_tiny_sweep();
     test_failures();
     test_errors();
     test_csv_quoting();
     test_sweep_files();
-    rm_dir();
+    test_remove_dir(dir);
     return check_summary("test_sweep");
 }

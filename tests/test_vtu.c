@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L /* mkdtemp, setrlimit, opendir */
 
 #include "check.h"
+#include "support.h"
 #include "pstencil.h"
 
 #include <dirent.h>
@@ -1051,28 +1052,10 @@ static void test_read_fuzz(void)
     fuzz_file("poly.vtp", 1000, 4);
 }
 
-static void cleanup(void)
-{
-    DIR *d = opendir(dir);
-    char p[512];
-    for (struct dirent *e; d && (e = readdir(d));) {
-        if (e->d_name[0] == '.')
-            continue;
-        snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
-        unlink(p);
-    }
-    if (d)
-        closedir(d);
-    rmdir(dir);
-}
-
 int main(void)
 {
-    snprintf(dir, sizeof dir, "/tmp/pst_test_vtu_XXXXXX");
-    if (!mkdtemp(dir)) {
-        perror("mkdtemp");
+    if (test_scratch_dir(dir, sizeof dir, "pst_test_vtu") != 0)
         return 1;
-    }
     test_layouts();
     test_exact_bytes();
     test_failures();
@@ -1080,6 +1063,6 @@ int main(void)
     test_read_formats();
     test_read_errors();
     test_read_fuzz();
-    cleanup();
+    test_remove_dir(dir);
     return check_summary("test_vtu");
 }
