@@ -35,8 +35,6 @@ void report_peak_memory(cJSON *report)
 
 void report_operator(cJSON *report, const pst_op *op)
 {
-    static const char *const phases[PST_NPHASES] = {"geometry", "moments", "inversion",
-                                                    "weights",  "precompute", "apply"};
     cJSON *o = cJSON_CreateObject();
     cJSON_AddItemToArray(cJSON_GetObjectItem(report, "operators"), o);
     cJSON_AddStringToObject(o, "scheme", pst_op_scheme(op));
@@ -47,7 +45,7 @@ void report_operator(cJSON *report, const pst_op *op)
     cJSON *ph = cJSON_AddObjectToObject(o, "phases");
     for (int k = 0; k < PST_NPHASES; ++k)
         if (k != PST_PHASE_APPLY)
-            cJSON_AddNumberToObject(ph, phases[k], t[k]);
+            cJSON_AddNumberToObject(ph, pst_phase_name(k), t[k]);
     size_t counts[PST_ROW_NSTATUS];
     pst_op_status_counts(op, counts);
     cJSON *sc = cJSON_AddObjectToObject(o, "row_status");

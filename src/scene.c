@@ -8,6 +8,7 @@
 #include "internal.h"
 #include "json_pos.h"
 #include "scene_default_json.h"
+#include "text_file.h"
 
 #include <cJSON.h>
 #include <errno.h>
@@ -1315,39 +1316,11 @@ int pst_scene_load(pst_scene *s, const char *path, const char *const *overrides,
                    char *err, size_t errlen)
 {
     memset(s, 0, sizeof *s);
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        if (err && errlen)
-            snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
-        return PST_EIO;
-    }
-    size_t cap = 4096, len = 0;
-    char *text = malloc(cap);
-    for (size_t got = 1; text && got > 0;) {
-        if (len + 1 == cap) {
-            char *grown = realloc(text, cap *= 2);
-            if (!grown) {
-                free(text);
-                text = NULL;
-                break;
-            }
-            text = grown;
-        }
-        got = fread(text + len, 1, cap - 1 - len, f);
-        len += got;
-    }
-    int bad_read = ferror(f);
-    fclose(f);
+    size_t len;
+    int rc = PST_OK;
+    char *text = pst_read_text(path, &len, err, errlen, &rc);
     if (!text)
-        return PST_ENOMEM;
-    if (bad_read) {
-        free(text);
-        if (err && errlen)
-            snprintf(err, errlen, "%s: read error", path);
-        return PST_EIO;
-    }
-    text[len] = '\0';
-    int rc;
+        return rc;
     if (strlen(text) != len) { /* the parser would stop at the NUL and misreport */
         int line, col;
         json_pos_offset(text, strlen(text), &line, &col);

@@ -10,6 +10,7 @@
 #include "progress.h"
 #include "run.h"
 #include "scene.h"
+#include "text_file.h"
 
 #include <cjson/cJSON.h>
 #include <errno.h>
@@ -33,10 +34,6 @@ enum { C_DIM, C_PARTICLES, C_NEIGH, C_TASK, C_TYPE, C_NORM0, C_ITER = C_NORM0 + 
 
 static const char *const norm_cols[7] = {"rel_l2", "qsfdi11", "qsfdi11_normalised", "lv78",
                                          "lv95",   "max_abs", "max_rel"};
-static const char *const phase_names[5] = {"geometry", "moments", "inversion", "weights",
-                                           "precompute"};
-static const char *const status_names[5] = {"ok", "fallback", "ill-conditioned",
-                                            "rank-deficient", "too-few-neighbours"};
 
 static char *dupstr(const char *s)
 {
@@ -45,41 +42,6 @@ static char *dupstr(const char *s)
     if (d)
         memcpy(d, s, n);
     return d;
-}
-
-static char *read_text(const char *path, char *err, size_t errlen, int *status)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        snprintf(err, errlen, "%s: cannot open: %s", path, strerror(errno));
-        *status = PST_EIO;
-        return NULL;
-    }
-    size_t cap = 4096, len = 0;
-    char *text = malloc(cap);
-    for (size_t got = 1; text && got > 0;) {
-        if (len + 1 == cap) {
-            char *g = realloc(text, cap *= 2);
-            if (!g) {
-                free(text);
-                text = NULL;
-                break;
-            }
-            text = g;
-        }
-        got = fread(text + len, 1, cap - 1 - len, f);
-        len += got;
-    }
-    int bad = ferror(f);
-    fclose(f);
-    if (!text || bad) {
-        free(text);
-        snprintf(err, errlen, "%s: %s", path, bad ? "read error" : "out of memory");
-        *status = bad ? PST_EIO : PST_ENOMEM;
-        return NULL;
-    }
-    text[len] = '\0';
-    return text;
 }
 
 /* ---- the sweep file ---------------------------------------------------------------------- */
@@ -329,7 +291,7 @@ static int read_sweep(pctx *c, const cJSON *root, pst_sweep *sw)
         strcpy(sw->scene_path + dl, file);
         char msg[PST_ERRLEN + 512];
         int st = PST_OK;
-        sw->scene_text = read_text(sw->scene_path, msg, sizeof msg, &st);
+        sw->scene_text = pst_read_text(sw->scene_path, NULL, msg, sizeof msg, &st);
         if (!sw->scene_text) {
             perr(c, steps, 1, "scene", "%s", msg);
             return st;
@@ -548,7 +510,7 @@ int pst_sweep_load(pst_sweep *sw, const char *path, char *err, size_t errlen)
 {
     memset(sw, 0, sizeof *sw);
     int st = PST_OK;
-    char *text = read_text(path, err, errlen, &st);
+    char *text = pst_read_text(path, NULL, err, errlen, &st);
     if (!text)
         return st;
     st = pst_sweep_parse(sw, text, path, err, errlen);
@@ -761,8 +723,8 @@ static int add_rows(csv_job *j, size_t k, const cJSON *report, const pst_scene *
             {
                 ++nops;
                 for (int q = 0; q < 5; ++q) {
-                    ph[q] += cJSON_GetNumberValue(get(get(op, "phases"), phase_names[q]));
-                    const cJSON *rv = get(get(op, "row_status"), status_names[q]);
+                    ph[q] += cJSON_GetNumberValue(get(get(op, "phases"), pst_phase_name(q)));
+                    const cJSON *rv = get(get(op, "row_status"), pst_row_status_name(q));
                     rows[q] += cJSON_IsNumber(rv) ? rv->valuedouble : 0;
                 }
             }
@@ -848,7 +810,7 @@ int pst_csv_read(const char *path, pst_csv_table *t, char *err, size_t errlen)
 {
     memset(t, 0, sizeof *t);
     int st = PST_OK;
-    char *text = read_text(path, err, errlen, &st);
+    char *text = pst_read_text(path, NULL, err, errlen, &st);
     if (!text)
         return st;
     size_t cap = 64, n = 0, line = 1, row_start = 0;
