@@ -48,6 +48,8 @@ static void print_help(void)
            "                      --plan prints what it would compute\n"
            "  sweep SWEEP.json    run a scene over a grid of key values: a CSV row per run\n"
            "                      and task, a summary with means and convergence slopes\n"
+           "  plot RESULTS.csv    PNG plots of a sweep (gnuplot): error against s0 and time,\n"
+           "                      time ratios, phase costs, solver iterations\n"
            "  help scene          every scene key: type, default, units, meaning\n"
            "  cloud [OPTIONS]     generate a particle cloud and write it as CSV\n"
            "  neighbours FILE     read a CSV cloud, build its neighbour list, print statistics\n"
@@ -148,6 +150,8 @@ int main(int argc, char **argv)
         rc = cli_run(&ctx, nargs - 1, args + 1);
     } else if (strcmp(args[0], "sweep") == 0) {
         rc = cli_sweep(&ctx, nargs - 1, args + 1);
+    } else if (strcmp(args[0], "plot") == 0) {
+        rc = cli_plot(&ctx, nargs - 1, args + 1);
     } else if (strcmp(args[0], "cloud") == 0) {
         rc = cli_cloud(&ctx, nargs - 1, args + 1);
     } else if (strcmp(args[0], "neighbours") == 0 || strcmp(args[0], "neighbors") == 0) {

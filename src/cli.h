@@ -48,6 +48,8 @@ int cli_neighbour_report(const cli_ctx *ctx, pst_cloud *c, pst_kernel kernel, do
 int cli_run(const cli_ctx *ctx, int argc, char **argv);
 /* `pstencil sweep SWEEP.json [--resume] [--plan]` (docs/sweeps.md). */
 int cli_sweep(const cli_ctx *ctx, int argc, char **argv);
+/* `pstencil plot RESULTS.csv [--summary F] [--out DIR] [--norm N]` (docs/plots.md). */
+int cli_plot(const cli_ctx *ctx, int argc, char **argv);
 int cli_cloud(const cli_ctx *ctx, int argc, char **argv);
 int cli_neighbours(const cli_ctx *ctx, int argc, char **argv);
 int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv);

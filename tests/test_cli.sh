@@ -163,6 +163,26 @@ cp "$work/sw.csv" "$work/sw_before.csv"
 expect 0 "sweep --resume" -- "$exe" sweep "$work/sw.json" --resume
 contains out "0 run, 8 kept" "sweep --resume reruns nothing"
 check "sweep --resume keeps the CSV bytes" 'cmp -s "$work/sw.csv" "$work/sw_before.csv"'
+# plot: PNGs of the sweep just made (gnuplot-nox); each starts with the PNG signature and an
+# IHDR of the requested size; nothing but the PNGs is left in the folder
+expect 0 "plot" -- "$exe" plot "$work/sw.csv" --out "$work/plots" --size 640x400
+contains out "wrote $work/plots/error_vs_s0.png" "plot writes error_vs_s0.png"
+contains out "skipped time_ratio_vs_jitter.png: cloud.jitter is not a grid key" "plot says why it skips"
+check "plot: 3 PNGs and no other file" '[ "$(ls -A "$work/plots" | grep -cv "\.png$")" -eq 0 ] &&
+  [ "$(ls "$work/plots"/*.png | wc -l)" -eq 3 ]'
+for f in "$work"/plots/*.png; do
+  check "$(basename "$f"): PNG signature" \
+    '[ "$(od -An -tx1 -N8 "$f" | tr -d " \n")" = "89504e470d0a1a0a" ]'
+  check "$(basename "$f"): IHDR 640x400" \
+    '[ "$(od -An -tx1 -j12 -N12 "$f" | tr -d " \n")" = "494844520000028000000190" ]'
+done
+expect 0 "plot: default folder <stem>_plots" -- "$exe" --quiet plot "$work/sw.csv"
+check "plot: default folder" '[ -s "$work/sw_plots/phases.png" ]'
+expect 2 "plot: missing file" -- "$exe" plot "$work/none.csv"
+expect 1 "plot: unknown norm" -- "$exe" plot "$work/sw.csv" --norm l2
+expect 1 "plot without a file" -- "$exe" plot
+expect 2 "plot without gnuplot" -- env PATH=/nonexistent "$exe" plot "$work/sw.csv" --out "$work/p2"
+contains err "gnuplot not found: install gnuplot-nox" "plot names the missing package"
 # brookshaw has no gradient: its 4 runs fail, the sweep goes on, exit 16 + 4
 sed -e 's/"lpmps"\]/"lpmps", "brookshaw"]/' -e 's/"type": "laplacian"/"type": "gradient"/' \
   -e 's/"exact": "-100\*sin(6\*x + 8\*y)"/"exact": ["6*cos(6*x+8*y)", "8*cos(6*x+8*y)"]/' \
