@@ -44,47 +44,41 @@ static int fail(run_state *r, int status, const char *fmt, ...)
 
 /* ---- expressions ------------------------------------------------------------------------- */
 
-/* Evaluate expression `text` (scene key `key`) at every particle into out[]. Its variables are
- * the coordinates x, y (and z in 3D). A non-finite value is an error naming the particle. */
-static int eval_at_particles(run_state *r, const char *key, const char *text, double *out)
-{
-    static const char *const vars[] = {"x", "y", "z"};
-    const int dim = r->s->dim;
-    char msg[PST_ERRLEN];
-    pst_expr *e = pst_expr_parse(text, vars, dim, msg, sizeof msg);
-    if (!e)
-        return fail(r, PST_EINPUT, "%s: %s: %s", r->s->path, key, msg);
-    const double *cols[3] = {NULL, NULL, NULL};
-    for (int d = 0; d < dim; ++d)
-        cols[d] = pst_cloud_coord_const(r->c, d);
-    size_t n = pst_cloud_size(r->c);
-    pst_expr_eval_many(e, n, cols, out);
-    pst_expr_free(e);
-    const int64_t *id = pst_cloud_ids_const(r->c);
-    for (size_t i = 0; i < n; ++i)
-        if (!isfinite(out[i]))
-            return fail(r, PST_EINPUT, "%s: %s: '%s' is not finite at particle %lld (input "
-                                       "order)", r->s->path, key, text, (long long)id[i]);
-    return PST_OK;
-}
-
-/* Same at arbitrary points pts[d][k], k < m. */
-static int eval_at_points(run_state *r, const char *key, const char *text, double *const pts[3],
-                          size_t m, double *out)
+/* Evaluate expression `text` (scene key `key`) at n positions cols[d][k] into out[]. Its
+ * variables are the coordinates x, y (and z in 3D). A non-finite value is an error naming the
+ * particle (by its input id, when ids is given) or the point. */
+static int eval_columns(run_state *r, const char *key, const char *text,
+                        const double *const cols[3], size_t n, const int64_t *ids, double *out)
 {
     static const char *const vars[] = {"x", "y", "z"};
     char msg[PST_ERRLEN];
     pst_expr *e = pst_expr_parse(text, vars, r->s->dim, msg, sizeof msg);
     if (!e)
         return fail(r, PST_EINPUT, "%s: %s: %s", r->s->path, key, msg);
-    const double *cols[3] = {pts[0], pts[1], pts[2]};
-    pst_expr_eval_many(e, m, cols, out);
+    pst_expr_eval_many(e, n, cols, out);
     pst_expr_free(e);
-    for (size_t k = 0; k < m; ++k)
+    for (size_t k = 0; k < n; ++k)
         if (!isfinite(out[k]))
-            return fail(r, PST_EINPUT, "%s: %s: '%s' is not finite at point %zu", r->s->path,
-                        key, text, k);
+            return fail(r, PST_EINPUT, "%s: %s: '%s' is not finite at %s %lld", r->s->path, key,
+                        text, ids ? "particle (input order)" : "point",
+                        ids ? (long long)ids[k] : (long long)k);
     return PST_OK;
+}
+
+static int eval_at_particles(run_state *r, const char *key, const char *text, double *out)
+{
+    const double *cols[3] = {NULL, NULL, NULL};
+    for (int d = 0; d < r->s->dim; ++d)
+        cols[d] = pst_cloud_coord_const(r->c, d);
+    return eval_columns(r, key, text, cols, pst_cloud_size(r->c), pst_cloud_ids_const(r->c),
+                        out);
+}
+
+static int eval_at_points(run_state *r, const char *key, const char *text, double *const pts[3],
+                          size_t m, double *out)
+{
+    const double *cols[3] = {pts[0], pts[1], pts[2]};
+    return eval_columns(r, key, text, cols, m, NULL, out);
 }
 
 /* ---- cloud ------------------------------------------------------------------------------- */
@@ -152,7 +146,8 @@ static int make_mobility(run_state *r)
         if (st != PST_OK)
             return fail(r, st, "%s: mobility: %s", s->path, msg);
     } else {
-        pst_cloud_set_mobility(r->c, ncomp);
+        if (pst_cloud_set_mobility(r->c, ncomp) != PST_OK)
+            return fail(r, PST_ENOMEM, "out of memory for the mobility");
         for (int a = 0; a < ncomp; ++a) {
             char key[64];
             snprintf(key, sizeof key, ncomp == 1 ? "mobility.expression" : "mobility.expression[%d]",
