@@ -127,10 +127,8 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
     default: break;
     }
 
-    double doubles = dim + 1 + dim + 1; /* x, V, normals, id */
-    for (int f = 0; f < s->nfields; ++f)
-        doubles += 1;
-    doubles += p->mobility_ncomp;
+    /* per particle: x, V, normals, id, the fields, the mobility (task outputs below) */
+    double doubles = dim + 1 + dim + 1 + s->nfields + p->mobility_ncomp;
     double solver_vectors = 0, amg = 0;
     for (int k = 0; k < s->ntasks; ++k) {
         const sc_task *t = &s->tasks[k];
