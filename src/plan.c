@@ -245,9 +245,12 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
             fprintf(f, ", %d error norm%s", t->nnorms, t->nnorms > 1 ? "s" : "");
         fprintf(f, "\n");
     }
-    fprintf(f, "  memory     about %.2f GB (cloud %.2f, neighbours %.2f, operators %.2f, "
+    /* GB for big runs, MB for small ones, so that no part prints as 0.00 */
+    int gb = p->bytes_total >= 1e9;
+    double unit = gb ? 1e-9 : 1e-6;
+    fprintf(f, "  memory     about %.2f %s (cloud %.2f, neighbours %.2f, operators %.2f, "
                "weights %.2f, solver %.2f) of %.2f GB available\n",
-            p->bytes_total * 1e-9, p->bytes_cloud * 1e-9, p->bytes_neighbours * 1e-9,
-            p->bytes_operators * 1e-9, p->bytes_weights * 1e-9, p->bytes_solver * 1e-9,
-            p->bytes_available * 1e-9);
+            p->bytes_total * unit, gb ? "GB" : "MB", p->bytes_cloud * unit,
+            p->bytes_neighbours * unit, p->bytes_operators * unit, p->bytes_weights * unit,
+            p->bytes_solver * unit, p->bytes_available * 1e-9);
 }
