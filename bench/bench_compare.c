@@ -4,11 +4,13 @@
  * and A) the operator, REPS times, and keeps the median of every phase (geometry, moments,
  * inversion, weights, precompute) and of the matrix-free apply. It prints a table, the ratios
  * the paper claims (LP-MPS / QSFDI time for the direct Laplacian, the inversion-cost share) and,
- * with --json FILE, the same as JSON.
+ * with --json FILE, the same as JSON. Both record the machine and the compiler flags
+ * (src/machine.h: a "# machine:" line under the title, "machine" and "compiler_flags" in JSON).
  *
  * usage: bench_compare [--n N] [--dims 2,3] [--ratios 0.75,0.9,1.2] [--reps R] [--json FILE]
  *   --n    particles per cloud (default 1000000; the lattice side is rounded)
  */
+#include "machine.h"
 #include "pstencil.h"
 
 #include <math.h>
@@ -81,6 +83,18 @@ static int make_cloud(int dim, size_t n, double ratio, pst_cloud **c, pst_nlist 
     return 0;
 }
 
+/* s as a JSON string (quotes and backslashes escaped, control characters dropped). */
+static void json_string(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; ++s)
+        if (*s == '"' || *s == '\\')
+            fprintf(f, "\\%c", *s);
+        else if ((unsigned char)*s >= 0x20)
+            fputc(*s, f);
+    fputc('"', f);
+}
+
 int main(int argc, char **argv)
 {
     size_t n = 1000000;
@@ -112,11 +126,27 @@ int main(int argc, char **argv)
         fprintf(stderr, "bench_compare: cannot write %s\n", json);
         return 1;
     }
-    if (js)
-        fprintf(js, "{\"pstencil\": \"%s\", \"threads\": %d, \"reps\": %d, \"runs\": [\n",
+    pst_machine mach;
+    pst_machine_probe(&mach);
+    if (js) {
+        /* the machine record as {"cpu": "...", "cores": "2", ...} (string values) and the flags */
+        const char *keys[PST_MACHINE_NPAIRS];
+        char values[PST_MACHINE_NPAIRS][PST_MACHINE_VLEN];
+        int np = pst_machine_pairs(&mach, keys, values, PST_MACHINE_NPAIRS);
+        fprintf(js, "{\"pstencil\": \"%s\", \"threads\": %d, \"reps\": %d,\n \"machine\": {",
                 pst_version(), pst_threads(), reps);
-    printf("pstencil %s, %d threads, median of %d; seconds per phase\n", pst_version(),
-           pst_threads(), reps);
+        for (int i = 0; i < np; ++i) {
+            fprintf(js, "%s\"%s\": ", i ? ", " : "", keys[i]);
+            json_string(js, values[i]);
+        }
+        fprintf(js, "},\n \"compiler_flags\": ");
+        json_string(js, mach.compile_flags);
+        fprintf(js, ",\n \"runs\": [\n");
+    }
+    char mline[1024];
+    pst_machine_line(&mach, mline, sizeof mline);
+    printf("pstencil %s, %d threads, median of %d; seconds per phase\n# machine: %s\n",
+           pst_version(), pst_threads(), reps, mline);
     int first = 1;
     for (int di = 0; di < ndims; ++di)
         for (int ri = 0; ri < nratios; ++ri) {

@@ -1,6 +1,8 @@
 /* Benchmarks of the Morton sort and the neighbour-list build on 10^6-particle jittered lattices
- * (K = 0.5, h = 1.2 s0, quintic support 3h), with 1 and 2 OpenMP threads (the argument). */
+ * (K = 0.5, h = 1.2 s0, quintic support 3h), with 1 and 2 OpenMP threads (the argument). The
+ * run's context records the machine, the flags and the triad / FP64 peak probes (peak.h). */
 #include "bench_shim.h"
+#include "peak.h"
 #include "pstencil.h"
 
 #include <omp.h>
@@ -105,6 +107,10 @@ static void nlist_3d(pstb_state *s) { nlist_build(s, 3); }
 void pstb_register_all(void)
 {
     static const int64_t threads[2] = {1, 2};
+    /* the machine record and the triad / FP64 probes, in the run's context (bench/README.md) */
+    static pstb_probes probes;
+    pstb_probes_run(&probes);
+    pstb_probes_record(&probes, pstb_context);
     pstb_register("morton_sort_3d_1e6", morton_sort, threads, 2);
     pstb_register("nlist_build_2d_1e6", nlist_2d, threads, 2);
     pstb_register("nlist_build_3d_1e6", nlist_3d, threads, 2);

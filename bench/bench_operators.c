@@ -7,8 +7,12 @@
  *   csr_{1sum,4sums}_lv_<dim>d      the assembled lv matrix times a vector, one or four partial
  *                                   sums per row (is the stored apply memory- or latency-bound?)
  * plus a STREAM-like triad a = b + s c (3 x 80 MB and 3 x 400 MB arrays) and a read-only
- * dot product (2 x 400 MB) as the bandwidth references of the stored apply. bench/README.md explains the counters and the byte model. */
+ * dot product (2 x 400 MB) as the bandwidth references of the stored apply. The run's context
+ * records the machine, the flags and in-process triad and FP64 peak probes (peak.h); the stored
+ * applies report triad_fraction, the matrix-free applies peak_fraction (flop model below).
+ * bench/README.md explains the counters and the byte and flop models. */
 #include "bench_shim.h"
+#include "peak.h"
 #include "stream.h"
 #include "pstencil.h"
 
@@ -143,6 +147,17 @@ static double stored_bytes(const setup *s)
     return 12.0 * pairs + 32.0 * n;
 }
 
+/* Flops per pair of the matrix-free apply (docs/schemes/README.md, counted for G1, scalar
+ * mobility, cubic spline): about 60 in 3D, 8 fewer in 2D; the sqrt and the three divisions
+ * are not counted. All four schemes share the one pair function (brookshaw and cb with
+ * eta = 0), so the model is the same for each. */
+static double apply_flops_per_pair(int dim) { return dim == 3 ? 60.0 : 52.0; }
+
+/* The probes of the run's context, at 1 thread ([0]) and at all threads ([1]). */
+static pstb_probes probes;
+
+static int probe_index(int threads) { return threads > 1 ? 1 : 0; }
+
 static void run(pstb_state *st, int scheme, int dim, int mode)
 {
     int saved = omp_get_max_threads();
@@ -193,6 +208,10 @@ static void run(pstb_state *st, int scheme, int dim, int mode)
             pst_op_apply(op, s->u, s->y);
         common_counters(st, s);
         pstb_counter(st, "pairs/s", pairs, 1);
+        /* achieved flop rate (model above) over the FP64 probe at this thread count */
+        double peak = probes.peak[probe_index((int)pstb_arg(st))].gflops;
+        if (peak > 0)
+            pstb_counter(st, "peak_fraction", pairs * apply_flops_per_pair(dim) / (peak * 1e9), 1);
     } else {
         if (pst_op_store(op) != PST_OK) {
             pstb_skip(st, "pst_op_store: out of memory");
@@ -206,6 +225,10 @@ static void run(pstb_state *st, int scheme, int dim, int mode)
         pstb_counter(st, "pairs/s", pairs, 1);
         pstb_counter(st, "bytes/apply", stored_bytes(s), 0);
         pstb_counter(st, "bytes/s", stored_bytes(s), 1);
+        /* modelled bytes/s over the in-process triad at this thread count */
+        double triad = probes.triad_gbs[probe_index((int)pstb_arg(st))];
+        if (triad > 0)
+            pstb_counter(st, "triad_fraction", stored_bytes(s) / (triad * 1e9), 1);
     }
     omp_set_num_threads(saved);
 }
@@ -370,6 +393,8 @@ static void read_dot(pstb_state *st)
 void pstb_register_all(void)
 {
     static const int64_t threads[2] = {1, 2};
+    pstb_probes_run(&probes);
+    pstb_probes_record(&probes, pstb_context);
     pstb_register_iters("triad_3x80MB", triad_80mb, threads, 2, ITERS_TRIAD);
     pstb_register_iters("triad_3x400MB", triad_400mb, threads, 2, ITERS_TRIAD);
     pstb_register_iters("read_dot_2x400MB", read_dot, threads, 2, ITERS_TRIAD);

@@ -32,6 +32,11 @@ void pstb_skip(pstb_state *s, const char *message);
 /* A counter: a plain value, or (rate != 0) value per second per iteration. */
 void pstb_counter(pstb_state *s, const char *name, double value, int rate);
 
+/* A key/value pair of the run's context (Google Benchmark's AddCustomContext: printed in the
+ * console header, the "context" object of --benchmark_format=json). Call it from
+ * pstb_register_all, before the benchmarks run; a key given twice is an error. */
+void pstb_context(const char *key, const char *value);
+
 /* Defined by the C side: registers every benchmark. */
 void pstb_register_all(void);
 

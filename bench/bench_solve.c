@@ -8,8 +8,12 @@
  *
  * usage: bench_solve [--dim 2|3] [--n N] [--scheme S] [--precond jacobi|amg] [--stored 0|1]
  *                    [--h-ratio F] [--max-iter N] [--header]
+ *
+ * --header prints "# machine: <cpu, topology, caches>; flags: <compiler flags>; triad ...,
+ * FP64 peak ..." (src/machine.h, peak.h: probes run in this process) and the table header.
  */
 #include "pstencil.h"
+#include "peak.h"
 #include "stream.h"
 
 #include <math.h>
@@ -51,6 +55,11 @@ static double apply_seconds(const pst_op *op, size_t np, int stored, int reps)
 
 static void print_header(void)
 {
+    pstb_probes p;
+    pstb_probes_run(&p);
+    char line[2048];
+    pstb_probes_line(&p, line, sizeof line);
+    printf("# machine: %s\n", line);
     printf("| dim | particles | nbrs | scheme | precond | operator | neighbours s | precompute s "
            "| store s | solve s | iterations | rel. residual | eq. 15 error | apply ms "
            "| apply rate | triad GB/s | peak GB |\n"

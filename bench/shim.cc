@@ -38,6 +38,11 @@ extern "C" void pstb_counter(pstb_state *s, const char *name, double value, int 
         value, rate ? benchmark::Counter::kIsIterationInvariantRate : benchmark::Counter::kDefaults);
 }
 
+extern "C" void pstb_context(const char *key, const char *value)
+{
+    benchmark::AddCustomContext(key, value);
+}
+
 int main(int argc, char **argv)
 {
     pstb_register_all();

@@ -1,13 +1,11 @@
 /* `pstencil sweep SWEEP.json [--resume] [--plan]`: run a scene over a grid of key values, one
  * CSV row per (run, task) and a summary JSON (docs/sweeps.md). The machine (hwloc) and the
- * compiler flags are probed here, where hwloc and the flags' definition are linked, and handed
- * to the summary. */
+ * compiler flags come from the shared probe (machine.h) and are handed to the summary. */
 #include "cli.h"
+#include "machine.h"
 #include "sweep.h"
 
 #include <cjson/cJSON.h>
-#include <hwloc.h>
-#include <omp.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -27,40 +25,37 @@ static void sweep_help(void)
            "failed (N capped at 100), the CSV and summary written all the same\n");
 }
 
-static void add_cache(cJSON *m, hwloc_topology_t topo, hwloc_obj_type_t type, const char *name)
+static void add_cache(cJSON *m, const pst_machine_cache *c, const char *name)
 {
-    int n = hwloc_get_nbobjs_by_type(topo, type);
-    hwloc_obj_t o = n > 0 ? hwloc_get_obj_by_type(topo, type, 0) : NULL;
     char key[32];
     snprintf(key, sizeof key, "%s_bytes", name);
-    if (o)
-        cJSON_AddNumberToObject(m, key, (double)o->attr->cache.size);
+    if (c->count > 0)
+        cJSON_AddNumberToObject(m, key, (double)c->bytes);
     else
         cJSON_AddNullToObject(m, key);
     snprintf(key, sizeof key, "%s_count", name);
-    cJSON_AddNumberToObject(m, key, n > 0 ? n : 0);
+    cJSON_AddNumberToObject(m, key, c->count);
 }
 
 /* {"machine": {cores, hardware_threads, l2_bytes, l3_bytes, ..., openmp_threads},
  *  "compiler_flags": "...", "build_type": "...", "pstencil": "..."} */
 static cJSON *machine_info(void)
 {
+    pst_machine mi;
+    pst_machine_probe(&mi);
     cJSON *root = cJSON_CreateObject();
     cJSON *m = cJSON_AddObjectToObject(root, "machine");
-    hwloc_topology_t topo;
-    if (hwloc_topology_init(&topo) == 0 && hwloc_topology_load(topo) == 0) {
-        cJSON_AddNumberToObject(m, "packages", hwloc_get_nbobjs_by_type(topo, HWLOC_OBJ_PACKAGE));
-        cJSON_AddNumberToObject(m, "cores", hwloc_get_nbobjs_by_type(topo, HWLOC_OBJ_CORE));
-        cJSON_AddNumberToObject(m, "hardware_threads",
-                                hwloc_get_nbobjs_by_type(topo, HWLOC_OBJ_PU));
-        add_cache(m, topo, HWLOC_OBJ_L1CACHE, "l1d");
-        add_cache(m, topo, HWLOC_OBJ_L2CACHE, "l2");
-        add_cache(m, topo, HWLOC_OBJ_L3CACHE, "l3");
-        hwloc_topology_destroy(topo);
+    if (mi.topology_ok) {
+        cJSON_AddNumberToObject(m, "packages", mi.packages);
+        cJSON_AddNumberToObject(m, "cores", mi.cores);
+        cJSON_AddNumberToObject(m, "hardware_threads", mi.hardware_threads);
+        add_cache(m, &mi.l1d, "l1d");
+        add_cache(m, &mi.l2, "l2");
+        add_cache(m, &mi.l3, "l3");
     }
-    cJSON_AddNumberToObject(m, "openmp_threads", omp_get_max_threads());
-    cJSON_AddStringToObject(root, "compiler_flags", PSTENCIL_C_FLAGS);
-    cJSON_AddStringToObject(root, "build_type", PSTENCIL_BUILD_TYPE);
+    cJSON_AddNumberToObject(m, "openmp_threads", mi.omp_threads);
+    cJSON_AddStringToObject(root, "compiler_flags", mi.compile_flags);
+    cJSON_AddStringToObject(root, "build_type", mi.build_type);
     cJSON_AddStringToObject(root, "pstencil", pst_version());
     return root;
 }
