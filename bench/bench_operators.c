@@ -1,6 +1,7 @@
-/* Benchmarks of the Lukyanov-Vuik operators (brookshaw, cb, schwaiger, lv; gradient G1, cubic
- * spline) on 10^6-particle jittered lattices in 2D (1000^2) and 3D (100^3), K = 0.5,
- * h = 1.2 s0, neighbour support 2h, Morton-sorted, with 1 and 2 OpenMP threads (the argument):
+/* Benchmarks of every registered scheme (pst_scheme_count / pst_scheme_name; options at their
+ * defaults, i.e. each scheme's default kernel, gradient G1 for the LV family) on 10^6-particle
+ * jittered lattices in 2D (1000^2) and 3D (100^3), K = 0.5, h = 1.2 s0, neighbour support the
+ * default kernel's (2h cubic, 3h quintic), Morton-sorted, with 1 and 2 OpenMP threads:
  *   op_precompute_<scheme>_<dim>d   pst_op_create (per-particle data, one threaded pass)
  *   op_apply_<scheme>_<dim>d        pst_op_apply (matrix-free: pair weights recomputed)
  *   op_stored_<scheme>_<dim>d       pst_op_apply_stored (weights stored once, untimed)
@@ -23,7 +24,8 @@
 
 #define H_RATIO 1.2
 #define JITTER 0.5
-#define SUPPORT 2.0 /* cubic spline: R = 2h */
+#define NSUPP 2 /* neighbour-list supports: 2h (cubic) and 3h (quintic) */
+static const double supports[NSUPP] = {2.0, 3.0};
 
 /* Fixed iteration counts: each benchmark a few iterations (override needs a code change; the
  * counts keep a full run at about two minutes on a 2-core machine). */
@@ -31,6 +33,14 @@
 #define ITERS_APPLY 5
 #define ITERS_STORED 20
 #define ITERS_TRIAD 20
+/* The quintic schemes (support 3h: ~40 neighbours in 2D, ~190 in 3D; their precomputes solve a
+ * 5x5 / 9x9 or larger system per particle) run fewer iterations so that a full run stays near
+ * ten minutes. */
+#define ITERS_PRECOMPUTE_WIDE 1
+#define ITERS_APPLY_WIDE_2D 3
+#define ITERS_APPLY_WIDE_3D 1
+#define ITERS_STORED_WIDE 5
+#define MAX_SCHEMES 16
 
 /* ---- clouds and lists, built once per process ------------------------------------------- */
 
@@ -60,19 +70,21 @@ typedef struct {
     double *u, *y;
 } setup;
 
-static setup setups[4];
+static setup setups[4][NSUPP];
 
-static setup *get_setup(int dim)
+static int supp_index(double support) { return support > 2.5 ? 1 : 0; }
+
+static setup *get_setup(int dim, int si)
 {
-    setup *s = &setups[dim];
+    setup *s = &setups[dim][si];
     if (s->nl)
         return s;
     char err[PST_ERRLEN] = "";
     s->cloud = lattice(dim);
     if (!s->cloud)
         return NULL;
-    pst_cloud_morton_sort(s->cloud, SUPPORT * H_RATIO);
-    if (pst_nlist_build(&s->nl, s->cloud, SUPPORT, err) != PST_OK) {
+    pst_cloud_morton_sort(s->cloud, supports[si] * H_RATIO);
+    if (pst_nlist_build(&s->nl, s->cloud, supports[si], err) != PST_OK) {
         fprintf(stderr, "bench_operators: neighbour list: %s\n", err);
         return NULL;
     }
@@ -104,13 +116,19 @@ static void release_op(void)
     cached.scheme = -1;
 }
 
-static const char *const scheme_names[4] = {"brookshaw", "cb", "schwaiger", "lv"};
+/* The registered scheme of index `scheme` and the list support of its default kernel. */
+static const char *scheme_name(int scheme) { return pst_scheme_name(scheme); }
+
+static int scheme_supp(int scheme)
+{
+    return supp_index(pst_kernel_support((pst_kernel)pst_scheme_default_kernel(scheme_name(scheme))));
+}
 
 static int create_op(pst_op **op, const setup *s, int scheme, char *err)
 {
     pst_op_opts o;
     pst_op_defaults(&o);
-    o.scheme = scheme_names[scheme];
+    o.scheme = scheme_name(scheme);
     o.gradient = PST_GRAD_G1;
     return pst_op_create(op, s->cloud, s->nl, &o, err);
 }
@@ -141,17 +159,40 @@ enum { MODE_PRECOMPUTE, MODE_APPLY, MODE_STORED };
 /* Bytes moved by one stored apply (the model of bench/README.md): per pair 8 (weight) + 4
  * (index); per row 8 (offset) + 8 (u_I) + 8 (y_I written); u_J gathers counted once per
  * particle (8), i.e. perfect cache reuse of u under Morton order. */
-static double stored_bytes(const setup *s)
+static double stored_bytes(const setup *s, double pattern_pairs)
 {
-    double n = (double)pst_cloud_size(s->cloud), pairs = (double)s->st.pairs;
-    return 12.0 * pairs + 32.0 * n;
+    double n = (double)pst_cloud_size(s->cloud);
+    return 12.0 * pattern_pairs + 32.0 * n;
 }
 
-/* Flops per pair of the matrix-free apply (docs/schemes/README.md, counted for G1, scalar
- * mobility, cubic spline): about 60 in 3D, 8 fewer in 2D; the sqrt and the three divisions
- * are not counted. All four schemes share the one pair function (brookshaw and cb with
- * eta = 0), so the model is the same for each. */
-static double apply_flops_per_pair(int dim) { return dim == 3 ? 60.0 : 52.0; }
+/* Entries of the operator's stored pattern (off-diagonal): the neighbour list for every scheme
+ * but the mixed ones, whose rows span the neighbours of neighbours. */
+static double pattern_pairs(const pst_op *op) { return (double)pst_op_pattern_pairs(op); }
+
+/* Flops per list pair of the matrix-free apply (pst_op_apply), counted once from each scheme's
+ * per-pair function (adds, muls, divisions and sqrt 1 each; compares and selects not counted;
+ * the kernel's shape from sph_kernels.h at its default kernel). bench/README.md, "Flop models
+ * of the matrix-free applies", gives the function and line each is counted from. The mixed
+ * schemes' apply makes two sweeps over the list (gradient, then divergence): both counted per
+ * list pair. Unknown schemes get no peak_fraction. */
+static const struct {
+    const char *scheme;
+    double flops[2]; /* 2D, 3D */
+} flop_models[] = {
+    {"brookshaw", {52, 60}}, {"cb", {52, 60}},      {"schwaiger", {52, 60}},
+    {"lv", {52, 60}},        {"cspm", {82, 104}},   {"icspm", {82, 104}},
+    {"csph2g", {82, 104}},   {"mixed0", {101, 140}}, {"mixed1", {99, 138}},
+    {"mixed2", {133, 228}},  {"lsmps", {44, 59}},   {"lpmps", {42, 57}},
+    {"qsfdi", {52, 73}},
+};
+
+static double apply_flops_per_pair(int scheme, int dim)
+{
+    for (size_t m = 0; m < sizeof flop_models / sizeof *flop_models; ++m)
+        if (strcmp(flop_models[m].scheme, scheme_name(scheme)) == 0)
+            return flop_models[m].flops[dim == 3];
+    return 0;
+}
 
 /* The probes of the run's context, at 1 thread ([0]) and at all threads ([1]). */
 static pstb_probes probes;
@@ -163,7 +204,16 @@ static void run(pstb_state *st, int scheme, int dim, int mode)
     int saved = omp_get_max_threads();
     omp_set_num_threads((int)pstb_arg(st));
     char err[PST_ERRLEN] = "";
-    setup *s = get_setup(dim);
+    const char *name = scheme_name(scheme);
+    if (dim == 3 && strncmp(name, "mixed", 5) == 0) {
+        /* 3D quintic list ~190 neighbours; the two-ring pattern ~1500 per row: ~6 GB of
+         * pattern index and ~12 GB of stored weights at 10^6 particles */
+        pstb_skip(st, "mixed 3D: the neighbours-of-neighbours pattern of 10^6 particles needs "
+                      "~6 GB (index) + ~12 GB (stored weights)");
+        omp_set_num_threads(saved);
+        return;
+    }
+    setup *s = get_setup(dim, scheme_supp(scheme));
     if (!s) {
         pstb_skip(st, "cannot build the cloud or its neighbour list");
         omp_set_num_threads(saved);
@@ -210,8 +260,11 @@ static void run(pstb_state *st, int scheme, int dim, int mode)
         pstb_counter(st, "pairs/s", pairs, 1);
         /* achieved flop rate (model above) over the FP64 probe at this thread count */
         double peak = probes.peak[probe_index((int)pstb_arg(st))].gflops;
-        if (peak > 0)
-            pstb_counter(st, "peak_fraction", pairs * apply_flops_per_pair(dim) / (peak * 1e9), 1);
+        double fpp = apply_flops_per_pair(scheme, dim);
+        if (fpp > 0)
+            pstb_counter(st, "flops/particle", pairs / (double)pst_cloud_size(s->cloud) * fpp, 0);
+        if (peak > 0 && fpp > 0)
+            pstb_counter(st, "peak_fraction", pairs * fpp / (peak * 1e9), 1);
     } else {
         if (pst_op_store(op) != PST_OK) {
             pstb_skip(st, "pst_op_store: out of memory");
@@ -221,31 +274,44 @@ static void run(pstb_state *st, int scheme, int dim, int mode)
         pst_op_apply_stored(op, s->u, s->y); /* warm: first touch of y done, caches primed */
         while (pstb_keep_running(st))
             pst_op_apply_stored(op, s->u, s->y);
+        double pp = pattern_pairs(op), bytes = stored_bytes(s, pp);
         common_counters(st, s);
-        pstb_counter(st, "pairs/s", pairs, 1);
-        pstb_counter(st, "bytes/apply", stored_bytes(s), 0);
-        pstb_counter(st, "bytes/s", stored_bytes(s), 1);
+        pstb_counter(st, "pairs/s", pp, 1); /* the stored pattern's entries */
+        pstb_counter(st, "pattern/particle", pp / (double)pst_cloud_size(s->cloud), 0);
+        pstb_counter(st, "bytes/apply", bytes, 0);
+        pstb_counter(st, "bytes/s", bytes, 1);
         /* modelled bytes/s over the in-process triad at this thread count */
         double triad = probes.triad_gbs[probe_index((int)pstb_arg(st))];
         if (triad > 0)
-            pstb_counter(st, "triad_fraction", stored_bytes(s) / (triad * 1e9), 1);
+            pstb_counter(st, "triad_fraction", bytes / (triad * 1e9), 1);
     }
     omp_set_num_threads(saved);
 }
 
-#define OP_BENCH(S, SI, D)                                                                    \
-    static void pre_##S##_##D(pstb_state *st) { run(st, SI, D, MODE_PRECOMPUTE); }           \
-    static void app_##S##_##D(pstb_state *st) { run(st, SI, D, MODE_APPLY); }                \
-    static void sto_##S##_##D(pstb_state *st) { run(st, SI, D, MODE_STORED); }
+/* One body per (scheme index, dim, mode): the shim's bodies take no user data. */
+#define OP_BENCH(SI, D)                                                                       \
+    static void pre_##SI##_##D(pstb_state *st) { run(st, SI, D, MODE_PRECOMPUTE); }          \
+    static void app_##SI##_##D(pstb_state *st) { run(st, SI, D, MODE_APPLY); }               \
+    static void sto_##SI##_##D(pstb_state *st) { run(st, SI, D, MODE_STORED); }
+#define OP_BENCH2(SI) OP_BENCH(SI, 2) OP_BENCH(SI, 3)
+OP_BENCH2(0) OP_BENCH2(1) OP_BENCH2(2) OP_BENCH2(3) OP_BENCH2(4) OP_BENCH2(5) OP_BENCH2(6)
+OP_BENCH2(7) OP_BENCH2(8) OP_BENCH2(9) OP_BENCH2(10) OP_BENCH2(11) OP_BENCH2(12) OP_BENCH2(13)
+OP_BENCH2(14) OP_BENCH2(15)
+#define FNS(SI) {{pre_##SI##_2, app_##SI##_2, sto_##SI##_2}, {pre_##SI##_3, app_##SI##_3, sto_##SI##_3}}
+static const pstb_fn op_fns[MAX_SCHEMES][2][3] = {
+    FNS(0), FNS(1), FNS(2),  FNS(3),  FNS(4),  FNS(5),  FNS(6),  FNS(7),
+    FNS(8), FNS(9), FNS(10), FNS(11), FNS(12), FNS(13), FNS(14), FNS(15),
+};
+#undef FNS
 
-OP_BENCH(brookshaw, 0, 2)
-OP_BENCH(brookshaw, 0, 3)
-OP_BENCH(cb, 1, 2)
-OP_BENCH(cb, 1, 3)
-OP_BENCH(schwaiger, 2, 2)
-OP_BENCH(schwaiger, 2, 3)
-OP_BENCH(lv, 3, 2)
-OP_BENCH(lv, 3, 3)
+/* The index of the lv scheme (the CSR probes use its operator). */
+static int lv_index(void)
+{
+    for (int k = 0; k < pst_scheme_count(); ++k)
+        if (strcmp(pst_scheme_name(k), "lv") == 0)
+            return k;
+    return -1;
+}
 
 /* ---- the assembled matrix with 1 and 4 partial sums per row -------------------------------- */
 
@@ -259,8 +325,9 @@ static void csr_spmv(pstb_state *st, int dim, int accumulators)
     int saved = omp_get_max_threads();
     omp_set_num_threads((int)pstb_arg(st));
     char err[PST_ERRLEN] = "";
-    setup *s = get_setup(dim);
-    pst_op *op = s ? get_op(s, 3, dim, err) : NULL;
+    int lv = lv_index();
+    setup *s = lv >= 0 ? get_setup(dim, scheme_supp(lv)) : NULL;
+    pst_op *op = s ? get_op(s, lv, dim, err) : NULL;
     pst_csr a;
     if (!op || pst_op_assemble(op, &a) != PST_OK) {
         pstb_skip(st, err[0] ? err : "cannot assemble the lv matrix");
@@ -398,28 +465,33 @@ void pstb_register_all(void)
     pstb_register_iters("triad_3x80MB", triad_80mb, threads, 2, ITERS_TRIAD);
     pstb_register_iters("triad_3x400MB", triad_400mb, threads, 2, ITERS_TRIAD);
     pstb_register_iters("read_dot_2x400MB", read_dot, threads, 2, ITERS_TRIAD);
-    /* per (scheme, dim): precompute (which leaves its operator cached), matrix-free apply,
+    /* per (dim, scheme): precompute (which leaves its operator cached), matrix-free apply,
      * stored apply, so every operator is built by the timed precompute only */
-    static const struct {
-        const char *name[3];
-        pstb_fn fn[3];
-    } table[] = {
-#define ROW(S, D)                                                                             \
-    {{"op_precompute_" #S "_" #D "d", "op_apply_" #S "_" #D "d", "op_stored_" #S "_" #D "d"},    \
-     {pre_##S##_##D, app_##S##_##D, sto_##S##_##D}}
-        ROW(brookshaw, 2), ROW(cb, 2), ROW(schwaiger, 2), ROW(lv, 2),
-        ROW(brookshaw, 3), ROW(cb, 3), ROW(schwaiger, 3), ROW(lv, 3),
-#undef ROW
-    };
-    static const int iters[3] = {ITERS_PRECOMPUTE, ITERS_APPLY, ITERS_STORED};
-    for (size_t r = 0; r < sizeof table / sizeof *table; ++r) {
-        for (int m = 0; m < 3; ++m)
-            pstb_register_iters(table[r].name[m], table[r].fn[m], threads, 2, iters[m]);
-        if (r == 3) { /* after lv 2D, while its operator is cached */
-            pstb_register_iters("csr_1sum_lv_2d", csr1_2, threads, 2, ITERS_STORED);
-            pstb_register_iters("csr_4sums_lv_2d", csr4_2, threads, 2, ITERS_STORED);
+    static const char *const mode_names[3] = {"op_precompute_", "op_apply_", "op_stored_"};
+    int ns = pst_scheme_count(), lv = lv_index();
+    if (ns > MAX_SCHEMES) {
+        fprintf(stderr, "bench_operators: %d schemes, only the first %d benchmarked\n", ns,
+                MAX_SCHEMES);
+        ns = MAX_SCHEMES;
+    }
+    for (int dim = 2; dim <= 3; ++dim) {
+        for (int k = 0; k < ns; ++k) {
+            int wide = scheme_supp(k) > 0;
+            int iters[3] = {wide ? ITERS_PRECOMPUTE_WIDE : ITERS_PRECOMPUTE,
+                            wide ? (dim == 2 ? ITERS_APPLY_WIDE_2D : ITERS_APPLY_WIDE_3D)
+                                 : ITERS_APPLY,
+                            wide ? ITERS_STORED_WIDE : ITERS_STORED};
+            for (int m = 0; m < 3; ++m) {
+                char name[96];
+                snprintf(name, sizeof name, "%s%s_%dd", mode_names[m], pst_scheme_name(k), dim);
+                pstb_register_iters(name, op_fns[k][dim - 2][m], threads, 2, iters[m]);
+            }
+            if (k == lv) { /* while its operator is cached */
+                pstb_register_iters(dim == 2 ? "csr_1sum_lv_2d" : "csr_1sum_lv_3d",
+                                    dim == 2 ? csr1_2 : csr1_3, threads, 2, ITERS_STORED);
+                pstb_register_iters(dim == 2 ? "csr_4sums_lv_2d" : "csr_4sums_lv_3d",
+                                    dim == 2 ? csr4_2 : csr4_3, threads, 2, ITERS_STORED);
+            }
         }
     }
-    pstb_register_iters("csr_1sum_lv_3d", csr1_3, threads, 2, ITERS_STORED);
-    pstb_register_iters("csr_4sums_lv_3d", csr4_3, threads, 2, ITERS_STORED);
 }

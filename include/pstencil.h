@@ -380,6 +380,10 @@ int pst_op_apply(const pst_op *op, const double *u, double *y);
 int pst_op_has_rows(const pst_op *op);
 const char *pst_op_scheme(const pst_op *op);
 int pst_op_kernel(const pst_op *op);
+/* Entries of the operator's sparsity pattern without the diagonal: the neighbour list's
+ * pairs, or more for schemes with a wider stencil (the mixed schemes' neighbours of
+ * neighbours). pst_op_store keeps 8 bytes per entry. */
+int64_t pst_op_pattern_pairs(const pst_op *op);
 
 /* Compute and keep the stencil weights w_IJ (CSR, the list's layout: 8 bytes per pair). */
 int pst_op_store(pst_op *op);

@@ -254,6 +254,7 @@ int pst_op_apply(const pst_op *op, const double *u, double *y)
 int pst_op_has_rows(const pst_op *op) { return op->rows; }
 const char *pst_op_scheme(const pst_op *op) { return op->scheme->name; }
 int pst_op_kernel(const pst_op *op) { return op->kernel; }
+int64_t pst_op_pattern_pairs(const pst_op *op) { return op->poff[op->n]; }
 
 int pst_op_store(pst_op *op)
 {
