@@ -13,6 +13,7 @@
  * applies report triad_fraction, the matrix-free applies peak_fraction (flop model below).
  * bench/README.md explains the counters and the byte and flop models. */
 #include "bench_shim.h"
+#include "markers.h"
 #include "peak.h"
 #include "stream.h"
 #include "pstencil.h"
@@ -253,9 +254,14 @@ static void run(pstb_state *st, int scheme, int dim, int mode)
         return;
     }
     double pairs = (double)s->st.pairs;
+    char region[96]; /* the likwid region: the benchmark's name without the thread count */
+    snprintf(region, sizeof region, "%s_%s_%dd", mode == MODE_APPLY ? "op_apply" : "op_stored",
+             name, dim);
     if (mode == MODE_APPLY) {
+        PSTB_REGION_START(region);
         while (pstb_keep_running(st))
             pst_op_apply(op, s->u, s->y);
+        PSTB_REGION_STOP(region);
         common_counters(st, s);
         pstb_counter(st, "pairs/s", pairs, 1);
         /* achieved flop rate (model above) over the FP64 probe at this thread count */
@@ -272,8 +278,10 @@ static void run(pstb_state *st, int scheme, int dim, int mode)
             return;
         }
         pst_op_apply_stored(op, s->u, s->y); /* warm: first touch of y done, caches primed */
+        PSTB_REGION_START(region);
         while (pstb_keep_running(st))
             pst_op_apply_stored(op, s->u, s->y);
+        PSTB_REGION_STOP(region);
         double pp = pattern_pairs(op), bytes = stored_bytes(s, pp);
         common_counters(st, s);
         pstb_counter(st, "pairs/s", pp, 1); /* the stored pattern's entries */
@@ -460,6 +468,7 @@ static void read_dot(pstb_state *st)
 void pstb_register_all(void)
 {
     static const int64_t threads[2] = {1, 2};
+    PSTB_MARKERS_INIT();
     pstb_probes_run(&probes);
     pstb_probes_record(&probes, pstb_context);
     pstb_register_iters("triad_3x80MB", triad_80mb, threads, 2, ITERS_TRIAD);
