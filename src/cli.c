@@ -50,6 +50,8 @@ static void print_help(void)
            "                      and task, a summary with means and convergence slopes\n"
            "  plot RESULTS.csv    PNG plots of a sweep (gnuplot): error against s0 and time,\n"
            "                      time ratios, phase costs, solver iterations\n"
+           "  analyse SCENE [K=V] the spectrum of the scene's operator on its unknowns\n"
+           "                      (LAPACK): wrong-sign eigenvalues, CSV and PNG (--out DIR)\n"
            "  help scene          every scene key: type, default, units, meaning\n"
            "  cloud [OPTIONS]     generate a particle cloud and write it as CSV\n"
            "  neighbours FILE     read a CSV cloud, build its neighbour list, print statistics\n"
@@ -148,6 +150,8 @@ int main(int argc, char **argv)
         rc = CLI_OK;
     } else if (strcmp(args[0], "run") == 0) {
         rc = cli_run(&ctx, nargs - 1, args + 1);
+    } else if (strcmp(args[0], "analyse") == 0 || strcmp(args[0], "analyze") == 0) {
+        rc = cli_analyse(&ctx, nargs - 1, args + 1);
     } else if (strcmp(args[0], "sweep") == 0) {
         rc = cli_sweep(&ctx, nargs - 1, args + 1);
     } else if (strcmp(args[0], "plot") == 0) {

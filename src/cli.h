@@ -55,6 +55,8 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv);
 int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv);
 int cli_apply(const cli_ctx *ctx, int argc, char **argv);
 int cli_stencil(const cli_ctx *ctx, int argc, char **argv);
+/* `pstencil analyse SCENE.json [K=V ...] [--out DIR]`: the operator's spectrum. */
+int cli_analyse(const cli_ctx *ctx, int argc, char **argv);
 /* `pstencil help scene [--markdown]`: the scene keys as text or as docs/scenes.md. */
 int cli_help(const cli_ctx *ctx, int argc, char **argv);
 

@@ -806,3 +806,44 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
         pst_cloud_destroy(r.c);
     return st;
 }
+
+int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, pst_cloud **cloud,
+                           pst_nlist **nl, pst_op **op, char *err, size_t errlen)
+{
+    pst_run_opts o = {.quiet = quiet};
+    run_state r = {.s = s, .o = &o, .err = err, .errlen = errlen};
+    err[0] = '\0';
+    *cloud = NULL;
+    *nl = NULL;
+    *op = NULL;
+    int st = pst_plan_make(&r.plan, s, pst_plan_particles(s), err, errlen);
+    r.report = report_begin(s);
+    r.plan.need_neighbours = 1;
+    if (st == PST_OK)
+        st = build(&r);
+    if (st == PST_OK && !r.nl)
+        st = fail(&r, PST_EINPUT, "%s: no task of the scene uses the operator", s->path);
+    if (st == PST_OK && max_unknowns) {
+        size_t n = pst_cloud_size(r.c), m = 0;
+        const uint8_t *kind = pst_cloud_kinds_const(r.c);
+        for (size_t i = 0; i < n; ++i)
+            m += kind[i] != PST_DIRICHLET;
+        if (m > max_unknowns)
+            st = fail(&r, PST_EINPUT, "%s: %zu unknowns (interior and Neumann particles), more "
+                                      "than %zu: use a coarser cloud.spacing", s->path, m,
+                      max_unknowns);
+    }
+    if (st == PST_OK)
+        st = make_operator(&r, 1, &r.base);
+    cJSON_Delete(r.report);
+    if (st != PST_OK) {
+        pst_op_destroy(r.base);
+        pst_nlist_destroy(r.nl);
+        pst_cloud_destroy(r.c);
+        return st;
+    }
+    *cloud = r.c;
+    *nl = r.nl;
+    *op = r.base;
+    return PST_OK;
+}

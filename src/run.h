@@ -22,4 +22,11 @@ typedef struct {
 int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
                   pst_run_counters *counters, pst_cloud **cloud, char *err, size_t errlen);
 
+/* Build scene `s`'s cloud, neighbour list and base operator (with Laplacian rows, on the
+ * cloud's own boundary kinds), as pst_run_scene would, and hand them to the caller (destroy
+ * op, then nl, then cloud). With max_unknowns > 0, a cloud with more interior + Neumann
+ * particles is refused (PST_EINPUT) before the operator is built. Errors as pst_run_scene. */
+int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, pst_cloud **cloud,
+                           pst_nlist **nl, pst_op **op, char *err, size_t errlen);
+
 #endif

@@ -316,5 +316,26 @@ expect 1 "bad --variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field
 expect 1 "lv rejects a variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
   --out "$work/lu_v.csv" --variant 1
 
+# analyse: the spectrum of a scene's operator on its unknowns (docs/stability.md)
+expect 0 "analyse --help" -- "$exe" analyse --help
+expect 1 "analyse without a scene" -- "$exe" analyse
+expect 0 "analyse qsfdi" -- "$exe" analyse "$scenes/qsfdi_test_c.json" cloud.spacing=0.05 \
+  cloud.jitter=0.35 --out "$work/sp"
+contains out "unknowns             361" "analyse counts the unknowns"
+contains out "wrong sign (re >= 0) 0$" "qsfdi has no wrong-sign eigenvalue at K = 0.35"
+check "spectrum.csv: header and 361 rows" \
+  '[ "$(head -n 1 "$work/sp/spectrum.csv")" = "re,im" ] && [ "$(wc -l < "$work/sp/spectrum.csv")" -eq 362 ]'
+check "spectrum.png has the PNG signature" \
+  '[ "$(head -c 8 "$work/sp/spectrum.png" | od -An -tx1 | tr -d " \n")" = "89504e470d0a1a0a" ]'
+check "analyse left no temporary file" '[ "$(ls -A "$work/sp" | wc -l)" -eq 2 ]'
+expect 0 "analyse icspm" -- "$exe" analyse "$scenes/qsfdi_test_c.json" operator.scheme=icspm \
+  cloud.h_ratio=1.2 cloud.jitter=0.35 cloud.spacing=0.05 --out "$work/sp2"
+check "icspm has wrong-sign eigenvalues at K = 0.35, h = 1.2 s0" \
+  '[ "$(awk "/^wrong sign/ { print \$NF }" "$work/out")" -gt 0 ]'
+expect 2 "analyse refuses more than 5000 unknowns" -- "$exe" analyse "$scenes/qsfdi_test_c.json" \
+  --out "$work/sp3"
+contains err "more than 5000" "analyse names the limit"
+check "refused analyse wrote nothing" '[ ! -e "$work/sp3" ]'
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
