@@ -48,26 +48,6 @@ static char *dupstr(const char *s)
     return d;
 }
 
-static int col_of(const pst_csv_table *t, const char *name, int below)
-{
-    for (int q = 0; q < below; ++q)
-        if (strcmp(t->cell[q], name) == 0)
-            return q;
-    return -1;
-}
-
-static int num(const char *s, double *v)
-{
-    if (!s || !*s)
-        return 0;
-    char *end;
-    double x = strtod(s, &end);
-    if (*end || !isfinite(x))
-        return 0;
-    *v = x;
-    return 1;
-}
-
 /* the part of a dotted key after its last dot: cloud.h_ratio -> h_ratio */
 static const char *short_key(const char *k)
 {
@@ -250,7 +230,7 @@ static const cJSON *find_fit(const ctx *c, size_t r, const char *norm)
         const cJSON *kv;
         cJSON_ArrayForEach(kv, key)
         {
-            int q = col_of(c->t, kv->string, c->nkeys);
+            int q = pst_csv_column(c->t, kv->string, c->nkeys);
             if (q < 0 || !cell_equals(cell(c, r, q), kv)) {
                 match = 0;
                 break;
@@ -293,7 +273,7 @@ static void line_plot(ctx *c, const line_spec *sp, unsigned char *keep)
     const size_t n = c->t->nrows;
     for (size_t r = 1; r <= n; ++r) {
         double x, y;
-        if (keep[r] && !(num(cell(c, r, sp->xcol), &x) && num(cell(c, r, sp->ycol), &y) &&
+        if (keep[r] && !(pst_csv_number(cell(c, r, sp->xcol), &x) && pst_csv_number(cell(c, r, sp->ycol), &y) &&
                          (!sp->logx || x > 0) && (!sp->logy || y > 0)))
             keep[r] = 0;
     }
@@ -423,8 +403,8 @@ static void line_plot(ctx *c, const line_spec *sp, unsigned char *keep)
                 size_t m = 0;
                 for (size_t r = first_p[g]; r <= n; ++r)
                     if (gid_p[r] == g) {
-                        num(cell(c, r, sp->xcol), &xv[m]);
-                        num(cell(c, r, sp->ycol), &yv[m]);
+                        pst_csv_number(cell(c, r, sp->xcol), &xv[m]);
+                        pst_csv_number(cell(c, r, sp->ycol), &yv[m]);
                         ++m;
                     }
                 double sx;
@@ -471,7 +451,7 @@ static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
         double a, b;
         const char *s = cell(c, r, c->scheme);
         int q = strcmp(s, "qsfdi") == 0, l = strcmp(s, "lpmps") == 0;
-        if (keep[r] && (q || l) && num(cell(c, r, c->tpre), &a) && num(cell(c, r, c->ttask), &b)) {
+        if (keep[r] && (q || l) && pst_csv_number(cell(c, r, c->tpre), &a) && pst_csv_number(cell(c, r, c->ttask), &b)) {
             has_q |= q;
             has_l |= l;
         } else {
@@ -508,8 +488,8 @@ static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
         for (size_t r = first[g]; r <= n; ++r)
             if (gid[r] == g) {
                 double a = 0, b = 0;
-                num(cell(c, r, c->tpre), &a);
-                num(cell(c, r, c->ttask), &b);
+                pst_csv_number(cell(c, r, c->tpre), &a);
+                pst_csv_number(cell(c, r, c->ttask), &b);
                 s += a + b;
                 ++m;
             }
@@ -564,7 +544,7 @@ static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
                            strcmp(cell(c, rl, q), cell(c, rq, q)) == 0;
                 if (!same || !(mean[g] > 0))
                     continue;
-                num(cell(c, rq, xcol), &se->x[se->n]);
+                pst_csv_number(cell(c, rq, xcol), &se->x[se->n]);
                 se->y[se->n] = mean[h] / mean[g];
                 se->err[se->n] = NAN;
                 ++se->n;
@@ -594,9 +574,9 @@ static void phases_plot(ctx *c, unsigned char *keep)
     double fine = INFINITY;
     for (size_t r = 1; r <= n; ++r) {
         double v;
-        if (keep[r] && !num(cell(c, r, c->ttask), &v))
+        if (keep[r] && !pst_csv_number(cell(c, r, c->ttask), &v))
             keep[r] = 0;
-        if (keep[r] && c->spacing >= 0 && num(cell(c, r, c->spacing), &v) && v < fine)
+        if (keep[r] && c->spacing >= 0 && pst_csv_number(cell(c, r, c->spacing), &v) && v < fine)
             fine = v;
     }
     if (distinct(c, keep, c->ttask) == 0) {
@@ -607,7 +587,7 @@ static void phases_plot(ctx *c, unsigned char *keep)
     if (c->spacing >= 0)
         for (size_t r = 1; r <= n; ++r) {
             double v;
-            if (keep[r] && !(num(cell(c, r, c->spacing), &v) && v == fine))
+            if (keep[r] && !(pst_csv_number(cell(c, r, c->spacing), &v) && v == fine))
                 keep[r] = 0;
             else if (keep[r] && !fine_cell)
                 fine_cell = cell(c, r, c->spacing);
@@ -662,7 +642,7 @@ static void phases_plot(ctx *c, unsigned char *keep)
         for (size_t g = 0; g < ng; ++g) {
             size_t m = 0;
             for (size_t r = first[g]; r <= n; ++r)
-                if (gid[r] == g && num(cell(c, r, c->phase[k]), &v[m]))
+                if (gid[r] == g && pst_csv_number(cell(c, r, c->phase[k]), &v[m]))
                     ++m;
             se->x[g] = (double)g;
             if (m)
@@ -686,7 +666,7 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
 {
     memset(ps, 0, sizeof *ps);
     ctx c = {.t = t, .nc = t->ncols, .ps = ps};
-    c.nkeys = col_of(t, "dim", t->ncols);
+    c.nkeys = pst_csv_column(t, "dim", t->ncols);
     if (c.nkeys < 0 || t->ncols != c.nkeys + pst_sweep_ncolumns) {
         snprintf(err, errlen, "not a sweep CSV (no 'dim' column, or not %d columns after the "
                               "grid keys)", pst_sweep_ncolumns);
@@ -703,21 +683,21 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     c.slope_key = cJSON_IsString(sk) ? sk->valuestring : "cloud.spacing";
     const char *repeat_key = cJSON_IsString(rk) ? rk->valuestring : "cloud.seed";
     c.fits = cJSON_GetObjectItemCaseSensitive(summary, "fits");
-    c.scheme = col_of(t, "operator.scheme", c.nkeys);
-    c.spacing = col_of(t, c.slope_key, c.nkeys);
-    c.repeat = col_of(t, repeat_key, c.nkeys);
-    c.jitter = col_of(t, "cloud.jitter", c.nkeys);
-    c.hratio = col_of(t, "cloud.h_ratio", c.nkeys);
-    c.task = col_of(t, "task", t->ncols);
-    c.type = col_of(t, "type", t->ncols);
-    c.status = col_of(t, "status", t->ncols);
-    c.particles = col_of(t, "particles", t->ncols);
-    c.iter = col_of(t, "iterations", t->ncols);
-    c.tpre = col_of(t, "t_precompute", t->ncols);
-    c.ttask = col_of(t, "t_task", t->ncols);
-    c.ttotal = col_of(t, "t_total", t->ncols);
+    c.scheme = pst_csv_column(t, "operator.scheme", c.nkeys);
+    c.spacing = pst_csv_column(t, c.slope_key, c.nkeys);
+    c.repeat = pst_csv_column(t, repeat_key, c.nkeys);
+    c.jitter = pst_csv_column(t, "cloud.jitter", c.nkeys);
+    c.hratio = pst_csv_column(t, "cloud.h_ratio", c.nkeys);
+    c.task = pst_csv_column(t, "task", t->ncols);
+    c.type = pst_csv_column(t, "type", t->ncols);
+    c.status = pst_csv_column(t, "status", t->ncols);
+    c.particles = pst_csv_column(t, "particles", t->ncols);
+    c.iter = pst_csv_column(t, "iterations", t->ncols);
+    c.tpre = pst_csv_column(t, "t_precompute", t->ncols);
+    c.ttask = pst_csv_column(t, "t_task", t->ncols);
+    c.ttotal = pst_csv_column(t, "t_total", t->ncols);
     for (int k = 0; k < 5; ++k)
-        c.phase[k] = col_of(t, phase_cols[k], t->ncols);
+        c.phase[k] = pst_csv_column(t, phase_cols[k], t->ncols);
 
     const size_t n = t->nrows;
     unsigned char *keep = malloc(n + 1);
@@ -730,7 +710,7 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     if (norm) {
         for (size_t i = 0; i < sizeof norm_columns / sizeof norm_columns[0]; ++i)
             if (strcmp(norm, norm_columns[i]) == 0)
-                c.normcol = col_of(t, norm, t->ncols);
+                c.normcol = pst_csv_column(t, norm, t->ncols);
         if (c.normcol < 0) {
             free(keep);
             snprintf(err, errlen, "unknown norm '%s' (known: rel_l2, qsfdi11, "
@@ -740,10 +720,10 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     } else {
         keep_ok(&c, keep);
         for (int i = 0; i < pst_plot_nnorms && c.normcol < 0; ++i) {
-            int q = col_of(t, pst_plot_norms[i], t->ncols);
+            int q = pst_csv_column(t, pst_plot_norms[i], t->ncols);
             for (size_t r = 1; r <= n && c.normcol < 0; ++r) {
                 double v;
-                if (keep[r] && num(cell(&c, r, q), &v))
+                if (keep[r] && pst_csv_number(cell(&c, r, q), &v))
                     c.normcol = q;
             }
         }

@@ -931,15 +931,15 @@ int pst_csv_read(const char *path, pst_csv_table *t, char *err, size_t errlen)
 
 /* ---- the summary --------------------------------------------------------------------------- */
 
-static int col_of(const pst_csv_table *t, const char *name)
+int pst_csv_column(const pst_csv_table *t, const char *name, int below)
 {
-    for (int q = 0; q < t->ncols; ++q)
+    for (int q = 0; q < below && q < t->ncols; ++q)
         if (strcmp(t->cell[q], name) == 0)
             return q;
     return -1;
 }
 
-static int parse_num(const char *s, double *v)
+int pst_csv_number(const char *s, double *v)
 {
     if (!s || !*s)
         return 0;
@@ -1025,17 +1025,17 @@ static void add_number_or_null(cJSON *o, const char *name, double v)
 
 cJSON *pst_sweep_summary(const pst_csv_table *t, const char *slope_key, const char *repeat_key)
 {
-    const int nkeys = col_of(t, "dim");
+    const int nkeys = pst_csv_column(t, "dim", t->ncols);
     if (nkeys < 0 || nkeys > 4 * SW_MAX_KEYS || t->ncols != nkeys + pst_sweep_ncolumns)
         return NULL;
     for (int q = 0; q < pst_sweep_ncolumns; ++q)
         if (strcmp(t->cell[nkeys + q], pst_sweep_columns[q]) != 0)
             return NULL;
     const int task_col = nkeys + C_TASK, status_col = nkeys + C_STATUS;
-    const int slope = col_of(t, slope_key), repeat = col_of(t, repeat_key);
+    const int slope = pst_csv_column(t, slope_key, t->ncols), repeat = pst_csv_column(t, repeat_key, t->ncols);
     int stat_col[NSTAT];
     for (int q = 0; q < NSTAT; ++q)
-        stat_col[q] = col_of(t, stat_cols[q]);
+        stat_col[q] = pst_csv_column(t, stat_cols[q], t->ncols);
     size_t n = t->nrows;
     size_t *gid = malloc((n + 1) * sizeof *gid), *first = malloc((n + 1) * sizeof *first);
     double *vals = malloc((n + 1) * sizeof *vals);
@@ -1092,7 +1092,7 @@ cJSON *pst_sweep_summary(const pst_csv_table *t, const char *slope_key, const ch
             for (size_t r = 1; r <= n; ++r) {
                 char **row = t->cell + r * (size_t)t->ncols;
                 if (gid[r - 1] == g && strcmp(row[status_col], "ok") == 0 &&
-                    parse_num(row[stat_col[q]], &vals[m]))
+                    pst_csv_number(row[stat_col[q]], &vals[m]))
                     ++m;
             }
             if (m == 0)
@@ -1124,7 +1124,7 @@ cJSON *pst_sweep_summary(const pst_csv_table *t, const char *slope_key, const ch
                 size_t q = 0;
                 while (q < nres && strcmp(rescell[q], c) != 0)
                     ++q;
-                if (q == nres && parse_num(c, &res[nres]) && res[nres] > 0)
+                if (q == nres && pst_csv_number(c, &res[nres]) && res[nres] > 0)
                     rescell[nres++] = c;
             }
             for (int nq = 0; nq < 7; ++nq) {
@@ -1138,7 +1138,7 @@ cJSON *pst_sweep_summary(const pst_csv_table *t, const char *slope_key, const ch
                         char **row = t->cell + r * (size_t)t->ncols;
                         double v;
                         if (gid[r - 1] == g && strcmp(row[slope], rescell[q]) == 0 &&
-                            strcmp(row[status_col], "ok") == 0 && parse_num(row[col], &v)) {
+                            strcmp(row[status_col], "ok") == 0 && pst_csv_number(row[col], &v)) {
                             s += v;
                             ++m;
                         }

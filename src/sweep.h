@@ -82,6 +82,10 @@ typedef struct {
  * header's number of cells. PST_EIO / PST_EINPUT / PST_ENOMEM with "PATH:LINE: ..." in err. */
 int pst_csv_read(const char *path, pst_csv_table *t, char *err, size_t errlen);
 void pst_csv_table_free(pst_csv_table *t);
+/* The header column named `name` among the first `below` columns, or -1. */
+int pst_csv_column(const pst_csv_table *t, const char *name, int below);
+/* 1 and *v when the cell is a whole finite number, 0 for anything else (empty included). */
+int pst_csv_number(const char *cell, double *v);
 
 /* The summary of a sweep CSV: groups (grid keys except repeat_key, per task: counts, means and
  * standard deviations of the norms and times, mean iterations) and convergence fits (grid
