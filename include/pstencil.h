@@ -316,6 +316,9 @@ typedef struct {
                              ill-conditioned (default 1e10)                                   */
     double rank_tol;      /* ... and below 1/cond of rank_tol it is rank-deficient and the
                              row falls back (default 1e-13)                                    */
+    double min_pair_distance; /* pairs closer than this fraction of the smoothing length (h~_IJ
+                             for the LV family, h_I otherwise) are degenerate and contribute
+                             nothing (default 1e-8; in (0, 0.5))                              */
     int mobility_mean;    /* pst_mobility_mean: how a pair (I, J) averages the mobility
                              (default PST_MEAN_ARITHMETIC, the paper's)                        */
     int laplacian;        /* 1 (default): precompute the rows of L. 0: the operator serves
@@ -341,7 +344,8 @@ typedef enum {
 } pst_mobility_mean;
 
 /* Defaults: scheme "lv", the scheme's default kernel, G1, variant 0, cond_max 1e10,
- * rank_tol 1e-13, mobility_mean PST_MEAN_ARITHMETIC, laplacian 1. */
+ * rank_tol 1e-13, min_pair_distance 1e-8, mobility_mean PST_MEAN_ARITHMETIC, laplacian 1.
+ * Degenerate rows are never regularised: they drop down the scheme's fallback chain. */
 void pst_op_defaults(pst_op_opts *o);
 
 /* The registered schemes: count, names (index < count) and a one-line description. */
@@ -350,6 +354,10 @@ const char *pst_scheme_name(int index);
 const char *pst_scheme_description(int index);
 /* The kernel a scheme uses by default (a pst_kernel), or -1 for an unknown scheme name. */
 int pst_scheme_default_kernel(const char *name);
+/* The fallback chain of a scheme's degenerate rows, in the order it is tried, as one line
+ * ("quadric fit: too few neighbours or singular -> linear-exact row -> ..."); NULL for an
+ * unknown name. docs/operators.md, "Row status and fallbacks". */
+const char *pst_scheme_fallback(const char *name);
 
 /* What a scheme can do, for planning before an operator exists (0 for an unknown name). */
 enum {
@@ -380,6 +388,9 @@ int pst_op_apply(const pst_op *op, const double *u, double *y);
 int pst_op_has_rows(const pst_op *op);
 const char *pst_op_scheme(const pst_op *op);
 int pst_op_kernel(const pst_op *op);
+/* The options an operator was built with, as resolved (the kernel is the one in use, never
+ * -1; scheme points at the registry's name): what to report beside its results. */
+void pst_op_options(const pst_op *op, pst_op_opts *o);
 /* Entries of the operator's sparsity pattern without the diagonal: the neighbour list's
  * pairs, or more for schemes with a wider stencil (the mixed schemes' neighbours of
  * neighbours). pst_op_store keeps 8 bytes per entry. */

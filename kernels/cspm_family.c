@@ -28,8 +28,6 @@
 /* Levels of the fallback chain; a scheme starts at its own level. */
 enum { CS_ICSPM = 0, CS_CSPM = 1, CS_CSPH = 2, CS_BROOK = 3 };
 
-/* Pairs closer than this fraction of h_I are degenerate: they contribute 0 (spec choice 1). */
-#define CS_DEGENERATE 1e-8
 
 /* Particles per block of the precompute: the moments and inverses of one block are kept
  * between the timed passes (about 7 MB in 3D). */
@@ -85,6 +83,7 @@ typedef struct {
     const uint8_t *kind;
     const int64_t *off;
     const uint32_t *idx;
+    double pair_eps; /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
 } cs_ctx;
 
 static cs_ctx make_ctx(const pst_op *op)
@@ -93,7 +92,8 @@ static cs_ctx make_ctx(const pst_op *op)
     const cs_data *d = op->data;
     cs_ctx k = {.dim = c->dim, .which = d->which, .kernel = op->kernel, .h = c->h,
                 .h_uniform = c->h_uniform, .kind = c->kind, .V = d->V, .K = d->K,
-                .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl)};
+                .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
+                .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.normal[a] = c->normal[a];
@@ -118,7 +118,7 @@ CS_HOT int pair_kernel(const cs_ctx *k, int D, size_t i, size_t j, double hi, do
     }
     *d2 = s;
     *d = sqrt(s);
-    if (!(*d > CS_DEGENERATE * hi) || !(*d < pst_sph_support[k->kernel] * hi))
+    if (!(*d > k->pair_eps * hi) || !(*d < pst_sph_support[k->kernel] * hi))
         return 0;
     *w1 = pst_sph_dw(k->kernel, D, *d, hi);
     *w2 = pst_sph_d2w(k->kernel, D, *d, hi);
@@ -751,9 +751,10 @@ static void cs_hessian(const pst_op *op, const double *u, double *const hess[6])
     }
 }
 
-#define CS_SCHEME(ID, NAME, DESC, PRE, MIN, HESS)                                             \
+#define CS_SCHEME(ID, NAME, DESC, FALLBACK, PRE, MIN, HESS)                                   \
     const pst_scheme ID = {.name = NAME,                                                      \
                            .description = DESC,                                               \
+                           .fallback = FALLBACK,                                              \
                            .default_kernel = PST_KERNEL_QUINTIC,                              \
                            .min_neighbours = MIN,                                             \
                            .precompute = PRE,                                                 \
@@ -763,12 +764,14 @@ static void cs_hessian(const pst_op *op, const double *u, double *const hess[6])
                            .hessian = HESS,                                                   \
                            .free_data = cs_free}
 
-CS_SCHEME(pst_scheme_cspm, "cspm", "CSPM, Chen et al. 1999 (QSFDI eqs. 38-41)", pre_cspm,
+CS_SCHEME(pst_scheme_cspm, "cspm", "CSPM, Chen et al. 1999 (QSFDI eqs. 38-41)",
+          "too few neighbours or singular -> csph2g row -> Brookshaw row -> zero row", pre_cspm,
           cs_min_cspm, NULL);
 CS_SCHEME(pst_scheme_icspm, "icspm", "improved CSPM, quadratic-exact (QSFDI eqs. 7, 47-48)",
+          "too few neighbours or singular -> cspm row -> csph2g row -> Brookshaw row -> zero row",
           pre_icspm, cs_min_icspm, cs_hessian);
 CS_SCHEME(pst_scheme_csph2g, "csph2g", "CSPH2Gamma, Schwaiger's variant (QSFDI eq. 45)",
-          pre_csph, cs_min_csph, NULL);
+          "too few neighbours or singular -> Brookshaw row -> zero row", pre_csph, cs_min_csph, NULL);
 
 /* The volumes of a CSPM-family operator (NULL for other schemes). Internal: for the tests. */
 const double *pst_cspm_volumes(const pst_op *op);

@@ -124,6 +124,8 @@ const pst_scheme pst_scheme_lpmps = {
     .name = "lpmps",
     .description = "LP-MPS, block-eliminated quadratic WLS, weight w in both blocks "
                    "(QSFDI sec. 2.6, a reconstruction)",
+    .fallback = "quadric fit: too few neighbours or singular -> linear-exact reduced fit -> "
+                "radial row -> zero row",
     .default_kernel = PST_KERNEL_QUINTIC,
     .min_neighbours = pst_wls_min_neighbours,
     .precompute = lpmps_precompute,

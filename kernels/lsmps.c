@@ -29,8 +29,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Pairs closer than this fraction of h_I are degenerate and get weight 0 (spec choice 1). */
-#define WLS_DEGENERATE 1e-8
 /* Particles per block of the precompute: bounds the memory of the moments and factors kept
  * between passes (3D type B: 32768 x 235 doubles, 62 MB) and the number of parallel regions;
  * rows are dealt in dynamic chunks of 128 (each row is still computed by one thread, so the
@@ -87,13 +85,15 @@ typedef struct {
     const int64_t *off;
     const uint32_t *idx;
     const wls_data *d;
+    double pair_eps; /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
 } wls_ctx;
 
 static wls_ctx make_ctx(const pst_op *op)
 {
     const pst_cloud *c = op->cloud;
     wls_ctx k = {.dim = c->dim, .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind,
-                 .off = op->poff, .idx = op->pidx, .d = op->data};
+                 .off = op->poff, .idx = op->pidx, .d = op->data,
+                 .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.normal[a] = c->normal[a];
@@ -119,7 +119,7 @@ WLS_HOT double pair_weight(const wls_ctx *k, int D, pst_kernel K, const double *
     }
     double q = sqrt(q2);
     double f = pst_sph_shape(K, D, q, 0);
-    return q < pst_sph_support[K] && q > WLS_DEGENERATE ? f : 0.0;
+    return q < pst_sph_support[K] && q > k->pair_eps ? f : 0.0;
 }
 
 /* The moment passes gather a row's neighbours, a chunk at a time, into stack arrays (structure
@@ -147,10 +147,10 @@ WLS_HOT void gather(const wls_ctx *k, int D, pst_kernel K, const double *xc, dou
 #pragma omp simd
     for (int c = 0; c < n; ++c)
         w[c] = pst_sph_shape(K, D, q[c], 0);
-    const double supp = pst_sph_support[K];
+    const double supp = pst_sph_support[K], eps = k->pair_eps;
 #pragma omp simd
     for (int c = 0; c < n; ++c)
-        w[c] = (q[c] < supp) & (q[c] > WLS_DEGENERATE) ? w[c] : 0.0;
+        w[c] = (q[c] < supp) & (q[c] > eps) ? w[c] : 0.0;
 }
 
 /* s[.] += sum_c w_c m(r_c) over the monomials m of one degree (1 to 4) in graded
@@ -1008,6 +1008,8 @@ const pst_scheme pst_scheme_lsmps = {
     .name = "lsmps",
     .description = "quadric LSMPS, type B (variant 0, 6x6 / 10x10) or A (variant 1) "
                    "(QSFDI sec. 2.5)",
+    .fallback = "quadric fit: too few neighbours or singular -> linear-exact reduced fit -> "
+                "radial row -> zero row",
     .default_kernel = PST_KERNEL_QUINTIC,
     .min_neighbours = pst_wls_min_neighbours,
     .precompute = lsmps_precompute,

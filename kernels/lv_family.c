@@ -29,8 +29,6 @@
 
 enum { LV_BROOKSHAW, LV_CB, LV_SCHWAIGER, LV_MSPH };
 
-/* Pairs closer than this fraction of h~ are degenerate: their weight is 0 (spec choice 1). */
-#define LV_DEGENERATE 1e-8
 
 typedef struct {
     int which;     /* LV_* */
@@ -52,6 +50,7 @@ typedef struct {
     const uint8_t *kind;
     const double *nnormal[3];
     const lv_data *d;
+    double pair_eps; /* opts.min_pair_distance: closer pairs (in units of h~) are degenerate */
 } lv_ctx;
 
 static lv_ctx make_ctx(const pst_op *op)
@@ -59,7 +58,8 @@ static lv_ctx make_ctx(const pst_op *op)
     const pst_cloud *c = op->cloud;
     lv_ctx k = {.dim = c->dim, .variant = op->opts.gradient, .ncomp = c->mob_ncomp,
                 .harmonic = op->opts.mobility_mean == PST_MEAN_HARMONIC, .kernel = op->kernel,
-                .V = c->V, .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind, .d = op->data};
+                .V = c->V, .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind, .d = op->data,
+                .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.mob[a] = c->mob[a];
@@ -105,7 +105,7 @@ LV_HOT double pair_geometry(const lv_ctx *k, int D, int needW, size_t i, size_t 
     }
     double ht = 0.5 * (h_of(k, i) + h_of(k, j));
     double d = sqrt(d2);
-    int ok = d > LV_DEGENERATE * ht;
+    int ok = d > k->pair_eps * ht;
     *d2out = d2;
     *W = ok && needW ? pst_sph_w(k->kernel, D, d, ht) : 0.0;
     return ok ? -pst_sph_dw(k->kernel, D, d, ht) / d : 0.0;
@@ -524,9 +524,10 @@ static void lv_lemma3(const pst_op *op, size_t i, int *sign_mixed, int *xi_large
     *xi_large = xi2 * dmax >= 1.0;
 }
 
-#define LV_SCHEME(ID, NAME, DESC, PRE, MIN, GRAD, LEMMA)                                      \
+#define LV_SCHEME(ID, NAME, DESC, FALLBACK, PRE, MIN, GRAD, LEMMA)                            \
     const pst_scheme ID = {.name = NAME,                                                      \
                            .description = DESC,                                               \
+                           .fallback = FALLBACK,                                              \
                            .default_kernel = PST_KERNEL_CUBIC,                                \
                            .pair_mobility = 1,                                                \
                            .mobility = 1,                                                     \
@@ -540,10 +541,17 @@ static void lv_lemma3(const pst_op *op, size_t i, int *sign_mixed, int *xi_large
                            .free_data = lv_free}
 
 LV_SCHEME(pst_scheme_brookshaw, "brookshaw", "Brookshaw 1985, m_I + m_J (LV eq. 27)",
+          "no neighbour -> zero row (the Brookshaw row is the other schemes' last resort)",
           pre_brookshaw, lv_min_brookshaw, NULL, NULL);
-LV_SCHEME(pst_scheme_cb, "cb", "corrected Brookshaw, times tr C / n (LV eq. 51)", pre_cb,
+LV_SCHEME(pst_scheme_cb, "cb", "corrected Brookshaw, times tr C / n (LV eq. 51)",
+          "too few neighbours, C singular or tr C <= 0 -> Brookshaw row -> zero row", pre_cb,
           lv_min_cb, lv_gradient, NULL);
-LV_SCHEME(pst_scheme_schwaiger, "schwaiger", "Schwaiger 2008 (LV eqs. 52-55)", pre_schwaiger,
+LV_SCHEME(pst_scheme_schwaiger, "schwaiger", "Schwaiger 2008 (LV eqs. 52-55)",
+          "too few neighbours, C or Gamma singular, tr Gamma^-1 <= 0 -> Brookshaw row -> zero "
+          "row",
+          pre_schwaiger,
           lv_min_schwaiger, lv_gradient, lv_lemma3);
 LV_SCHEME(pst_scheme_lv, "lv", "Lukyanov-Vuik two-point scheme M-SPH (LV eqs. 69-71, 90-91)",
+          "Gamma* not SDD -> Gamma-bar = Gamma (eq. 70); too few neighbours, C or Gamma-bar "
+          "singular, tr Gamma-bar^-1 <= 0 -> Brookshaw row -> zero row",
           pre_msph, lv_min_msph, lv_gradient, lv_lemma3);

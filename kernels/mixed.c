@@ -36,8 +36,6 @@ enum { MX_ORDINARY, MX_LINEAR, MX_QUADRATIC };
 /* Per-particle fit actually used: the scheme's, the linear one (mixed2 fallback), none. */
 enum { MX_FIT = 0, MX_LINEAR_FIT = 1, MX_NOFIT = 2 };
 
-/* Pairs closer than this fraction of h_I are degenerate: weight 0 (spec choice 1). */
-#define MX_DEGENERATE 1e-8
 
 /* Particles per block of the moment/inversion passes: bounds the moment scratch (55 doubles
  * per particle in 3D quadratic, 3.6 MB per block) while keeping the two passes separate. */
@@ -62,6 +60,7 @@ typedef struct {
     const int64_t *off; /* the neighbour list */
     const uint32_t *idx;
     const mx_data *d;
+    double pair_eps; /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
 } mx_ctx;
 
 static mx_ctx make_ctx(const pst_op *op)
@@ -70,7 +69,7 @@ static mx_ctx make_ctx(const pst_op *op)
     mx_ctx k = {.dim = c->dim, .ncomp = c->mob_ncomp, .kernel = op->kernel, .V = c->V,
                 .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind,
                 .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
-                .d = op->data};
+                .d = op->data, .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.mob[a] = c->mob[a];
@@ -118,7 +117,7 @@ MX_HOT int pair_offset(const mx_ctx *k, int D, size_t i, size_t j, double x[3], 
         d2 += x[a] * x[a];
     }
     *d = sqrt(d2);
-    return *d > MX_DEGENERATE * h_of(k, i);
+    return *d > k->pair_eps * h_of(k, i);
 }
 
 /* The LS fit weight w_j of pair (i, j) (the head comment), 0 when degenerate. */
@@ -776,9 +775,13 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
     }
 }
 
-#define MX_SCHEME(ID, NAME, DESC, PRE, MIN, HESS)                                              \
+#define MX_FALLBACK_LINEAR                                                                     \
+    "linear fit: too few neighbours or singular -> kernel gradient and Brookshaw row -> zero row"
+
+#define MX_SCHEME(ID, NAME, DESC, FALLBACK, PRE, MIN, HESS)                                    \
     const pst_scheme ID = {.name = NAME,                                                       \
                            .description = DESC,                                                \
+                           .fallback = FALLBACK,                                               \
                            .default_kernel = PST_KERNEL_QUINTIC,                               \
                            .mobility = 1,                                                      \
                            .min_neighbours = MIN,                                              \
@@ -791,10 +794,12 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
 
 MX_SCHEME(pst_scheme_mixed0, "mixed0",
           "mixed ordinary method, nested LS gradient with W V weights (seed 003 Model 3)",
-          pre_ordinary, mx_min_linear, NULL);
+          MX_FALLBACK_LINEAR, pre_ordinary, mx_min_linear, NULL);
 MX_SCHEME(pst_scheme_mixed1, "mixed1",
           "mixed least squares 1st order, nested linear LS gradient (seed 003 Model 4)",
-          pre_linear, mx_min_linear, NULL);
+          MX_FALLBACK_LINEAR, pre_linear, mx_min_linear, NULL);
 MX_SCHEME(pst_scheme_mixed2, "mixed2",
           "mixed least squares 2nd order, nested quadratic LS gradient (seed 003 Model 5)",
+          "quadratic fit: too few neighbours or singular -> linear fit -> kernel gradient and "
+          "Brookshaw row -> zero row",
           pre_quadratic, mx_min_quadratic, mx_hessian);

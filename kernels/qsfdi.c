@@ -28,8 +28,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Pairs closer than this fraction of h are degenerate: weight 0 (spec choice 1). */
-#define QS_DEGENERATE 1e-8
 /* The linear-exact fallback row is used only if its correction keeps this fraction of
  * sum w in the normalisation (sum a |r|^2); below it the row would be amplified by more than
  * the inverse (with exactly D neighbours linear exactness forces the row to 0) and the
@@ -78,6 +76,7 @@ typedef struct {
     double h_uniform;
     const uint8_t *kind;
     double cond_max, rank_tol;
+    double pair_eps; /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
 } qs_ctx;
 
 static qs_ctx make_ctx(const pst_op *op)
@@ -85,7 +84,8 @@ static qs_ctx make_ctx(const pst_op *op)
     const pst_cloud *c = op->cloud;
     qs_ctx k = {.dim = c->dim, .kernel = op->kernel, .supp = pst_kernel_support(op->kernel),
                 .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind,
-                .cond_max = op->opts.cond_max, .rank_tol = op->opts.rank_tol};
+                .cond_max = op->opts.cond_max, .rank_tol = op->opts.rank_tol,
+                .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.normal[a] = c->normal[a];
@@ -106,7 +106,7 @@ QS_HOT int qs_pair(const qs_ctx *k, int D, const double xi[3], double ih, size_t
         d2 += r[a] * r[a];
     }
     double q = sqrt(d2);
-    int ok = q > QS_DEGENERATE && q < k->supp;
+    int ok = q > k->pair_eps && q < k->supp;
     double w = ok ? pst_sph_shape(k->kernel, D, q, 0) : 0.0; /* constant C_D cancels */
     double id2 = 1.0 / (ok ? d2 : 1.0);
     *o2 = w * id2;
@@ -155,7 +155,7 @@ QS_HOT double qs_weight(int D, const double r[3], double o2, double o4, const do
  * in place; 0 for degenerate pairs and pairs beyond the support. Returns the live pairs.
  * Vectorised (the count is a double: an integer count of double compares does not vectorise
  * with SSE2); bound by the division, ~2 ns per neighbour (3D, 1 thread, default flags). */
-QS_HOT int qs_omegas(pst_kernel K, int D, double supp, int n, double *restrict o2,
+QS_HOT int qs_omegas(pst_kernel K, int D, double supp, double eps, int n, double *restrict o2,
                      double *restrict o4)
 {
     double live = 0;
@@ -164,7 +164,7 @@ QS_HOT int qs_omegas(pst_kernel K, int D, double supp, int n, double *restrict o
         double q = o2[c], w = pst_sph_shape(K, D, q, 0); /* the constant C_D cancels */
         /* 1 for a live pair, else 0; arithmetic on it rather than selects of computed values,
          * which GCC turns back into branches (it may not speculate the division) */
-        double in = (q > QS_DEGENERATE) & (q < supp) ? 1.0 : 0.0;
+        double in = (q > eps) & (q < supp) ? 1.0 : 0.0;
         double id2 = in / (o4[c] + (1.0 - in)); /* 1 / d^2, or 0 / (d^2 + 1) */
         o2[c] = w * id2;
         o4[c] = w * id2 * id2;
@@ -188,10 +188,10 @@ QS_HOT int qs_gather(const qs_ctx *k, int D, const double xi[3], double ih, cons
     for (int c = 0; c < n; ++c)
         o2[c] = sqrt(o4[c]);
     switch (k->kernel) { /* one vectorised instantiation per kernel */
-    case PST_KERNEL_CUBIC: return qs_omegas(PST_KERNEL_CUBIC, D, k->supp, n, o2, o4);
-    case PST_KERNEL_QUINTIC: return qs_omegas(PST_KERNEL_QUINTIC, D, k->supp, n, o2, o4);
-    case PST_KERNEL_WENDLAND_C2: return qs_omegas(PST_KERNEL_WENDLAND_C2, D, k->supp, n, o2, o4);
-    default: return qs_omegas(PST_KERNEL_WENDLAND_C4, D, k->supp, n, o2, o4);
+    case PST_KERNEL_CUBIC: return qs_omegas(PST_KERNEL_CUBIC, D, k->supp, k->pair_eps, n, o2, o4);
+    case PST_KERNEL_QUINTIC: return qs_omegas(PST_KERNEL_QUINTIC, D, k->supp, k->pair_eps, n, o2, o4);
+    case PST_KERNEL_WENDLAND_C2: return qs_omegas(PST_KERNEL_WENDLAND_C2, D, k->supp, k->pair_eps, n, o2, o4);
+    default: return qs_omegas(PST_KERNEL_WENDLAND_C4, D, k->supp, k->pair_eps, n, o2, o4);
     }
 }
 
@@ -942,6 +942,8 @@ const pst_scheme pst_scheme_qsfdi = {
     .name = "qsfdi",
     .derivatives_standalone = 1,
     .description = "quadric SFDI, Yan-Ma-Wang 2020 (eqs. 2, 3, 20-35), one-pass moments",
+    .fallback = "quadric fit: too few neighbours or singular -> linear-exact row -> "
+                "Brookshaw-type row -> zero row",
     .default_kernel = PST_KERNEL_QUINTIC,
     .min_neighbours = qs_min,
     .precompute = qs_precompute,

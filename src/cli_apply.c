@@ -114,6 +114,11 @@ static void print_help(const char *cmd)
            "  --mean MEAN         pair mobility of the LV family: arithmetic (m_I + m_J, the\n"
            "                      paper's, default) or harmonic (4 m_I m_J / (m_I + m_J), an\n"
            "                      extension for high-contrast mobility)\n"
+           "  --cond-max C        flag rows whose moment matrix has a larger condition\n"
+           "                      estimate ill-conditioned (default 1e10)\n"
+           "  --rank-tol R        below 1/cond of R a moment matrix is rank-deficient and the\n"
+           "                      row falls back (default 1e-13)\n"
+           "  --min-pair-distance E  pairs closer than E h contribute nothing (default 1e-8)\n"
            "  --timers FILE.json  write the counts and per-phase timers as JSON\n");
     if (strcmp(cmd, "apply") == 0)
         printf("  --stored            store the weights and apply from them (default:\n"
@@ -177,6 +182,21 @@ static int parse_args(apply_args *a, int argc, char **argv)
             if (m < 0)
                 return bad_option(a->cmd, "--mean", v, "arithmetic or harmonic");
             a->opts.mobility_mean = m;
+        } else if (cli_option(argc, argv, &i, "--cond-max", &v)) {
+            double c;
+            if (!v || cli_parse_double(v, &c) != 0 || !(c >= 1))
+                return bad_option(a->cmd, "--cond-max", v, "a number >= 1");
+            a->opts.cond_max = c;
+        } else if (cli_option(argc, argv, &i, "--rank-tol", &v)) {
+            double r;
+            if (!v || cli_parse_double(v, &r) != 0 || !(r > 0 && r < 1))
+                return bad_option(a->cmd, "--rank-tol", v, "a number in (0, 1)");
+            a->opts.rank_tol = r;
+        } else if (cli_option(argc, argv, &i, "--min-pair-distance", &v)) {
+            double r;
+            if (!v || cli_parse_double(v, &r) != 0 || !(r > 0 && r < 0.5))
+                return bad_option(a->cmd, "--min-pair-distance", v, "a number in (0, 0.5)");
+            a->opts.min_pair_distance = r;
         } else if (cli_option(argc, argv, &i, "--timers", &v)) {
             if (!v || !*v)
                 return bad_option(a->cmd, "--timers", v, "a file name");
@@ -293,6 +313,9 @@ static void print_summary(const apply_args *a, const apply_setup *s)
            s->support);
     printf("particles            %zu (%dD)\n", pst_cloud_size(s->c), pst_cloud_dim(s->c));
     printf("pairs stored         %lld\n", (long long)pst_nlist_pairs(s->nl));
+    printf("thresholds           cond_max %g, rank_tol %g, min_pair_distance %g h\n",
+           a->opts.cond_max, a->opts.rank_tol, a->opts.min_pair_distance);
+    printf("fallback             %s\n", pst_scheme_fallback(a->opts.scheme));
     printf("row status          ");
     for (int k = 0; k < PST_ROW_NSTATUS; ++k)
         printf("%s %s %zu", k ? "," : "", pst_row_status_name(k), counts[k]);
@@ -330,6 +353,11 @@ static void write_timers(FILE *f, const void *job)
     fprintf(f, "  \"scheme\": \"%s\",\n  \"variant\": %d,\n  \"gradient\": %d,\n",
             t->a->opts.scheme, t->a->opts.variant, t->a->opts.gradient);
     fprintf(f, "  \"mobility_mean\": \"%s\",\n", mean_name(t->a->opts.mobility_mean));
+    fprintf(f, "  \"cond_max\": %.17g,\n  \"rank_tol\": %.17g,\n", t->a->opts.cond_max,
+            t->a->opts.rank_tol);
+    fprintf(f, "  \"min_pair_distance\": %.17g,\n", t->a->opts.min_pair_distance);
+    fprintf(f, "  \"regularisation\": \"none\",\n  \"fallback\": \"%s\",\n",
+            pst_scheme_fallback(t->a->opts.scheme));
     fprintf(f, "  \"kernel\": \"%s\",\n  \"dim\": %d,\n  \"particles\": %zu,\n",
             pst_kernel_name((pst_kernel)kernel), pst_cloud_dim(t->s->c), pst_cloud_size(t->s->c));
     fprintf(f, "  \"pairs\": %lld,\n  \"threads\": %d,\n", (long long)pst_nlist_pairs(t->s->nl),

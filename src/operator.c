@@ -60,6 +60,7 @@ void pst_op_defaults(pst_op_opts *o)
     o->variant = 0;
     o->cond_max = 1e10;
     o->rank_tol = 1e-13;
+    o->min_pair_distance = 1e-8;
     o->laplacian = 1;
     o->mobility_mean = PST_MEAN_ARITHMETIC;
 }
@@ -100,6 +101,12 @@ int pst_scheme_default_kernel(const char *name)
     return s ? (int)s->default_kernel : -1;
 }
 
+const char *pst_scheme_fallback(const char *name)
+{
+    const pst_scheme *s = find_scheme(name);
+    return s ? s->fallback : NULL;
+}
+
 static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist *nl,
                       const pst_scheme **scheme, char *err)
 {
@@ -125,6 +132,10 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
     if (!(o->cond_max >= 1) || !(o->rank_tol > 0 && o->rank_tol < 1)) {
         pst_set_err(err, "cond_max must be >= 1 and rank_tol in (0, 1) (got %g, %g)",
                     o->cond_max, o->rank_tol);
+        return PST_EINVAL;
+    }
+    if (!(o->min_pair_distance > 0 && o->min_pair_distance < 0.5)) {
+        pst_set_err(err, "min_pair_distance must be in (0, 0.5) (got %g)", o->min_pair_distance);
         return PST_EINVAL;
     }
     if (o->mobility_mean != PST_MEAN_ARITHMETIC && o->mobility_mean != PST_MEAN_HARMONIC) {
@@ -254,6 +265,12 @@ int pst_op_apply(const pst_op *op, const double *u, double *y)
 int pst_op_has_rows(const pst_op *op) { return op->rows; }
 const char *pst_op_scheme(const pst_op *op) { return op->scheme->name; }
 int pst_op_kernel(const pst_op *op) { return op->kernel; }
+void pst_op_options(const pst_op *op, pst_op_opts *o)
+{
+    *o = op->opts;
+    o->scheme = op->scheme->name;
+    o->kernel = op->kernel;
+}
 int64_t pst_op_pattern_pairs(const pst_op *op) { return op->poff[op->n]; }
 
 int pst_op_store(pst_op *op)

@@ -13,6 +13,8 @@
 typedef struct pst_scheme {
     const char *name;
     const char *description;
+    /* the fallback chain of a degenerate row, in order (pst_scheme_fallback) */
+    const char *fallback;
     pst_kernel default_kernel;
     /* 1 when the rows average the mobility pairwise, (M_I + M_J), and honour
      * opts.mobility_mean (the LV family); 0: PST_MEAN_HARMONIC is refused */

@@ -33,6 +33,23 @@ void report_peak_memory(cJSON *report)
     cJSON_AddNumberToObject(report, "peak_rss_bytes", 1024.0 * (double)ru.ru_maxrss);
 }
 
+cJSON *report_parameters(const pst_op_opts *oo)
+{
+    cJSON *p = cJSON_CreateObject();
+    const char *fallback = pst_scheme_fallback(oo->scheme);
+    cJSON_AddStringToObject(p, "scheme", oo->scheme);
+    cJSON_AddNumberToObject(p, "gradient", oo->gradient);
+    cJSON_AddNumberToObject(p, "variant", oo->variant);
+    cJSON_AddStringToObject(p, "mobility_mean",
+                            oo->mobility_mean == PST_MEAN_HARMONIC ? "harmonic" : "arithmetic");
+    cJSON_AddNumberToObject(p, "cond_max", oo->cond_max);
+    cJSON_AddNumberToObject(p, "rank_tol", oo->rank_tol);
+    cJSON_AddNumberToObject(p, "min_pair_distance", oo->min_pair_distance);
+    cJSON_AddStringToObject(p, "regularisation", "none");
+    cJSON_AddStringToObject(p, "fallback", fallback ? fallback : "unknown scheme");
+    return p;
+}
+
 void report_operator(cJSON *report, const pst_op *op)
 {
     cJSON *o = cJSON_CreateObject();
@@ -40,6 +57,9 @@ void report_operator(cJSON *report, const pst_op *op)
     cJSON_AddStringToObject(o, "scheme", pst_op_scheme(op));
     cJSON_AddStringToObject(o, "kernel", pst_kernel_name(pst_op_kernel(op)));
     cJSON_AddBoolToObject(o, "laplacian_rows", pst_op_has_rows(op));
+    pst_op_opts oo;
+    pst_op_options(op, &oo);
+    cJSON_AddItemToObject(o, "parameters", report_parameters(&oo));
     double t[PST_NPHASES];
     pst_op_phase_times(op, t);
     cJSON *ph = cJSON_AddObjectToObject(o, "phases");
@@ -274,7 +294,12 @@ void report_summary(FILE *f, const cJSON *report)
             cJSON_ArrayForEach(st, cJSON_GetObjectItem(t, "row_status"))
                 if (st->valuedouble > 0)
                     fprintf(f, " %s %.0f", st->string, st->valuedouble);
-        fprintf(f, "\n");
+        const cJSON *p = cJSON_GetObjectItem(t, "parameters");
+        fprintf(f, "\n    cond_max %g, rank_tol %g, min_pair_distance %g h; fallback: %s\n",
+                cJSON_GetNumberValue(cJSON_GetObjectItem(p, "cond_max")),
+                cJSON_GetNumberValue(cJSON_GetObjectItem(p, "rank_tol")),
+                cJSON_GetNumberValue(cJSON_GetObjectItem(p, "min_pair_distance")),
+                cJSON_GetStringValue(cJSON_GetObjectItem(p, "fallback")));
     }
     cJSON_ArrayForEach(t, cJSON_GetObjectItem(report, "tasks")) {
         fprintf(f, "  task %s (%s)", cJSON_GetStringValue(cJSON_GetObjectItem(t, "name")),

@@ -14,8 +14,14 @@ cJSON *report_begin(const pst_scene *s);
 void report_timer(cJSON *report, const char *name, double seconds);
 /* The process's peak resident memory so far (bytes), as "peak_rss_bytes". */
 void report_peak_memory(cJSON *report);
-/* An operator: scheme, kernel, per-phase timers and row status counts, under "operators". */
+/* An operator: scheme, kernel, its parameters, per-phase timers and row status counts, under
+ * "operators". */
 void report_operator(cJSON *report, const pst_op *op);
+/* The parameters of an operator as a new JSON object: scheme, gradient, variant, mobility
+ * mean, the degeneracy thresholds (cond_max, rank_tol, min_pair_distance), "regularisation":
+ * "none" (degenerate rows are never regularised) and the scheme's fallback chain
+ * (pst_scheme_fallback). Every result that names an operator carries them. */
+cJSON *report_parameters(const pst_op_opts *oo);
 /* A task's name and type. */
 void report_task_header(cJSON *task, const sc_task *t);
 /* A solve's outcome: solver, converged, iterations, residual, message, residual history. */

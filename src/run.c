@@ -186,18 +186,24 @@ static int make_fields(run_state *r)
 
 /* ---- operators --------------------------------------------------------------------------- */
 
+void pst_scene_op_opts(const pst_scene *s, pst_op_opts *oo)
+{
+    pst_op_defaults(oo);
+    oo->scheme = s->op.scheme;
+    oo->kernel = s->op.kernel;
+    if (s->op.gradient)
+        oo->gradient = s->op.gradient;
+    oo->variant = s->op.variant;
+    oo->cond_max = s->op.cond_max;
+    oo->rank_tol = s->op.rank_tol;
+    oo->min_pair_distance = s->op.min_pair_distance;
+    oo->mobility_mean = s->op.mobility_mean;
+}
+
 static int make_operator(run_state *r, int laplacian, pst_op **op)
 {
     pst_op_opts oo;
-    pst_op_defaults(&oo);
-    oo.scheme = r->s->op.scheme;
-    oo.kernel = r->s->op.kernel;
-    if (r->s->op.gradient)
-        oo.gradient = r->s->op.gradient;
-    oo.variant = r->s->op.variant;
-    oo.cond_max = r->s->op.cond_max;
-    oo.rank_tol = r->s->op.rank_tol;
-    oo.mobility_mean = r->s->op.mobility_mean;
+    pst_scene_op_opts(r->s, &oo);
     oo.laplacian = laplacian;
     char msg[PST_ERRLEN];
     cli_progress pg;

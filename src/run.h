@@ -22,6 +22,9 @@ typedef struct {
 int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
                   pst_run_counters *counters, pst_cloud **cloud, char *err, size_t errlen);
 
+/* The operator options of scene `s` (its "operator" object over pst_op_defaults). */
+void pst_scene_op_opts(const pst_scene *s, pst_op_opts *oo);
+
 /* Build scene `s`'s cloud, neighbour list and base operator (with Laplacian rows, on the
  * cloud's own boundary kinds), as pst_run_scene would, and hand them to the caller (destroy
  * op, then nl, then cloud). With max_unknowns > 0, a cloud with more interior + Neumann

@@ -45,7 +45,7 @@ typedef struct {
     int kernel;              /* pst_kernel, or -1 for the scheme's default                      */
     int gradient;            /* pst_gradient (LV family)                                       */
     int variant;
-    double cond_max, rank_tol;
+    double cond_max, rank_tol, min_pair_distance;
     int mobility_mean;       /* pst_mobility_mean                                              */
 } sc_operator;
 

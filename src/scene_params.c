@@ -88,8 +88,13 @@ const sc_param sc_params[] = {
      .doc = "Rows whose moment matrix has a larger condition estimate are flagged "
             "ill-conditioned."},
     {.key = "operator.rank_tol", .type = SC_T_REAL, .def = "1e-13", .lo_kind = '(', .lo = 0,
+     .hi = 1, .hi_kind = ')',
      .doc = "Below 1/cond of rank_tol a moment matrix is rank-deficient and the row falls "
-            "back."},
+            "back (down the scheme's fallback chain: docs/operators.md)."},
+    {.key = "operator.min_pair_distance", .type = SC_T_REAL, .def = "1e-8", .units = "h",
+     .lo_kind = '(', .lo = 0, .hi = 0.5, .hi_kind = ')',
+     .doc = "Pairs closer than this fraction of the smoothing length are degenerate and "
+            "contribute nothing (near-duplicate particles)."},
     {.key = "operator.mobility_mean", .type = SC_T_ENUM, .values = "arithmetic|harmonic",
      .def = "\"arithmetic\"",
      .doc = "Pair mobility of the Lukyanov-Vuik family: arithmetic m_I + m_J (the paper's) or "

@@ -8,6 +8,7 @@
 #include "json_pos.h"
 #include "plan.h"
 #include "progress.h"
+#include "report.h"
 #include "run.h"
 #include "scene.h"
 #include "text_file.h"
@@ -1223,6 +1224,41 @@ static void write_json(FILE *f, const void *job)
     free(text);
 }
 
+/* The distinct operator parameters over the sweep's combinations (report_parameters), from
+ * the scenes themselves, so that resumed runs count too. A combination whose scene does not
+ * parse has none. */
+static cJSON *sweep_parameters(const pst_sweep *sw)
+{
+    cJSON *list = cJSON_CreateArray();
+    for (size_t k = 0; list && k < sw->ncombos; ++k) {
+        char *ov[SW_MAX_OVERRIDES + SW_MAX_KEYS + 1];
+        int nov = 0;
+        if (run_overrides(sw, k, ov, &nov) != PST_OK) {
+            free_overrides(ov, nov);
+            continue;
+        }
+        pst_scene s;
+        char msg[PST_ERRLEN * 2];
+        int ps = pst_scene_parse(&s, sw->scene_text, sw->scene_path, (const char *const *)ov,
+                                 nov, msg, sizeof msg);
+        free_overrides(ov, nov);
+        if (ps != PST_OK)
+            continue;
+        pst_op_opts oo;
+        pst_scene_op_opts(&s, &oo);
+        cJSON *p = report_parameters(&oo), *q;
+        pst_scene_free(&s);
+        int seen = 0;
+        cJSON_ArrayForEach(q, list)
+            seen |= cJSON_Compare(p, q, 1);
+        if (seen)
+            cJSON_Delete(p);
+        else
+            cJSON_AddItemToArray(list, p);
+    }
+    return list;
+}
+
 static int write_summary(const pst_sweep *sw, const csv_job *j, const cJSON *machine, char *err,
                          size_t errlen)
 {
@@ -1237,8 +1273,9 @@ static int write_summary(const pst_sweep *sw, const csv_job *j, const cJSON *mac
         snprintf(err, errlen, "out of memory for the summary");
         return PST_ENOMEM;
     }
-    /* what the CSV does not hold: where it came from, and the machine */
+    /* what the CSV does not hold: where it came from, the operators' parameters, the machine */
     cJSON_AddStringToObject(s, "sweep", sw->path);
+    cJSON_AddItemToObject(s, "operator_parameters", sweep_parameters(sw));
     cJSON_AddStringToObject(s, "csv", sw->csv);
     const cJSON *m;
     cJSON_ArrayForEach(m, machine)

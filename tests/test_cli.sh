@@ -311,6 +311,17 @@ expect 0 "apply --timers" -- "$exe" apply --scheme lv --in "$work/au.csv" --fiel
 contains t.json '"scheme": "lv"' "timers name the scheme"
 contains t.json '"status": {"ok": ' "timers carry the status counts"
 contains t.json '"precompute": ' "timers carry the precompute phase"
+contains t.json '"min_pair_distance": 1e-08' "timers carry the pair-distance guard"
+contains t.json '"fallback": "Gamma. not SDD' "timers carry the fallback chain"
+expect 0 "apply with named thresholds" -- "$exe" apply --scheme lv --in "$work/au.csv" \
+  --field u --out "$work/lu_th.csv" --cond-max 1e6 --rank-tol 1e-10 --min-pair-distance 1e-4
+contains out "cond_max 1e+06, rank_tol 1e-10, min_pair_distance 0.0001 h" \
+  "apply prints the thresholds in force"
+expect 1 "bad --min-pair-distance" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
+  --out "$work/lu_v.csv" --min-pair-distance 0.5
+contains err "(0, 0.5)" "bad --min-pair-distance names the range"
+expect 1 "bad --cond-max" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
+  --out "$work/lu_v.csv" --cond-max 0.5
 expect 1 "bad --variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
   --out "$work/lu_v.csv" --variant x
 expect 1 "lv rejects a variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \

@@ -5,6 +5,9 @@
 #include "check.h"
 #include "plan.h"
 #include "run.h"
+#include "support.h"
+
+#include <cjson/cJSON.h>
 
 #include <math.h>
 #include <stdlib.h>
@@ -250,11 +253,90 @@ static void test_refusals(void)
     }
 }
 
+/* The degeneracy thresholds and the fallback chain are named parameters: a scene sets them,
+ * the report carries them, bad values are refused, and min_pair_distance decides whether a
+ * near-duplicate pair contributes. */
+static void test_parameters(void)
+{
+    const char *ov[] = {"operator.min_pair_distance=1e-6", "operator.cond_max=1e8",
+                        "tasks=[{\"type\":\"laplacian\",\"field\":\"u\"}]"};
+    pst_scene s = scene(ov, 3);
+    cJSON *rep = NULL;
+    pst_run_opts o = {.quiet = 1, .report = &rep};
+    char err[1024];
+    pst_cloud *c = NULL;
+    CHECK_INT(pst_run_scene(&s, &o, NULL, NULL, &c, err, sizeof err), PST_OK);
+    const cJSON *p = cJSON_GetObjectItem(
+        cJSON_GetArrayItem(cJSON_GetObjectItem(rep, "operators"), 0), "parameters");
+    CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(p, "min_pair_distance")), 1e-6, 0);
+    CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(p, "cond_max")), 1e8, 0);
+    CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(p, "rank_tol")), 1e-13, 0);
+    const char *fb = cJSON_GetStringValue(cJSON_GetObjectItem(p, "fallback"));
+    CHECK(fb && strcmp(fb, pst_scheme_fallback("qsfdi")) == 0);
+    CHECK(strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(p, "regularisation")), "none") == 0);
+    cJSON_Delete(rep);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+
+    const char *bad[] = {"operator.min_pair_distance=0.7"};
+    pst_scene t;
+    CHECK_INT(pst_scene_parse(&t, base_scene, "test.json", bad, 1, err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "operator.min_pair_distance") != NULL);
+
+    /* every scheme: a pair at 1e-7 h contributes with the default 1e-8 and not with 1e-6 */
+    for (int k = 0; k < pst_scheme_count(); ++k) {
+        const char *name = pst_scheme_name(k);
+        CHECK(pst_scheme_fallback(name) != NULL && strlen(pst_scheme_fallback(name)) > 10);
+        pst_cloud *cl = test_lattice(2, 0, 1, 0.1, 1.2, 0.2, 5, 0);
+        double *x = pst_cloud_coord(cl, 0), *y = pst_cloud_coord(cl, 1);
+        size_t i = 60, j = 61; /* interior neighbours; j moved next to i */
+        x[j] = x[i] + 1.2e-8;
+        y[j] = y[i];
+        pst_nlist *nl = test_nlist(cl, pst_kernel_support(pst_scheme_default_kernel(name)));
+        double entry[2];
+        for (int e = 0; e < 2; ++e) {
+            pst_op_opts oo;
+            pst_op_defaults(&oo);
+            oo.scheme = name;
+            oo.min_pair_distance = e ? 1e-6 : 1e-8;
+            pst_op *op;
+            CHECK_INT(pst_op_create(&op, cl, nl, &oo, err), PST_OK);
+            pst_csr a;
+            CHECK_INT(pst_op_assemble(op, &a), PST_OK);
+            entry[e] = test_csr_entry(&a, i, j);
+            pst_csr_free(&a);
+            pst_op_destroy(op);
+        }
+        /* the mixed schemes also couple i and j through common neighbours (a two-ring
+         * pattern): there the direct pair's share changes the entry */
+        int two_ring = strncmp(name, "mixed", 5) == 0;
+        int ok = entry[0] != 0 && isfinite(entry[0]) &&
+                 (two_ring ? entry[1] != entry[0] && isfinite(entry[1]) : entry[1] == 0);
+        if (!ok)
+            printf("%s: w_ij %g with min_pair_distance 1e-8, %g with 1e-6\n", name, entry[0],
+                   entry[1]);
+        CHECK(ok);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(cl);
+    }
+    pst_op_opts oo;
+    pst_op_defaults(&oo);
+    oo.min_pair_distance = 0;
+    pst_cloud *cl = test_lattice(2, 0, 1, 0.1, 1.2, 0, 5, 0);
+    pst_nlist *nl = test_nlist(cl, 2);
+    pst_op *op = NULL;
+    CHECK_INT(pst_op_create(&op, cl, nl, &oo, err), PST_EINVAL);
+    CHECK(strstr(err, "min_pair_distance") != NULL);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(cl);
+}
+
 int main(void)
 {
     test_only_what_is_asked();
     test_mobility_factor();
     test_solve_plan();
     test_refusals();
+    test_parameters();
     return check_summary("test_plan");
 }

@@ -104,6 +104,19 @@ static void check_summary_from_csv(const char *name, const pst_sweep *sw)
     cJSON_DeleteItemFromObject(written, "compiler_flags");
     cJSON_DeleteItemFromObject(written, "sweep");
     cJSON_DeleteItemFromObject(written, "csv");
+    /* the operators' parameters come from the scenes, not the CSV: one entry per distinct
+     * set, each with the thresholds in force and its scheme's fallback chain */
+    const cJSON *params = cJSON_GetObjectItem(written, "operator_parameters"), *p;
+    CHECK(cJSON_GetArraySize(params) >= 1);
+    cJSON_ArrayForEach(p, params) {
+        const char *scheme = cJSON_GetStringValue(cJSON_GetObjectItem(p, "scheme"));
+        const char *fb = cJSON_GetStringValue(cJSON_GetObjectItem(p, "fallback"));
+        CHECK(scheme && fb && pst_scheme_fallback(scheme) &&
+              strcmp(fb, pst_scheme_fallback(scheme)) == 0);
+        CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(p, "min_pair_distance")), 1e-8, 0);
+        CHECK_NEAR(cJSON_GetNumberValue(cJSON_GetObjectItem(p, "cond_max")), 1e10, 0);
+    }
+    cJSON_DeleteItemFromObject(written, "operator_parameters");
     pst_csv_table t;
     char err[1024];
     snprintf(path, sizeof path, "%s/%s.csv", dir, name);
