@@ -319,6 +319,8 @@ typedef struct {
     double min_pair_distance; /* pairs closer than this fraction of the smoothing length (h~_IJ
                              for the LV family, h_I otherwise) are degenerate and contribute
                              nothing (default 1e-8; in (0, 0.5))                              */
+    int on_degenerate;    /* pst_on_degenerate: what a rank-deficient or too-few-neighbours
+                             row does (default PST_DEGENERATE_FALL_BACK)                      */
     int mobility_mean;    /* pst_mobility_mean: how a pair (I, J) averages the mobility
                              (default PST_MEAN_ARITHMETIC, the paper's)                        */
     int laplacian;        /* 1 (default): precompute the rows of L. 0: the operator serves
@@ -343,8 +345,17 @@ typedef enum {
     PST_MEAN_HARMONIC = 1
 } pst_mobility_mean;
 
+/* What pst_op_create does with rows that are rank-deficient or have too few neighbours. */
+typedef enum {
+    PST_DEGENERATE_FALL_BACK = 0, /* take the next level of the scheme's fallback chain
+                                     (pst_scheme_fallback), flag and count the row          */
+    PST_DEGENERATE_REFUSE = 1     /* refuse the operator: PST_ENUMERIC, the counts and the
+                                     first such particle in the message                     */
+} pst_on_degenerate;
+
 /* Defaults: scheme "lv", the scheme's default kernel, G1, variant 0, cond_max 1e10,
- * rank_tol 1e-13, min_pair_distance 1e-8, mobility_mean PST_MEAN_ARITHMETIC, laplacian 1.
+ * rank_tol 1e-13, min_pair_distance 1e-8, on_degenerate PST_DEGENERATE_FALL_BACK,
+ * mobility_mean PST_MEAN_ARITHMETIC, laplacian 1.
  * Degenerate rows are never regularised: they drop down the scheme's fallback chain. */
 void pst_op_defaults(pst_op_opts *o);
 

@@ -119,6 +119,8 @@ static void print_help(const char *cmd)
            "  --rank-tol R        below 1/cond of R a moment matrix is rank-deficient and the\n"
            "                      row falls back (default 1e-13)\n"
            "  --min-pair-distance E  pairs closer than E h contribute nothing (default 1e-8)\n"
+           "  --on-degenerate fall_back|refuse  rank-deficient / too-few-neighbours rows take\n"
+           "                      the scheme's fallback chain (default) or stop with exit 3\n"
            "  --timers FILE.json  write the counts and per-phase timers as JSON\n");
     if (strcmp(cmd, "apply") == 0)
         printf("  --stored            store the weights and apply from them (default:\n"
@@ -197,6 +199,13 @@ static int parse_args(apply_args *a, int argc, char **argv)
             if (!v || cli_parse_double(v, &r) != 0 || !(r > 0 && r < 0.5))
                 return bad_option(a->cmd, "--min-pair-distance", v, "a number in (0, 0.5)");
             a->opts.min_pair_distance = r;
+        } else if (cli_option(argc, argv, &i, "--on-degenerate", &v)) {
+            if (v && strcmp(v, "fall_back") == 0)
+                a->opts.on_degenerate = PST_DEGENERATE_FALL_BACK;
+            else if (v && strcmp(v, "refuse") == 0)
+                a->opts.on_degenerate = PST_DEGENERATE_REFUSE;
+            else
+                return bad_option(a->cmd, "--on-degenerate", v, "fall_back or refuse");
         } else if (cli_option(argc, argv, &i, "--timers", &v)) {
             if (!v || !*v)
                 return bad_option(a->cmd, "--timers", v, "a file name");
@@ -356,6 +365,8 @@ static void write_timers(FILE *f, const void *job)
     fprintf(f, "  \"cond_max\": %.17g,\n  \"rank_tol\": %.17g,\n", t->a->opts.cond_max,
             t->a->opts.rank_tol);
     fprintf(f, "  \"min_pair_distance\": %.17g,\n", t->a->opts.min_pair_distance);
+    fprintf(f, "  \"on_degenerate\": \"%s\",\n",
+            t->a->opts.on_degenerate == PST_DEGENERATE_REFUSE ? "refuse" : "fall_back");
     fprintf(f, "  \"regularisation\": \"none\",\n  \"fallback\": \"%s\",\n",
             pst_scheme_fallback(t->a->opts.scheme));
     fprintf(f, "  \"kernel\": \"%s\",\n  \"dim\": %d,\n  \"particles\": %zu,\n",

@@ -61,6 +61,7 @@ void pst_op_defaults(pst_op_opts *o)
     o->cond_max = 1e10;
     o->rank_tol = 1e-13;
     o->min_pair_distance = 1e-8;
+    o->on_degenerate = PST_DEGENERATE_FALL_BACK;
     o->laplacian = 1;
     o->mobility_mean = PST_MEAN_ARITHMETIC;
 }
@@ -138,6 +139,12 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
         pst_set_err(err, "min_pair_distance must be in (0, 0.5) (got %g)", o->min_pair_distance);
         return PST_EINVAL;
     }
+    if (o->on_degenerate != PST_DEGENERATE_FALL_BACK && o->on_degenerate != PST_DEGENERATE_REFUSE) {
+        pst_set_err(err, "on_degenerate must be PST_DEGENERATE_FALL_BACK (0) or "
+                         "PST_DEGENERATE_REFUSE (1) (got %d)",
+                    o->on_degenerate);
+        return PST_EINVAL;
+    }
     if (o->mobility_mean != PST_MEAN_ARITHMETIC && o->mobility_mean != PST_MEAN_HARMONIC) {
         pst_set_err(err, "mobility_mean must be PST_MEAN_ARITHMETIC (0) or PST_MEAN_HARMONIC "
                          "(1) (got %d)",
@@ -164,6 +171,29 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
         return PST_EINVAL;
     }
     return PST_OK;
+}
+
+/* PST_DEGENERATE_REFUSE: an operator with a rank-deficient or too-few-neighbours row is an
+ * error that names the counts and the first such particle (input order). */
+static int refuse_degenerate(const pst_op *op, char *err)
+{
+    size_t rank = op->counts[PST_ROW_RANK_DEFICIENT], few = op->counts[PST_ROW_TOO_FEW];
+    if (rank + few == 0)
+        return PST_OK;
+    const pst_cloud *c = op->cloud;
+    size_t first = 0;
+    int64_t first_id = INT64_MAX;
+    for (size_t i = 0; i < c->n; ++i)
+        if (op->status[i] >= PST_ROW_RANK_DEFICIENT && c->id[i] < first_id) {
+            first_id = c->id[i];
+            first = i;
+        }
+    pst_set_err(err, "%s: %zu degenerate rows (%zu rank-deficient, %zu too-few-neighbours); "
+                     "the first is particle %lld at (%g, %g, %g), %s; on_degenerate = refuse",
+                op->scheme->name, rank + few, rank, few, (long long)first_id, c->x[0][first],
+                c->x[1][first], c->dim == 3 ? c->x[2][first] : 0.0,
+                pst_row_status_name(op->status[first]));
+    return PST_ENUMERIC;
 }
 
 int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o,
@@ -213,6 +243,10 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
             op->status[i] = PST_ROW_OK; /* identity rows need nothing */
     for (size_t i = 0; i < c->n; ++i)
         op->counts[op->status[i]]++;
+    if (o->on_degenerate == PST_DEGENERATE_REFUSE && (st = refuse_degenerate(op, err)) != PST_OK) {
+        pst_op_destroy(op);
+        return st;
+    }
     *out = op;
     return PST_OK;
 }

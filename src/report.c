@@ -45,6 +45,8 @@ cJSON *report_parameters(const pst_op_opts *oo)
     cJSON_AddNumberToObject(p, "cond_max", oo->cond_max);
     cJSON_AddNumberToObject(p, "rank_tol", oo->rank_tol);
     cJSON_AddNumberToObject(p, "min_pair_distance", oo->min_pair_distance);
+    cJSON_AddStringToObject(p, "on_degenerate",
+                            oo->on_degenerate == PST_DEGENERATE_REFUSE ? "refuse" : "fall_back");
     cJSON_AddStringToObject(p, "regularisation", "none");
     cJSON_AddStringToObject(p, "fallback", fallback ? fallback : "unknown scheme");
     return p;

@@ -18,7 +18,8 @@ void report_peak_memory(cJSON *report);
  * "operators". */
 void report_operator(cJSON *report, const pst_op *op);
 /* The parameters of an operator as a new JSON object: scheme, gradient, variant, mobility
- * mean, the degeneracy thresholds (cond_max, rank_tol, min_pair_distance), "regularisation":
+ * mean, the degeneracy thresholds (cond_max, rank_tol, min_pair_distance), on_degenerate,
+ * "regularisation":
  * "none" (degenerate rows are never regularised) and the scheme's fallback chain
  * (pst_scheme_fallback). Every result that names an operator carries them. */
 cJSON *report_parameters(const pst_op_opts *oo);

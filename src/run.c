@@ -197,6 +197,7 @@ void pst_scene_op_opts(const pst_scene *s, pst_op_opts *oo)
     oo->cond_max = s->op.cond_max;
     oo->rank_tol = s->op.rank_tol;
     oo->min_pair_distance = s->op.min_pair_distance;
+    oo->on_degenerate = s->op.on_degenerate;
     oo->mobility_mean = s->op.mobility_mean;
 }
 

@@ -907,6 +907,7 @@ static int read_operator(ctx *c, const cJSON *root, pst_scene *s)
     s->op.cond_max = get_real(o, "operator.cond_max");
     s->op.rank_tol = get_real(o, "operator.rank_tol");
     s->op.min_pair_distance = get_real(o, "operator.min_pair_distance");
+    s->op.on_degenerate = get_enum(o, "operator.on_degenerate");
     s->op.mobility_mean = get_enum(o, "operator.mobility_mean");
     return set_str(c, &s->op.scheme,
                    scheme ? scheme : default_text("operator.scheme", buf, sizeof buf));

@@ -47,6 +47,7 @@ typedef struct {
     int variant;
     double cond_max, rank_tol, min_pair_distance;
     int mobility_mean;       /* pst_mobility_mean                                              */
+    int on_degenerate;       /* pst_on_degenerate                                              */
 } sc_operator;
 
 typedef enum {

@@ -95,6 +95,11 @@ const sc_param sc_params[] = {
      .lo_kind = '(', .lo = 0, .hi = 0.5, .hi_kind = ')',
      .doc = "Pairs closer than this fraction of the smoothing length are degenerate and "
             "contribute nothing (near-duplicate particles)."},
+    {.key = "operator.on_degenerate", .type = SC_T_ENUM, .values = "fall_back|refuse",
+     .def = "\"fall_back\"",
+     .doc = "Rows that are rank-deficient or have too few neighbours: take the next level of "
+            "the scheme's fallback chain (flagged and counted), or refuse the operator (exit 3, "
+            "naming the first such particle)."},
     {.key = "operator.mobility_mean", .type = SC_T_ENUM, .values = "arithmetic|harmonic",
      .def = "\"arithmetic\"",
      .doc = "Pair mobility of the Lukyanov-Vuik family: arithmetic m_I + m_J (the paper's) or "

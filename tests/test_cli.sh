@@ -322,6 +322,10 @@ expect 1 "bad --min-pair-distance" -- "$exe" apply --scheme lv --in "$work/au.cs
 contains err "(0, 0.5)" "bad --min-pair-distance names the range"
 expect 1 "bad --cond-max" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
   --out "$work/lu_v.csv" --cond-max 0.5
+contains t.json '"on_degenerate": "fall_back"' "timers carry the degenerate-row policy"
+expect 1 "bad --on-degenerate" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
+  --out "$work/lu_v.csv" --on-degenerate ignore
+contains err "fall_back or refuse" "bad --on-degenerate names the choices"
 expect 1 "bad --variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
   --out "$work/lu_v.csv" --variant x
 expect 1 "lv rejects a variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \

@@ -323,10 +323,36 @@ static void test_parameters(void)
     pst_op_defaults(&oo);
     oo.min_pair_distance = 0;
     pst_cloud *cl = test_lattice(2, 0, 1, 0.1, 1.2, 0, 5, 0);
-    pst_nlist *nl = test_nlist(cl, 2);
+    pst_nlist *nl = test_nlist(cl, 3);
     pst_op *op = NULL;
     CHECK_INT(pst_op_create(&op, cl, nl, &oo, err), PST_EINVAL);
     CHECK(strstr(err, "min_pair_distance") != NULL);
+
+    /* on_degenerate: an isolated particle (particle 0 moved away) has too few neighbours; it
+     * falls back by default and stops the operator when refused, named */
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(cl);
+    cl = test_lattice(2, 0, 1, 0.1, 1.2, 0, 5, 0);
+    pst_cloud_coord(cl, 0)[0] = -5;
+    nl = test_nlist(cl, 3);
+    pst_op_defaults(&oo);
+    oo.scheme = "qsfdi";
+    CHECK_INT(pst_op_create(&op, cl, nl, &oo, err), PST_OK);
+    size_t counts[PST_ROW_NSTATUS];
+    pst_op_status_counts(op, counts);
+    size_t degenerate = counts[PST_ROW_RANK_DEFICIENT] + counts[PST_ROW_TOO_FEW];
+    CHECK_INT(degenerate, 1);
+    pst_op_destroy(op);
+    oo.on_degenerate = PST_DEGENERATE_REFUSE;
+    op = NULL;
+    CHECK_INT(pst_op_create(&op, cl, nl, &oo, err), PST_ENUMERIC);
+    CHECK(op == NULL);
+    char want[64];
+    snprintf(want, sizeof want, "qsfdi: %zu degenerate rows", degenerate);
+    CHECK(strstr(err, want) != NULL && strstr(err, "the first is particle 0 at (-5, 0, 0)"));
+    printf("refused: %s\n", err);
+    oo.on_degenerate = 2;
+    CHECK_INT(pst_op_create(&op, cl, nl, &oo, err), PST_EINVAL);
     pst_nlist_destroy(nl);
     pst_cloud_destroy(cl);
 }
