@@ -1,8 +1,9 @@
-/* The spectrum of a scene's operator: assemble L, take the unknowns' block, LAPACKE_dgeev,
- * and write it as CSV and as a gnuplot scatter. docs/stability.md. */
-#define _POSIX_C_SOURCE 200809L /* popen, pclose, getpid */
+/* The analysis of a scene's operator: build it once, run the parts (spectrum: the unknowns'
+ * block of L and LAPACKE_dgeev; von Neumann; audit; maximum principle), and write the spectrum
+ * as CSV and as a gnuplot scatter. docs/stability.md. */
 #include "analyse.h"
 
+#include "gnuplot.h"
 #include "internal.h"
 #include "run.h"
 
@@ -11,7 +12,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 void pst_spectrum_free(pst_spectrum *sp)
 {
@@ -33,22 +33,16 @@ static int eig_cmp(const void *a, const void *b)
     return (x->im > y->im) - (x->im < y->im);
 }
 
-int pst_analyse_scene(const pst_scene *s, int quiet, size_t max_unknowns, pst_spectrum *sp,
-                      char *err, size_t errlen)
+int pst_spectrum_compute(const pst_cloud *c, const pst_csr *a, const char *name,
+                         pst_spectrum *sp, char *err, size_t errlen)
 {
     memset(sp, 0, sizeof *sp);
-    pst_cloud *c;
-    pst_nlist *nl;
-    pst_op *op;
-    int st = pst_run_build_operator(s, quiet, max_unknowns, &c, &nl, &op, err, errlen);
-    if (st != PST_OK)
-        return st;
-    pst_csr a = {0};
     size_t n = pst_cloud_size(c), m = 0;
     const uint8_t *kind = pst_cloud_kinds_const(c);
     size_t *idx = malloc((n ? n : 1) * sizeof *idx); /* particle -> unknown, SIZE_MAX: none */
     double *A = NULL, *wr = NULL, *wi = NULL;
     eig *e = NULL;
+    int st = PST_OK;
     if (!idx) {
         st = PST_ENOMEM;
         snprintf(err, errlen, "out of memory");
@@ -56,15 +50,10 @@ int pst_analyse_scene(const pst_scene *s, int quiet, size_t max_unknowns, pst_sp
     }
     for (size_t i = 0; i < n; ++i)
         idx[i] = kind[i] != PST_DIRICHLET ? m++ : (size_t)-1;
-    st = pst_op_assemble(op, &a);
-    if (st != PST_OK) {
-        snprintf(err, errlen, "%s: cannot assemble the operator: %s", s->path, pst_strerror(st));
-        goto done;
-    }
     if (m == 0) {
         st = PST_EINPUT;
         snprintf(err, errlen, "%s: the cloud has no unknowns (every particle is Dirichlet)",
-                 s->path);
+                 name);
         goto done;
     }
     A = calloc(m * m, sizeof *A);
@@ -79,17 +68,17 @@ int pst_analyse_scene(const pst_scene *s, int quiet, size_t max_unknowns, pst_sp
     for (size_t i = 0; i < n; ++i) {
         if (idx[i] == (size_t)-1)
             continue;
-        for (int64_t k = a.rowptr[i]; k < a.rowptr[i + 1]; ++k) {
-            size_t j = a.col[k];
+        for (int64_t k = a->rowptr[i]; k < a->rowptr[i + 1]; ++k) {
+            size_t j = a->col[k];
             if (idx[j] != (size_t)-1)
-                A[idx[i] + idx[j] * m] += a.val[k]; /* column major */
+                A[idx[i] + idx[j] * m] += a->val[k]; /* column major */
         }
     }
     lapack_int info = LAPACKE_dgeev(LAPACK_COL_MAJOR, 'N', 'N', (lapack_int)m, A, (lapack_int)m,
                                     wr, wi, NULL, 1, NULL, 1);
     if (info != 0) {
         st = PST_ENUMERIC;
-        snprintf(err, errlen, "%s: LAPACKE_dgeev failed (info %d)", s->path, (int)info);
+        snprintf(err, errlen, "%s: LAPACKE_dgeev failed (info %d)", name, (int)info);
         goto done;
     }
     for (size_t k = 0; k < m; ++k)
@@ -121,10 +110,90 @@ done:
     free(wi);
     free(e);
     free(idx);
+    return st;
+}
+
+void pst_analyse_defaults(pst_analyse_opts *o)
+{
+    o->tau = 0.25;
+    o->waves = 4;
+}
+
+void pst_analysis_free(pst_analysis *an)
+{
+    pst_spectrum_free(&an->spectrum);
+    pst_vonneumann_free(&an->vn);
+}
+
+/* Rows of K = -L with a diagonal <= 0 among the unknowns (pst_op_diagonal gives L's). */
+static int count_nonpositive_diag(const pst_cloud *c, const pst_op *op, pst_analysis *an)
+{
+    size_t n = pst_cloud_size(c);
+    const uint8_t *kind = pst_cloud_kinds_const(c);
+    double *diag = malloc((n ? n : 1) * sizeof *diag);
+    if (!diag)
+        return PST_ENOMEM;
+    int st = pst_op_diagonal(op, diag);
+    if (st == PST_OK)
+        for (size_t i = 0; i < n; ++i)
+            if (kind[i] != PST_DIRICHLET) {
+                ++an->diag_rows;
+                an->nonpositive_diag += -diag[i] <= 0;
+            }
+    free(diag);
+    return st;
+}
+
+int pst_analyse_scene_all(const pst_scene *s, const pst_analyse_opts *o, int quiet,
+                          size_t max_unknowns, pst_analysis *an, char *err, size_t errlen)
+{
+    memset(an, 0, sizeof *an);
+    if (!(o->tau > 0) || !isfinite(o->tau) || o->waves < 1 || o->waves > 64) {
+        snprintf(err, errlen, "tau must be > 0 and the wave count N in 1..64 (got %g, %d)",
+                 o->tau, o->waves);
+        return PST_EINVAL;
+    }
+    pst_cloud *c;
+    pst_nlist *nl;
+    pst_op *op;
+    int st = pst_run_build_operator(s, quiet, max_unknowns, &c, &nl, &op, err, errlen);
+    if (st != PST_OK)
+        return st;
+    pst_op_options(op, &an->opts);
+    /* generated clouds have a spacing; a file's cloud gets its mean nearest distance */
+    double s0 = s->cloud.spacing;
+    an->s0_from_spacing = s->cloud.source != SC_CLOUD_FILE;
+    if (!an->s0_from_spacing)
+        s0 = pst_mean_nearest_distance(c, nl);
+    pst_csr a = {0};
+    st = pst_vonneumann_compute(c, nl, op, s0, o->tau, o->waves, &an->vn, err, errlen);
+    if (st == PST_OK) {
+        st = pst_op_audit_rows(op, &an->audit);
+        if (st != PST_OK)
+            snprintf(err, errlen, "%s: monotonicity audit: %s", s->path, pst_strerror(st));
+    }
+    if (st == PST_OK) {
+        st = count_nonpositive_diag(c, op, an);
+        if (st != PST_OK)
+            snprintf(err, errlen, "%s: diagonal: %s", s->path, pst_strerror(st));
+    }
+    if (st == PST_OK) {
+        st = pst_op_assemble(op, &a);
+        if (st != PST_OK)
+            snprintf(err, errlen, "%s: cannot assemble the operator: %s", s->path,
+                     pst_strerror(st));
+    }
+    /* the maximum principle first: its dense block is freed before dgeev allocates its own */
+    if (st == PST_OK)
+        st = pst_dmp_check(c, &a, &an->dmp, err, errlen);
+    if (st == PST_OK)
+        st = pst_spectrum_compute(c, &a, s->path, &an->spectrum, err, errlen);
     pst_csr_free(&a);
     pst_op_destroy(op);
     pst_nlist_destroy(nl);
     pst_cloud_destroy(c);
+    if (st != PST_OK)
+        pst_analysis_free(an);
     return st;
 }
 
@@ -145,54 +214,21 @@ int pst_spectrum_write_csv(const pst_spectrum *sp, const char *path, char *err, 
     return st;
 }
 
-/* A gnuplot single-quoted string: only a quote is special, written twice. */
-static void put_quoted(FILE *g, const char *s)
-{
-    fputc('\'', g);
-    for (; *s; ++s) {
-        if (*s == '\'')
-            fputc('\'', g);
-        fputc(*s, g);
-    }
-    fputc('\'', g);
-}
-
-/* 1 when the file starts with the PNG signature. */
-static int is_png(const char *path)
-{
-    static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    unsigned char buf[8];
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return 0;
-    size_t got = fread(buf, 1, 8, f);
-    fclose(f);
-    return got == 8 && memcmp(buf, sig, 8) == 0;
-}
-
 int pst_spectrum_plot(const pst_spectrum *sp, const char *path, const char *title, char *err,
                       size_t errlen)
 {
-    char tmp[4400];
-    snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
-    /* gnuplot's messages go to our stderr; the plot goes to the temporary file */
-    FILE *g = popen("exec gnuplot", "w");
-    if (!g) {
-        snprintf(err, errlen, "cannot start gnuplot (install gnuplot-nox)");
-        return PST_EIO;
-    }
+    pst_gnuplot gp;
+    int st = pst_gnuplot_begin(&gp, path, title, err, errlen);
+    if (st != PST_OK)
+        return st;
+    FILE *g = gp.g;
     size_t nok = sp->n - sp->wrong_sign;
-    fprintf(g, "set encoding utf8\n"
-               "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
-               "  set terminal pngcairo enhanced size 900,700 font ',10'\n"
-               "} else {\n"
-               "  set terminal png enhanced size 900,700\n"
-               "}\n"
-               "set output ");
-    put_quoted(g, tmp);
-    fprintf(g, "\nset title ");
-    put_quoted(g, title);
-    fprintf(g, " noenhanced\nset xlabel 'Re {/Symbol l}'\nset ylabel 'Im {/Symbol l}'\n"
+    int real = 1; /* all eigenvalues real: gnuplot cannot autoscale an empty y range */
+    for (size_t k = 0; k < sp->n && real; ++k)
+        real = sp->im[k] == 0;
+    if (real)
+        fprintf(g, "set yrange [-1:1]\n");
+    fprintf(g, "set xlabel 'Re {/Symbol l}'\nset ylabel 'Im {/Symbol l}'\n"
                "set grid\nset key top left\nset xzeroaxis\nset yzeroaxis\nplot ");
     const char *sep = "";
     if (nok) {
@@ -212,17 +248,5 @@ int pst_spectrum_plot(const pst_spectrum *sp, const char *path, const char *titl
                 fprintf(g, "%.17g %.17g\n", sp->re[k], sp->im[k]);
         fprintf(g, "e\n");
     }
-    fprintf(g, "unset output\nexit\n");
-    int status = pclose(g);
-    if (status != 0 || !is_png(tmp)) {
-        remove(tmp);
-        snprintf(err, errlen, "gnuplot failed (no PNG written)");
-        return PST_EIO;
-    }
-    if (rename(tmp, path) != 0) {
-        remove(tmp);
-        snprintf(err, errlen, "cannot rename %s to %s", tmp, path);
-        return PST_EIO;
-    }
-    return PST_OK;
+    return pst_gnuplot_end(&gp, err, errlen);
 }

@@ -4,6 +4,7 @@
  * the PNGs from their temporary names, all of them or none. */
 #define _POSIX_C_SOURCE 200809L /* popen, pclose, getpid, access, mkdir */
 #include "cli.h"
+#include "gnuplot.h"
 #include "plot.h"
 #include "text_file.h"
 #include "sweep.h"
@@ -58,18 +59,6 @@ static int on_path(const char *name)
         path = end + 1;
     }
     return 0;
-}
-
-/* A gnuplot single-quoted string: only a quote is special, written twice. */
-static void put_quoted(FILE *g, const char *s)
-{
-    fputc('\'', g);
-    for (; *s; ++s) {
-        if (*s == '\'')
-            fputc('\'', g);
-        fputc(*s, g);
-    }
-    fputc('\'', g);
 }
 
 /* A shell single-quoted word. */
@@ -182,7 +171,7 @@ static void script_lines(FILE *g, const pst_plot *p)
             bars |= isfinite(se->err[i]) && se->err[i] > 0;
         fprintf(g, "%s$d%d using 1:2%s with %s lw 2 pt %d ps 1.2 title ", first ? "" : ", ", s,
                 bars ? ":3:4" : "", bars ? "yerrorlines" : "linespoints", 4 + 2 * (s % 5) + 1);
-        put_quoted(g, se->label);
+        pst_gnuplot_quoted(g, se->label);
         fprintf(g, " noenhanced");
         first = 0;
     }
@@ -210,22 +199,10 @@ static void script_stacked(FILE *g, const pst_plot *p)
     fprintf(g, "EOD\nplot ");
     for (int s = 0; s < p->nseries; ++s) {
         fprintf(g, "%s$d using %d%s title ", s ? ", " : "", s + 2, s ? "" : ":xtic(1)");
-        put_quoted(g, p->series[s].label);
+        pst_gnuplot_quoted(g, p->series[s].label);
         fprintf(g, " noenhanced");
     }
     fprintf(g, "\n");
-}
-
-static int is_png(const char *path)
-{
-    static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    unsigned char b[8];
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return 0;
-    size_t got = fread(b, 1, 8, f);
-    fclose(f);
-    return got == 8 && memcmp(b, sig, 8) == 0;
 }
 
 int cli_plot(const cli_ctx *ctx, int argc, char **argv)
@@ -376,13 +353,13 @@ int cli_plot(const cli_ctx *ctx, int argc, char **argv)
             snprintf(tmp[i], sizeof tmp[i], "%s/.%s.%ld.png.tmp", dir, p->name, (long)getpid());
             /* enhanced text for the tic labels (10^{-3}), none in strings from the data */
             fprintf(g, "reset\nset output ");
-            put_quoted(g, tmp[i]);
+            pst_gnuplot_quoted(g, tmp[i]);
             fprintf(g, "\nset title ");
-            put_quoted(g, p->title);
+            pst_gnuplot_quoted(g, p->title);
             fprintf(g, " noenhanced\nset xlabel ");
-            put_quoted(g, p->xlabel);
+            pst_gnuplot_quoted(g, p->xlabel);
             fprintf(g, " noenhanced\nset ylabel ");
-            put_quoted(g, p->ylabel);
+            pst_gnuplot_quoted(g, p->ylabel);
             fprintf(g, " noenhanced\n");
             if (p->kind == PST_PLOT_STACKED)
                 script_stacked(g, p);
@@ -394,7 +371,7 @@ int cli_plot(const cli_ctx *ctx, int argc, char **argv)
         int status = pclose(g);
         int ok = status == 0;
         for (int i = 0; ok && i < ps.nplots; ++i)
-            ok = !tmp[i][0] || is_png(tmp[i]);
+            ok = !tmp[i][0] || pst_file_is_png(tmp[i]);
         if (!ok) {
             fprintf(stderr, "pstencil: plot: gnuplot failed (no PNG written)\n");
             int rst;

@@ -331,7 +331,8 @@ expect 1 "bad --variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field
 expect 1 "lv rejects a variant" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u \
   --out "$work/lu_v.csv" --variant 1
 
-# analyse: the spectrum of a scene's operator on its unknowns (docs/stability.md)
+# analyse: the spectrum, von Neumann growth factors, audit and maximum principle of a scene's
+# operator on its unknowns (docs/stability.md)
 expect 0 "analyse --help" -- "$exe" analyse --help
 expect 1 "analyse without a scene" -- "$exe" analyse
 expect 0 "analyse qsfdi" -- "$exe" analyse "$scenes/qsfdi_test_c.json" cloud.spacing=0.05 \
@@ -342,7 +343,41 @@ check "spectrum.csv: header and 361 rows" \
   '[ "$(head -n 1 "$work/sp/spectrum.csv")" = "re,im" ] && [ "$(wc -l < "$work/sp/spectrum.csv")" -eq 362 ]'
 check "spectrum.png has the PNG signature" \
   '[ "$(head -c 8 "$work/sp/spectrum.png" | od -An -tx1 | tr -d " \n")" = "89504e470d0a1a0a" ]'
-check "analyse left no temporary file" '[ "$(ls -A "$work/sp" | wc -l)" -eq 2 ]'
+check "analyse left no temporary file" '[ "$(ls -A "$work/sp" | wc -l)" -eq 5 ]'
+contains out "waves N              4 (24 wave vectors)" "analyse: the default wave-vector set"
+contains out "s0                   0.05 (cloud.spacing)" "analyse: s0 from the scene"
+contains out "^max |growth factor|  1\.0" "analyse: qsfdi growth slightly above 1 at K = 0.35"
+contains out "rows pos. off-diag   [1-9]" "analyse: qsfdi has positive off-diagonals at K = 0.35"
+contains out "DMP step outside     0$" "analyse: qsfdi keeps the step data in range at K = 0.35"
+contains out "DMP linear |u - x|   [0-9.]*e-1[0-9]$" "analyse: qsfdi reproduces g = x"
+check "vonneumann.csv: header and 24 x 361 rows" \
+  '[ "$(head -n 1 "$work/sp/vonneumann.csv")" = "k,kx,ky,kz,id,re,im,abs" ] && [ "$(wc -l < "$work/sp/vonneumann.csv")" -eq 8665 ]'
+check "vonneumann.png has the PNG signature" \
+  '[ "$(head -c 8 "$work/sp/vonneumann.png" | od -An -tx1 | tr -d " \n")" = "89504e470d0a1a0a" ]'
+contains sp/analysis.json '"min_pair_distance":' "analysis.json carries the thresholds"
+contains sp/analysis.json '"fallback":' "analysis.json carries the fallback chain"
+check "analysis.json holds the von Neumann, audit and DMP numbers" \
+  'grep -q "\"fraction_above_one\":" "$work/sp/analysis.json" && grep -q "\"rows_positive_offdiag\":" "$work/sp/analysis.json" && grep -q "\"maximum_principle\":" "$work/sp/analysis.json" && ! grep -q null "$work/sp/analysis.json"'
+# the 5-point Laplacian (lv, unjittered, h = 0.5005 s0): the checkerboard is exactly -1 at
+# tau = 0.25 and grows at 0.26 (1 - 8 tau = -1.08) in every row
+expect 0 "analyse 5-point tau 0.25" -- "$exe" analyse "$scenes/qsfdi_test_c.json" cloud.spacing=0.05 \
+  cloud.jitter=0 cloud.h_ratio=0.5005 operator.scheme=lv --waves 2 --out "$work/sp4"
+contains out "^max |growth factor|  1$" "analyse: 5-point max |lambda| = 1 at tau 0.25"
+contains out "^growth > 1 pairs     0 of 2888" "analyse: 5-point, 8 wave vectors, no growth at tau 0.25"
+expect 0 "analyse 5-point tau 0.26" -- "$exe" analyse "$scenes/qsfdi_test_c.json" cloud.spacing=0.05 \
+  cloud.jitter=0 cloud.h_ratio=0.5005 operator.scheme=lv --waves 2 --tau 0.26 --out "$work/sp4"
+contains out "^max |growth factor|  1.08$" "analyse: 5-point max |lambda| = 1.08 at tau 0.26"
+contains out "^growth > 1 particles 361$" "analyse: every row grows at tau 0.26"
+expect 1 "analyse --tau 0" -- "$exe" analyse "$scenes/qsfdi_test_c.json" --tau 0
+contains err "\-\-tau '0': needs a number > 0" "bad --tau named"
+expect 1 "analyse --tau nan" -- "$exe" analyse "$scenes/qsfdi_test_c.json" --tau nan
+contains err "\-\-tau" "non-finite --tau named"
+expect 1 "analyse --tau without a value" -- "$exe" analyse "$scenes/qsfdi_test_c.json" --tau
+contains err "\-\-tau needs" "missing --tau value named"
+expect 1 "analyse --waves 0" -- "$exe" analyse "$scenes/qsfdi_test_c.json" --waves 0
+contains err "\-\-waves '0': needs a whole number in 1..64" "bad --waves named"
+expect 1 "analyse --waves 2.5" -- "$exe" analyse "$scenes/qsfdi_test_c.json" --waves 2.5
+contains err "\-\-waves '2.5'" "fractional --waves named"
 expect 0 "analyse icspm" -- "$exe" analyse "$scenes/qsfdi_test_c.json" operator.scheme=icspm \
   cloud.h_ratio=1.2 cloud.jitter=0.35 cloud.spacing=0.05 --out "$work/sp2"
 check "icspm has wrong-sign eigenvalues at K = 0.35, h = 1.2 s0" \
