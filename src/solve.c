@@ -446,7 +446,7 @@ done:
     pst_free(S);
     pst_free(x);
     pst_free(bp);
-    if (st != PST_OK && st != PST_ENUMERIC && !r->message[0])
+    if (st != PST_OK && !r->message[0]) /* also a numeric failure before the iteration */
         pst_set_err(r->message, "%s", err);
     if (err_out && st != PST_OK)
         pst_set_err(err_out, "%s", err);
