@@ -107,7 +107,7 @@ static inline double h_of(const cs_ctx *k, size_t i) { return k->h ? k->h[i] : k
 #define CS_HOT static inline __attribute__((always_inline))
 
 /* Pair (i, j) with i's h: r = x_j - x_i, d, W'(d) and W''(d). Returns 0 for a degenerate pair
- * (d < 1e-8 h) or one beyond the support (then W' = W'' = 0 and it contributes nothing). */
+ * (d <= min_pair_distance h) or one beyond the support (then W' = W'' = 0 and it contributes nothing). */
 CS_HOT int pair_kernel(const cs_ctx *k, int D, size_t i, size_t j, double hi, double r[3],
                        double *d2, double *d, double *w1, double *w2)
 {
@@ -751,6 +751,28 @@ static void cs_hessian(const pst_op *op, const double *u, double *const hess[6])
     }
 }
 
+/* A flat neighbourhood (pst_op_check_flat_rows): every level of the chain but the last is
+ * linear-exact and so has no diagonal there; the row becomes the Brookshaw row normalised to
+ * be exact for |x - x_I|^2, c0 = -2D / sum_J V_J (-W') d (-2 with a full support; a flat,
+ * one-sided neighbourhood would otherwise give a row too weak to pin u_I). The gradient and
+ * Hessian hooks refit from scratch and do not read K. */
+static void cs_degrade(pst_op *op, size_t i)
+{
+    cs_ctx k = make_ctx(op);
+    cs_data *d = op->data;
+    const int D = op->dim, nc = cs_ncoef(D);
+    double hi = h_of(&k, i), sum = 0;
+    for (int64_t e = k.off[i]; e < k.off[i + 1]; ++e) {
+        double r[3], d2, dd, w1, w2;
+        if (pair_kernel(&k, D, i, k.idx[e], hi, r, &d2, &dd, &w1, &w2))
+            sum -= k.V[k.idx[e]] * w1 * dd;
+    }
+    double *Ki = d->K + (size_t)nc * i;
+    for (int q = 0; q < nc - 1; ++q)
+        Ki[q] = 0.0;
+    Ki[nc - 1] = sum > 0 ? -2.0 * D / sum : 0.0;
+}
+
 #define CS_SCHEME(ID, NAME, DESC, FALLBACK, PRE, MIN, HESS)                                   \
     const pst_scheme ID = {.name = NAME,                                                      \
                            .description = DESC,                                               \
@@ -762,16 +784,22 @@ static void cs_hessian(const pst_op *op, const double *u, double *const hess[6])
                            .emit_row = cs_emit_row,                                           \
                            .gradient = cs_gradient,                                           \
                            .hessian = HESS,                                                   \
+                           .degrade = cs_degrade,                                             \
                            .free_data = cs_free}
 
 CS_SCHEME(pst_scheme_cspm, "cspm", "CSPM, Chen et al. 1999 (QSFDI eqs. 38-41)",
-          "too few neighbours or singular -> csph2g row -> Brookshaw row -> zero row", pre_cspm,
+          "too few neighbours or singular -> csph2g row -> Brookshaw row -> zero row; flat "
+          "neighbours off the particle -> normalised Brookshaw row",
+          pre_cspm,
           cs_min_cspm, NULL);
 CS_SCHEME(pst_scheme_icspm, "icspm", "improved CSPM, quadratic-exact (QSFDI eqs. 7, 47-48)",
-          "too few neighbours or singular -> cspm row -> csph2g row -> Brookshaw row -> zero row",
+          "too few neighbours or singular -> cspm row -> csph2g row -> Brookshaw row -> zero "
+          "row; flat neighbours off the particle -> normalised Brookshaw row",
           pre_icspm, cs_min_icspm, cs_hessian);
 CS_SCHEME(pst_scheme_csph2g, "csph2g", "CSPH2Gamma, Schwaiger's variant (QSFDI eq. 45)",
-          "too few neighbours or singular -> Brookshaw row -> zero row", pre_csph, cs_min_csph, NULL);
+          "too few neighbours or singular -> Brookshaw row -> zero row; flat neighbours off "
+          "the particle -> normalised Brookshaw row",
+          pre_csph, cs_min_csph, NULL);
 
 /* The volumes of a CSPM-family operator (NULL for other schemes). Internal: for the tests. */
 const double *pst_cspm_volumes(const pst_op *op);

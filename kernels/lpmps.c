@@ -125,7 +125,7 @@ const pst_scheme pst_scheme_lpmps = {
     .description = "LP-MPS, block-eliminated quadratic WLS, weight w in both blocks "
                    "(QSFDI sec. 2.6, a reconstruction)",
     .fallback = "quadric fit: too few neighbours or singular -> linear-exact reduced fit -> "
-                "radial row -> zero row",
+                "radial row -> zero row; flat neighbours off the particle -> radial row",
     .default_kernel = PST_KERNEL_QUINTIC,
     .min_neighbours = pst_wls_min_neighbours,
     .precompute = lpmps_precompute,
@@ -134,4 +134,5 @@ const pst_scheme pst_scheme_lpmps = {
     .gradient = pst_wls_gradient,
     .hessian = pst_wls_hessian,
     .interpolate = pst_wls_interpolate,
+    .degrade = pst_wls_degrade,
     .free_data = pst_wls_free};

@@ -706,6 +706,21 @@ int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn
     return PST_OK;
 }
 
+/* The reduced fit is linear-exact and so has no diagonal on a flat neighbourhood that misses
+ * I: the row drops to the radial row, which is non-negative and exact for |x|^2. The moments
+ * are recomputed (a flat row is rare; keeping them would cost nm doubles per particle). */
+void pst_wls_degrade(pst_op *op, size_t i)
+{
+    wls_ctx k = make_ctx(op);
+    wls_data *d = op->data;
+    int D = d->dim, B = d->typeB;
+    double mom[35], M[WLS_NBMAX * WLS_NBMAX], *lam = d->lam + (size_t)d->nb * i;
+    moments_row(&k, D, B, d->kernel, i, NULL, mom, NULL);
+    build_matrix(D, B, mom, M);
+    row_rhs(&k, i, lam);
+    d->level[i] = radial_solve(D, B, M, lam) ? LVL_RADIAL : LVL_EMPTY;
+}
+
 /* ---- apply and emission ------------------------------------------------------------------- */
 
 typedef void (*row_fn)(const wls_ctx *, size_t, const double *, double *, double *);
@@ -1009,7 +1024,7 @@ const pst_scheme pst_scheme_lsmps = {
     .description = "quadric LSMPS, type B (variant 0, 6x6 / 10x10) or A (variant 1) "
                    "(QSFDI sec. 2.5)",
     .fallback = "quadric fit: too few neighbours or singular -> linear-exact reduced fit -> "
-                "radial row -> zero row",
+                "radial row -> zero row; flat neighbours off the particle -> radial row",
     .default_kernel = PST_KERNEL_QUINTIC,
     .min_neighbours = pst_wls_min_neighbours,
     .precompute = lsmps_precompute,
@@ -1018,4 +1033,5 @@ const pst_scheme pst_scheme_lsmps = {
     .gradient = pst_wls_gradient,
     .hessian = pst_wls_hessian,
     .interpolate = pst_wls_interpolate,
+    .degrade = pst_wls_degrade,
     .free_data = pst_wls_free};

@@ -524,7 +524,29 @@ static void lv_lemma3(const pst_op *op, size_t i, int *sign_mixed, int *xi_large
     *xi_large = xi2 * dmax >= 1.0;
 }
 
-#define LV_SCHEME(ID, NAME, DESC, FALLBACK, PRE, MIN, GRAD, LEMMA)                            \
+/* A flat neighbourhood (pst_op_check_flat_rows): a linear-exact row has no diagonal there, so
+ * the row becomes the Brookshaw row (zeta = eta = 0) normalised to be exact for |x - x_I|^2,
+ * s = n / sum_J V_J F_IJ d_IJ^2 (about 1 with a full support; a flat, one-sided neighbourhood
+ * would otherwise give a row too weak to pin u_I). C stays, for the gradient (it is regular
+ * when the flat set misses I). */
+static void lv_degrade(pst_op *op, size_t i)
+{
+    lv_ctx k = make_ctx(op);
+    lv_data *d = op->data;
+    const int dim = op->dim;
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint32_t *idx = pst_nlist_indices(op->nl);
+    double sum = 0;
+    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+        double x[3], g[3], d2, F = pair_gradient(&k, dim, k.variant, i, idx[e], x, g, &d2);
+        sum += k.V[idx[e]] * F * d2;
+    }
+    d->s[i] = sum > 0 ? dim / sum : 1.0;
+    for (int a = 0; a < dim; ++a)
+        d->zeta[(size_t)dim * i + a] = d->eta[(size_t)dim * i + a] = 0.0;
+}
+
+#define LV_SCHEME(ID, NAME, DESC, FALLBACK, PRE, MIN, GRAD, LEMMA, DEGRADE)                   \
     const pst_scheme ID = {.name = NAME,                                                      \
                            .description = DESC,                                               \
                            .fallback = FALLBACK,                                              \
@@ -538,20 +560,22 @@ static void lv_lemma3(const pst_op *op, size_t i, int *sign_mixed, int *xi_large
                            .scale = lv_scale,                                                 \
                            .gradient = GRAD,                                                  \
                            .lemma3 = LEMMA,                                                   \
+                           .degrade = DEGRADE,                                                \
                            .free_data = lv_free}
 
 LV_SCHEME(pst_scheme_brookshaw, "brookshaw", "Brookshaw 1985, m_I + m_J (LV eq. 27)",
           "no neighbour -> zero row (the Brookshaw row is the other schemes' last resort)",
-          pre_brookshaw, lv_min_brookshaw, NULL, NULL);
+          pre_brookshaw, lv_min_brookshaw, NULL, NULL, NULL);
 LV_SCHEME(pst_scheme_cb, "cb", "corrected Brookshaw, times tr C / n (LV eq. 51)",
           "too few neighbours, C singular or tr C <= 0 -> Brookshaw row -> zero row", pre_cb,
-          lv_min_cb, lv_gradient, NULL);
+          lv_min_cb, lv_gradient, NULL, NULL);
 LV_SCHEME(pst_scheme_schwaiger, "schwaiger", "Schwaiger 2008 (LV eqs. 52-55)",
           "too few neighbours, C or Gamma singular, tr Gamma^-1 <= 0 -> Brookshaw row -> zero "
-          "row",
+          "row; flat neighbours off the particle -> normalised Brookshaw row",
           pre_schwaiger,
-          lv_min_schwaiger, lv_gradient, lv_lemma3);
+          lv_min_schwaiger, lv_gradient, lv_lemma3, lv_degrade);
 LV_SCHEME(pst_scheme_lv, "lv", "Lukyanov-Vuik two-point scheme M-SPH (LV eqs. 69-71, 90-91)",
           "Gamma* not SDD -> Gamma-bar = Gamma (eq. 70); too few neighbours, C or Gamma-bar "
-          "singular, tr Gamma-bar^-1 <= 0 -> Brookshaw row -> zero row",
-          pre_msph, lv_min_msph, lv_gradient, lv_lemma3);
+          "singular, tr Gamma-bar^-1 <= 0 -> Brookshaw row -> zero row; flat neighbours off the "
+          "particle -> normalised Brookshaw row",
+          pre_msph, lv_min_msph, lv_gradient, lv_lemma3, lv_degrade);

@@ -23,6 +23,8 @@ int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,
                         const double *u, double *value, double *lap, size_t *fallbacks,
                         char *err);
 void pst_wls_free(void *p);
+/* A flat neighbourhood (pst_op_check_flat_rows): row i becomes the radial row (or empty). */
+void pst_wls_degrade(pst_op *op, size_t i);
 
 /* s[.] += sum_c w_c m(r_c) over the monomials m of degree deg (1 to 4), graded lexicographic
  * order; r holds x, y[, z] at stride `stride`, n pairs. Vectorised reduction loops. */

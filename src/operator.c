@@ -233,6 +233,8 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
     op->rows = o->laplacian || !scheme->derivatives_standalone;
     double t0 = omp_get_wtime();
     st = op->rows ? scheme->precompute(op, err) : PST_OK;
+    if (st == PST_OK && op->rows)
+        pst_op_check_flat_rows(op);
     op->phase[PST_PHASE_PRECOMPUTE] = omp_get_wtime() - t0;
     if (st != PST_OK) {
         pst_op_destroy(op);

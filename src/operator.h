@@ -42,6 +42,11 @@ typedef struct pst_scheme {
     /* Value and Laplacian at arbitrary points (pst_op_interpolate), or NULL. */
     int (*interpolate)(const pst_op *op, const double *const pts[3], size_t m, const double *u,
                        double *value, double *lap, size_t *fallbacks, char *err);
+    /* Switch interior row i to the scheme's last-resort row, writing row i's data only: called
+     * by pst_op_check_flat_rows for rows whose neighbours are flat. NULL when the scheme's rows
+     * do not need it (non-negative rows; rows coupled through the neighbours' fits; a scheme
+     * whose own fallback already guards its diagonal) and then no row is checked. */
+    void (*degrade)(pst_op *op, size_t i);
     /* Lemma 3 diagnostics of row i into the two counters, or NULL (not applicable). */
     void (*lemma3)(const pst_op *op, size_t i, int *sign_mixed, int *xi_large);
     void (*free_data)(void *data);
@@ -67,6 +72,11 @@ struct pst_op {
     double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
     int rows;              /* 1 when the Laplacian rows were precomputed (opts.laplacian)     */
 };
+
+/* Flag interior rows whose live neighbours are flat (on one line in 2D, one plane in 3D):
+ * rank-deficient and degraded (scheme->degrade) when the condition of their centred second
+ * moment reaches 1/rank_tol, ill-conditioned above cond_max (src/operator_flat.c). */
+void pst_op_check_flat_rows(pst_op *op);
 
 /* 1 for the schemes CG can solve through their symmetric scaling (brookshaw, cb). */
 int pst_scheme_symmetrisable(const pst_scheme *s);

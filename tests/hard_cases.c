@@ -845,6 +845,16 @@ static void case_flat_neighbourhood(int dim)
                 }
                 pst_csr_free(&a);
                 double ratio = rowp / rowmax, dratio = rowp > 0 ? diagp / rowp : 0;
+                /* Every scheme whose rows are linear-exact flags P (pst_op_check_flat_rows)
+                 * and falls back to a row that pins u_P: a diagonal of the size of the row,
+                 * a row not negligible against the others. Brookshaw and cb rows are
+                 * non-negative anyway; the mixed rows couple P through the neighbours' fits. */
+                if (strcmp(s, "brookshaw") && strcmp(s, "cb") && strncmp(s, "mixed", 5)) {
+                    HC(st[n] == PST_ROW_RANK_DEFICIENT || st[n] == PST_ROW_TOO_FEW,
+                       "P is '%s'", pst_row_status_name(st[n]));
+                    HC(dratio > 0.5 && ratio > 1e-3, "P's row: diag %g, size %g", dratio,
+                       ratio);
+                }
                 fprintf(stderr, "case 6 %dD %-9s: P status %s, |a_PP| / sum |a_PJ| = %.3g, "
                                 "P's row / largest row = %.3g\n", dim, s,
                         pst_row_status_name(st[n]), dratio, ratio);
