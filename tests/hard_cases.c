@@ -162,28 +162,6 @@ static int is_quadratic(const char *s)
 
 /* ---- clouds ------------------------------------------------------------------------------- */
 
-static pst_cloud *lattice(int dim, double lo, double hi, double s0, double h_ratio, double K,
-                          uint64_t seed, int boundary, double angle)
-{
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = lo;
-        o.hi[d] = hi;
-    }
-    o.s0 = s0;
-    o.h_ratio = h_ratio;
-    o.jitter = K;
-    o.seed = seed;
-    o.boundary_layer = boundary;
-    o.angle = angle;
-    pst_cloud *c = NULL;
-    char err[PST_ERRLEN] = "";
-    must(pst_cloud_lattice(&c, &o, err), "lattice", err);
-    return c;
-}
-
 /* A copy of the positions, volumes, kinds and h of c with `extra` more particles at the end
  * (positions 0, V = V_0, interior). */
 static pst_cloud *grow(const pst_cloud *c, size_t extra)
@@ -535,7 +513,7 @@ static void case_jitter(int dim)
     set_case("1 jitter K=0.9 %dD", dim);
     int ns = pst_scheme_count();
     double s0 = dim == 2 ? 1.0 / 24 : 1.0 / 8;
-    pst_cloud *c = lattice(dim, 0, 1, s0, 1.2, 0.9, 7, 1, 0);
+    pst_cloud *c = test_lattice(dim, 0, 1, s0, 1.2, 0.9, 7, 1);
     run_spec sp = {.f = dim == 2 ? F2 : F3, .solve = 1, .solve_error = 1};
     for (int k = 0; k < ns; ++k) {
         const char *s = pst_scheme_name(k);
@@ -569,10 +547,10 @@ static void case_corners(void)
 {
     set_case("2 h=0.75 s0 K=0.8 corners");
     const double s0 = 1.0 / 20;
-    pst_cloud *c = lattice(2, 0, 1, s0, 0.75, 0.8, 3, 0, 0);
+    pst_cloud *c = test_lattice(2, 0, 1, s0, 0.75, 0.8, 3, 0);
     /* The corners: particles whose unjittered position is a corner of the box (the generator
      * places them in the same order for every K). */
-    pst_cloud *c0 = lattice(2, 0, 1, s0, 0.75, 0.0, 3, 0, 0);
+    pst_cloud *c0 = test_lattice(2, 0, 1, s0, 0.75, 0.0, 3, 0);
     size_t corner[4], nc = 0, n = pst_cloud_size(c);
     for (size_t i = 0; i < n && nc < 4; ++i) {
         double x = pst_cloud_coord_const(c0, 0)[i], y = pst_cloud_coord_const(c0, 1)[i];
@@ -650,7 +628,7 @@ static void case_lv_support(double K)
 static void case_rotated(int m)
 {
     set_case("4 rotated 45deg (xy)^%d", m);
-    pst_cloud *c = lattice(2, 1, 2, 1.0 / 24, 1.2, 0.0, 1, 1, atan(1.0));
+    pst_cloud *c = test_lattice_rotated(2, 1, 2, 1.0 / 24, 1.2, 0.0, 1, 1, atan(1.0));
     field f = m == 1 ? (field){xy1, xy1l} : m == 2 ? (field){xy2, xy2l} : (field){xy3, xy3l};
     run_spec sp = {.f = f, .solve = 1, .solve_error = 1};
     for (int k = 0; k < pst_scheme_count(); ++k)
@@ -701,7 +679,7 @@ static void case_near_duplicate(void)
 {
     set_case("5 near-duplicate 1e-12 s0");
     const double s0 = 1.0 / 20;
-    pst_cloud *c = lattice(2, 0, 1, s0, 1.2, 0.0, 1, 1, 0);
+    pst_cloud *c = test_lattice(2, 0, 1, s0, 1.2, 0.0, 1, 1);
     double mid[3] = {0.5, 0.5, 0}, nxt[3] = {0.5 + s0, 0.5, 0};
     size_t p = nearest(c, mid), q = nearest(c, nxt);
     /* p moves to 1e-12 s0 of q */
@@ -718,7 +696,7 @@ static void case_near_duplicate(void)
      * pst_op_create are documented as not checking (docs/operators.md: "rejected at input"),
      * so the catalogue records what they do. */
     set_case("5 exact duplicate (API)");
-    c = lattice(2, 0, 1, s0, 1.2, 0.0, 1, 1, 0);
+    c = test_lattice(2, 0, 1, s0, 1.2, 0.0, 1, 1);
     p = nearest(c, mid);
     q = nearest(c, nxt);
     pst_cloud_coord(c, 0)[p] = pst_cloud_coord(c, 0)[q];
@@ -794,7 +772,7 @@ static void case_flat_neighbourhood(int dim)
         /* support r = 2 h (cubic) or 3 h (quintic), h = 1.2 s0: P at r - 0.9 s0 below the
          * face sees the face (distance < r) but not the next layer (distance + s0 >= r). */
         double rsup = (cubic ? 2.0 : 3.0) * 1.2 * s0, a = rsup - 0.9 * s0;
-        pst_cloud *base = lattice(dim, 0, 1, s0, 1.2, 0.0, 1, 1, 0);
+        pst_cloud *base = test_lattice(dim, 0, 1, s0, 1.2, 0.0, 1, 1);
         size_t n = pst_cloud_size(base);
         pst_cloud *c = grow(base, 1);
         pst_cloud_destroy(base);
@@ -883,7 +861,7 @@ static void case_flat_neighbourhood(int dim)
 static void case_isolated(void)
 {
     set_case("7 isolated particle");
-    pst_cloud *base = lattice(2, 0, 1, 1.0 / 20, 1.2, 0.3, 5, 1, 0);
+    pst_cloud *base = test_lattice(2, 0, 1, 1.0 / 20, 1.2, 0.3, 5, 1);
     size_t n = pst_cloud_size(base);
     pst_cloud *c = grow(base, 1);
     pst_cloud_destroy(base);
@@ -946,7 +924,7 @@ static void case_thin_layer(void)
 static void case_scaled(void)
 {
     const double s0 = 1.0 / 20;
-    pst_cloud *base = lattice(2, 0, 1, s0, 1.2, 0.5, 9, 1, 0);
+    pst_cloud *base = test_lattice(2, 0, 1, s0, 1.2, 0.5, 9, 1);
     size_t n = pst_cloud_size(base);
     const double scales[2] = {1e-6, 1e6};
     /* The reference: the unscaled cloud, every scheme. */
@@ -1026,14 +1004,30 @@ static void case_scaled(void)
     pst_cloud_destroy(base);
 }
 
+/* Every scheme with a mobility, with the arithmetic pair mean, then the LV family with the
+ * harmonic one: cases "<name> arithmetic" and "<name> harmonic". */
+static void run_mobility_schemes(pst_cloud *c, run_spec *sp, const char *name)
+{
+    for (int mean = 0; mean < 2; ++mean) {
+        set_case("%s %s", name, mean ? "harmonic" : "arithmetic");
+        sp->mean = mean;
+        for (int k = 0; k < pst_scheme_count(); ++k) {
+            const char *s = pst_scheme_name(k);
+            if (!pst_scheme_supports(s, PST_SUPPORTS_MOBILITY) || (mean && !is_lv_family(s)))
+                continue;
+            run_simple(c, s, sp);
+        }
+    }
+}
+
 /* ---- case 10: checkerboard mobility, contrast 1e6 ------------------------------------------ */
 
 
 static void case_checkerboard(void)
 {
     const double s0 = 1.0 / 20;
-    pst_cloud *c = lattice(2, 0, 1, s0, 1.2, 0.3, 13, 1, 0);
-    pst_cloud *c0 = lattice(2, 0, 1, s0, 1.2, 0.0, 13, 1, 0);
+    pst_cloud *c = test_lattice(2, 0, 1, s0, 1.2, 0.3, 13, 1);
+    pst_cloud *c0 = test_lattice(2, 0, 1, s0, 1.2, 0.0, 13, 1);
     size_t n = pst_cloud_size(c);
     must(pst_cloud_set_mobility(c, 1), "mobility", NULL);
     double *m = pst_cloud_mobility(c, 0);
@@ -1045,16 +1039,7 @@ static void case_checkerboard(void)
     pst_cloud_destroy(c0);
     /* u = 1 - x on the boundary, a unit source inside; no exact solution. */
     run_spec sp = {.f = {lin, NULL}, .solve = 1, .rhs = one};
-    for (int mean = 0; mean < 2; ++mean) {
-        set_case("10 checkerboard 1e6 %s", mean ? "harmonic" : "arithmetic");
-        sp.mean = mean;
-        for (int k = 0; k < pst_scheme_count(); ++k) {
-            const char *s = pst_scheme_name(k);
-            if (!pst_scheme_supports(s, PST_SUPPORTS_MOBILITY) || (mean && !is_lv_family(s)))
-                continue;
-            run_simple(c, s, &sp);
-        }
-    }
+    run_mobility_schemes(c, &sp, "10 checkerboard 1e6");
     pst_cloud_destroy(c);
 }
 
@@ -1090,16 +1075,7 @@ static void case_spe10(void)
     /* Laplace: u = 1 - x on the faces, no source (no exact solution: the pressure field of
      * the layer) */
     run_spec sp = {.f = {lin, NULL}, .solve = 1, .rhs = zero};
-    for (int mean = 0; mean < 2; ++mean) {
-        set_case("11 SPE10 L85 30x30 diag %s", mean ? "harmonic" : "arithmetic");
-        sp.mean = mean;
-        for (int k = 0; k < pst_scheme_count(); ++k) {
-            const char *s = pst_scheme_name(k);
-            if (!pst_scheme_supports(s, PST_SUPPORTS_MOBILITY) || (mean && !is_lv_family(s)))
-                continue;
-            run_simple(c, s, &sp);
-        }
-    }
+    run_mobility_schemes(c, &sp, "11 SPE10 L85 30x30 diag");
     pst_cloud_destroy(c);
 }
 
@@ -1109,7 +1085,7 @@ static void case_hole(void)
 {
     set_case("12 hole r=0.2");
     const double s0 = 1.0 / 24, R = 0.2;
-    pst_cloud *full = lattice(2, 0, 1, s0, 1.2, 0.3, 17, 1, 0);
+    pst_cloud *full = test_lattice(2, 0, 1, s0, 1.2, 0.3, 17, 1);
     size_t nf = pst_cloud_size(full), n = 0;
     for (size_t i = 0; i < nf; ++i) {
         double x = pst_cloud_coord_const(full, 0)[i] - 0.5,

@@ -14,6 +14,12 @@
 pst_cloud *test_lattice(int dim, double lo, double hi, double s0, double h_ratio, double K,
                         uint64_t seed, int boundary_layer)
 {
+    return test_lattice_rotated(dim, lo, hi, s0, h_ratio, K, seed, boundary_layer, 0.0);
+}
+
+pst_cloud *test_lattice_rotated(int dim, double lo, double hi, double s0, double h_ratio,
+                                double K, uint64_t seed, int boundary_layer, double angle)
+{
     pst_lattice_opts o;
     pst_lattice_defaults(&o);
     o.dim = dim;
@@ -26,6 +32,7 @@ pst_cloud *test_lattice(int dim, double lo, double hi, double s0, double h_ratio
     o.jitter = K;
     o.seed = seed;
     o.boundary_layer = boundary_layer;
+    o.angle = angle;
     pst_cloud *c = NULL;
     char err[PST_ERRLEN];
     if (pst_cloud_lattice(&c, &o, err) != PST_OK) {

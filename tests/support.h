@@ -17,6 +17,9 @@
  * given seed and boundary layer (pst_lattice_opts). Exits on failure. */
 pst_cloud *test_lattice(int dim, double lo, double hi, double s0, double h_ratio, double K,
                         uint64_t seed, int boundary_layer);
+/* The same lattice rotated by `angle` (radians, about the box centre; pst_lattice_opts). */
+pst_cloud *test_lattice_rotated(int dim, double lo, double hi, double s0, double h_ratio,
+                                double K, uint64_t seed, int boundary_layer, double angle);
 
 /* The neighbour list of radius support * h. Exits on failure. */
 pst_nlist *test_nlist(const pst_cloud *c, double support);
