@@ -469,6 +469,23 @@ static void free_overrides(char **ov, int n)
         free(ov[q]);
 }
 
+/* The scene of combination k: the sweep's scene text with the combination's overrides.
+ * PST_ENOMEM when the overrides cannot be built; otherwise pst_scene_parse's status, with its
+ * message in msg. */
+static int combo_scene(const pst_sweep *sw, size_t k, pst_scene *s, char *msg, size_t msglen)
+{
+    char *ov[SW_MAX_OVERRIDES + SW_MAX_KEYS + 1];
+    int nov = 0;
+    if (run_overrides(sw, k, ov, &nov) != PST_OK) {
+        free_overrides(ov, nov);
+        return PST_ENOMEM;
+    }
+    int ps = pst_scene_parse(s, sw->scene_text, sw->scene_path, (const char *const *)ov, nov,
+                             msg, msglen);
+    free_overrides(ov, nov);
+    return ps;
+}
+
 int pst_sweep_parse(pst_sweep *sw, const char *text, const char *path, char *err,
                     size_t errlen)
 {
@@ -1231,18 +1248,9 @@ static cJSON *sweep_parameters(const pst_sweep *sw)
 {
     cJSON *list = cJSON_CreateArray();
     for (size_t k = 0; list && k < sw->ncombos; ++k) {
-        char *ov[SW_MAX_OVERRIDES + SW_MAX_KEYS + 1];
-        int nov = 0;
-        if (run_overrides(sw, k, ov, &nov) != PST_OK) {
-            free_overrides(ov, nov);
-            continue;
-        }
         pst_scene s;
         char msg[PST_ERRLEN * 2];
-        int ps = pst_scene_parse(&s, sw->scene_text, sw->scene_path, (const char *const *)ov,
-                                 nov, msg, sizeof msg);
-        free_overrides(ov, nov);
-        if (ps != PST_OK)
+        if (combo_scene(sw, k, &s, msg, sizeof msg) != PST_OK)
             continue;
         pst_op_opts oo;
         pst_scene_op_opts(&s, &oo);
@@ -1400,19 +1408,14 @@ int pst_sweep_run(const pst_sweep *sw, const pst_sweep_opts *o, pst_sweep_stats 
         combo_label(sw, k, label, sizeof label);
         snprintf(detail, sizeof detail, "run %zu/%zu: %.100s", made + 1, todo, label);
         progress_update(&pg, todo ? (double)made / (double)todo : 1, detail);
-        char *ov[SW_MAX_OVERRIDES + SW_MAX_KEYS + 1];
-        int nov = 0;
-        st = run_overrides(sw, k, ov, &nov);
-        if (st != PST_OK) {
-            free_overrides(ov, nov);
+        pst_scene s;
+        char msg[PST_ERRLEN * 2];
+        int ps = combo_scene(sw, k, &s, msg, sizeof msg);
+        if (ps == PST_ENOMEM) {
+            st = ps;
             snprintf(err, errlen, "out of memory");
             break;
         }
-        pst_scene s;
-        char msg[PST_ERRLEN * 2];
-        int ps = pst_scene_parse(&s, sw->scene_text, sw->scene_path, (const char *const *)ov,
-                                 nov, msg, sizeof msg);
-        free_overrides(ov, nov);
         if (ps != PST_OK) {
             st = add_rows(&j, k, NULL, NULL, msg);
             stats->failed++;
