@@ -470,6 +470,16 @@ typedef struct {
 } pst_op_audit;
 int pst_op_audit_rows(const pst_op *op, pst_op_audit *a);  /* PST_ENOMEM possible */
 
+/* The same audit per row: flags[i] is an OR of the bits below for interior row i, 0 for the
+ * other rows (n bytes, cloud order). PST_EINVAL without rows, PST_ENOMEM possible. */
+enum {
+    PST_AUDIT_POSITIVE_OFFDIAG = 1, /* K = -L has a positive off-diagonal entry (w_IJ < 0)  */
+    PST_AUDIT_NOT_DOMINANT = 2,     /* not weakly diagonally dominant with K_II > 0         */
+    PST_AUDIT_LEMMA3_MIXED = 4,     /* the brackets 1 - xi_I . x_IJ change sign (LV eq. 92) */
+    PST_AUDIT_XI_LARGE = 8          /* |xi_I| max_J d_IJ >= 1 (the sufficient check fails)   */
+};
+int pst_op_audit_flags(const pst_op *op, uint8_t *flags);
+
 /* Corrected gradient <grad u>_I = sum_J V_J (u_J - u_I) C_I grad W_IJ (LV eq. 54) with the
  * operator's kernel and gradient variant; exact for linear fields wherever C exists.
  * grad has dim arrays of n values. PST_EINVAL for schemes without C (brookshaw). */

@@ -123,6 +123,53 @@ void pst_analysis_free(pst_analysis *an)
 {
     pst_spectrum_free(&an->spectrum);
     pst_vonneumann_free(&an->vn);
+    pst_cloud_destroy(an->cloud);
+    free(an->status);
+    an->cloud = NULL;
+    an->status = NULL;
+}
+
+/* The per-particle findings as fields of the analysed cloud (kept in an->cloud, with a copy of
+ * the row status): the audit bits and the largest von Neumann |lambda| over the wave vectors
+ * (0 on Dirichlet particles, which have no growth factor). */
+static int particle_fields(pst_cloud *c, const pst_op *op, pst_analysis *an)
+{
+    static const char *const names[4] = {"audit_positive_offdiag", "audit_not_dominant",
+                                         "audit_lemma3_mixed", "audit_xi_large"};
+    size_t n = pst_cloud_size(c);
+    uint8_t *flags = malloc(n ? n : 1);
+    an->status = malloc(n ? n : 1);
+    double *f[5];
+    int st = flags && an->status ? PST_OK : PST_ENOMEM;
+    for (int b = 0; b < 4 && st == PST_OK; ++b)
+        st = pst_cloud_add_field(c, names[b], &f[b]);
+    if (st == PST_OK)
+        st = pst_cloud_add_field(c, "vn_max_abs", &f[4]);
+    if (st == PST_OK)
+        st = pst_op_audit_flags(op, flags);
+    if (st == PST_OK) {
+        memcpy(an->status, pst_op_status(op), n);
+        for (size_t i = 0; i < n; ++i)
+            for (int b = 0; b < 4; ++b)
+                f[b][i] = (flags[i] >> b) & 1;
+        const pst_vonneumann *vn = &an->vn;
+        for (size_t q = 0; q < vn->nk; ++q)
+            for (size_t r = 0; r < vn->rows; ++r) {
+                size_t k = q * vn->rows + r;
+                f[4][vn->particle[r]] = fmax(f[4][vn->particle[r]], hypot(vn->re[k], vn->im[k]));
+            }
+    }
+    free(flags);
+    return st;
+}
+
+int pst_analysis_write_vtu(const pst_analysis *an, const char *path, char *err, size_t errlen)
+{
+    char msg[PST_ERRLEN];
+    int st = pst_cloud_write_vtu(an->cloud, path, an->status, msg);
+    if (st != PST_OK)
+        snprintf(err, errlen, "%s", msg);
+    return st;
 }
 
 /* Rows of K = -L with a diagonal <= 0 among the unknowns (pst_op_diagonal gives L's). */
@@ -188,10 +235,12 @@ int pst_analyse_scene_all(const pst_scene *s, const pst_analyse_opts *o, int qui
         st = pst_dmp_check(c, &a, &an->dmp, err, errlen);
     if (st == PST_OK)
         st = pst_spectrum_compute(c, &a, s->path, &an->spectrum, err, errlen);
+    if (st == PST_OK && (st = particle_fields(c, op, an)) != PST_OK)
+        snprintf(err, errlen, "%s: per-particle findings: %s", s->path, pst_strerror(st));
     pst_csr_free(&a);
     pst_op_destroy(op);
     pst_nlist_destroy(nl);
-    pst_cloud_destroy(c);
+    an->cloud = c; /* freed by pst_analysis_free */
     if (st != PST_OK)
         pst_analysis_free(an);
     return st;

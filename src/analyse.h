@@ -55,6 +55,11 @@ typedef struct {
     size_t nonpositive_diag; /* ... where K = -L has a diagonal <= 0                           */
     pst_dmp dmp;
     pst_op_opts opts;        /* the operator's parameters, as built (pst_op_options)          */
+    pst_cloud *cloud;        /* the analysed cloud with the per-particle findings as fields:
+                                audit_positive_offdiag, audit_not_dominant, audit_lemma3_mixed,
+                                audit_xi_large (0/1, pst_op_audit_flags) and vn_max_abs (the
+                                largest |lambda| over the wave vectors)                        */
+    uint8_t *status;         /* the operator's row status, cloud order                         */
 } pst_analysis;
 
 /* Build the scene's operator once and run every part on it (spectrum, von Neumann with o,
@@ -64,6 +69,11 @@ int pst_analyse_scene_all(const pst_scene *s, const pst_analyse_opts *o, int qui
                           size_t max_unknowns, pst_analysis *an, char *err, size_t errlen);
 /* Free what an analysis holds (a zeroed or failed one is fine). */
 void pst_analysis_free(pst_analysis *an);
+
+/* DIR/analysis.vtu: the analysed cloud with its row status and per-particle findings (the
+ * fields of an->cloud), for ParaView: where the degenerate, non-monotone and growing rows
+ * are. All or nothing (pst_cloud_write_vtu). */
+int pst_analysis_write_vtu(const pst_analysis *an, const char *path, char *err, size_t errlen);
 
 /* DIR/analysis.json: every number of an, with the scene's path, tau and N (cJSON; all or
  * nothing). No value is NaN or infinite (an infinity would be written as null, so absent

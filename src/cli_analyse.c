@@ -28,8 +28,9 @@ static void analyse_help(void)
            "  --tau T     von Neumann step dt = T s0^2, T > 0 (default 0.25)\n"
            "  --waves N   wave vectors per axis, 1..64 (default 4)\n"
            "  --out DIR   write DIR/spectrum.csv (re,im sorted by real part), DIR/spectrum.png,\n"
-           "              DIR/vonneumann.csv, DIR/vonneumann.png and DIR/analysis.json;\n"
-           "              default: spectrum\n",
+           "              DIR/vonneumann.csv, DIR/vonneumann.png, DIR/analysis.json and\n"
+           "              DIR/analysis.vtu (row status, audit bits and max |lambda| per\n"
+           "              particle); default: spectrum\n",
            PST_ANALYSE_MAX_UNKNOWNS);
 }
 
@@ -177,12 +178,14 @@ int cli_analyse(const cli_ctx *ctx, int argc, char **argv)
         snprintf(err, sizeof err, "%s: cannot create the folder: %s", out, strerror(errno));
         st = PST_EIO;
     }
-    char csv[4400], png[4400], vcsv[4400], vpng[4400], json[4400], title[512], vtitle[512];
+    char csv[4400], png[4400], vcsv[4400], vpng[4400], json[4400], vtu[4400], title[512],
+        vtitle[512];
     snprintf(csv, sizeof csv, "%s/spectrum.csv", out);
     snprintf(png, sizeof png, "%s/spectrum.png", out);
     snprintf(vcsv, sizeof vcsv, "%s/vonneumann.csv", out);
     snprintf(vpng, sizeof vpng, "%s/vonneumann.png", out);
     snprintf(json, sizeof json, "%s/analysis.json", out);
+    snprintf(vtu, sizeof vtu, "%s/analysis.vtu", out);
     snprintf(title, sizeof title, "spectrum of L: %s, %s, %zu unknowns, %zu wrong-sign",
              s.path, an.opts.scheme, an.spectrum.n, an.spectrum.wrong_sign);
     snprintf(vtitle, sizeof vtitle, "von Neumann growth factors: %s, %s, tau %g, N %d, "
@@ -197,11 +200,13 @@ int cli_analyse(const cli_ctx *ctx, int argc, char **argv)
         st = pst_vonneumann_plot(&an.vn, vpng, vtitle, err, sizeof err);
     if (st == PST_OK)
         st = pst_analysis_write_json(&an, s.path, json, err, sizeof err);
+    if (st == PST_OK)
+        st = pst_analysis_write_vtu(&an, vtu, err, sizeof err);
     if (st == PST_OK) {
         print_analysis(&an, s.path);
         if (!ctx->quiet)
-            printf("wrote %s\nwrote %s\nwrote %s\nwrote %s\nwrote %s\n", csv, png, vcsv, vpng,
-                   json);
+            printf("wrote %s\nwrote %s\nwrote %s\nwrote %s\nwrote %s\nwrote %s\n", csv, png, vcsv,
+                   vpng, json, vtu);
     }
     pst_analysis_free(&an);
     pst_scene_free(&s);

@@ -508,14 +508,37 @@ int pst_csr_write_mtx(const pst_csr *a, const int64_t *ids, const char *path, ch
     return pst_write_atomic(path, write_mtx, &job, err);
 }
 
-int pst_op_audit_rows(const pst_op *op, pst_op_audit *a)
+/* The audit of interior row i from its weights w: the pst_op_audit_flags bits, and the
+ * count of positive off-diagonal entries of K in *npos. */
+static uint8_t audit_row(const pst_op *op, size_t i, const double *w, int64_t *npos)
+{
+    const int64_t *off = op->poff;
+    double sum = 0, abs_sum = 0;
+    *npos = 0;
+    for (int64_t k = 0; k < off[i + 1] - off[i]; ++k) {
+        *npos += w[k] < 0; /* K = -L: K_IJ = -w_IJ > 0 */
+        sum += w[k];
+        abs_sum += fabs(w[k]);
+    }
+    uint8_t f = *npos > 0 ? PST_AUDIT_POSITIVE_OFFDIAG : 0;
+    /* K_II = sum w >= sum |w| (to rounding) and > 0 */
+    if (!(sum > 0 && sum >= abs_sum * (1 - 1e-12)))
+        f |= PST_AUDIT_NOT_DOMINANT;
+    if (op->scheme->lemma3) {
+        int sm = 0, xl = 0;
+        op->scheme->lemma3(op, i, &sm, &xl);
+        f |= (sm ? PST_AUDIT_LEMMA3_MIXED : 0) | (xl ? PST_AUDIT_XI_LARGE : 0);
+    }
+    return f;
+}
+
+/* Audit every interior row (threaded): the flags into `flags` (may be NULL) and the totals
+ * into a (may be NULL). */
+static int audit(const pst_op *op, uint8_t *flags, pst_op_audit *a)
 {
     if (!op->rows)
         return PST_EINVAL;
-    memset(a, 0, sizeof *a);
-    const int64_t *off = op->poff;
     const uint8_t *kind = op->cloud->kind;
-    int has_lemma3 = op->scheme->lemma3 != NULL;
     size_t L;
     double *scratch = row_scratch(op, &L);
     size_t rows = 0, rows_pos = 0, rows_nd = 0;
@@ -527,38 +550,41 @@ int pst_op_audit_rows(const pst_op *op, pst_op_audit *a)
         double *buf = scratch ? scratch + (size_t)omp_get_thread_num() * L : NULL;
 #pragma omp for schedule(dynamic, 256)
         for (size_t i = 0; i < op->n; ++i) {
-            if (kind[i] != PST_INTERIOR) /* boundary rows are data or fluxes, not div(M grad) */
-                continue;
-            const double *w = row_weights(op, i, buf);
-            int64_t npos = 0;
-            double sum = 0, abs_sum = 0;
-            for (int64_t k = 0; k < off[i + 1] - off[i]; ++k) {
-                npos += w[k] < 0; /* K = -L: K_IJ = -w_IJ > 0 */
-                sum += w[k];
-                abs_sum += fabs(w[k]);
+            uint8_t f = 0;
+            if (kind[i] == PST_INTERIOR) { /* boundary rows are data or fluxes */
+                int64_t npos;
+                f = audit_row(op, i, row_weights(op, i, buf), &npos);
+                rows++;
+                pos += npos;
+                rows_pos += (f & PST_AUDIT_POSITIVE_OFFDIAG) != 0;
+                rows_nd += (f & PST_AUDIT_NOT_DOMINANT) != 0;
+                mixed += (f & PST_AUDIT_LEMMA3_MIXED) != 0;
+                large += (f & PST_AUDIT_XI_LARGE) != 0;
             }
-            rows++;
-            pos += npos;
-            rows_pos += npos > 0;
-            /* K_II = sum w >= sum |w| (to rounding) and > 0 */
-            rows_nd += !(sum > 0 && sum >= abs_sum * (1 - 1e-12));
-            if (has_lemma3) {
-                int sm = 0, xl = 0;
-                op->scheme->lemma3(op, i, &sm, &xl);
-                mixed += sm;
-                large += xl;
-            }
+            if (flags)
+                flags[i] = f;
         }
     }
     pst_free(scratch);
-    a->rows = rows;
-    a->rows_positive_offdiag = rows_pos;
-    a->positive_offdiag = pos;
-    a->rows_not_dominant = rows_nd;
-    a->lemma3_sign_mixed = has_lemma3 ? mixed : -1;
-    a->lemma3_xi_large = has_lemma3 ? large : -1;
+    if (a) {
+        int has_lemma3 = op->scheme->lemma3 != NULL;
+        a->rows = rows;
+        a->rows_positive_offdiag = rows_pos;
+        a->positive_offdiag = pos;
+        a->rows_not_dominant = rows_nd;
+        a->lemma3_sign_mixed = has_lemma3 ? mixed : -1;
+        a->lemma3_xi_large = has_lemma3 ? large : -1;
+    }
     return PST_OK;
 }
+
+int pst_op_audit_rows(const pst_op *op, pst_op_audit *a)
+{
+    memset(a, 0, sizeof *a);
+    return audit(op, NULL, a);
+}
+
+int pst_op_audit_flags(const pst_op *op, uint8_t *flags) { return audit(op, flags, NULL); }
 
 int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
 {

@@ -256,9 +256,32 @@ static void test_scene(void)
     CHECK_INT(an.dmp.applicable, 1);
     CHECK(an.dmp.linear.max_err < 1e-10);
     CHECK(strcmp(an.opts.scheme, "lv") == 0);
+    /* the per-particle fields add up to the summary */
+    size_t n = pst_cloud_size(an.cloud), rows_pos = 0, mixed = 0, growing = 0;
+    double vmax = 0;
+    const double *fp = pst_cloud_field_by_name(an.cloud, "audit_positive_offdiag"),
+                 *fm = pst_cloud_field_by_name(an.cloud, "audit_lemma3_mixed"),
+                 *fv = pst_cloud_field_by_name(an.cloud, "vn_max_abs");
+    CHECK(fp && fm && fv && an.status);
+    for (size_t i = 0; fp && fm && fv && i < n; ++i) {
+        rows_pos += fp[i] == 1;
+        mixed += fm[i] == 1;
+        growing += fv[i] > 1 + PST_VN_TOL;
+        vmax = fmax(vmax, fv[i]);
+    }
+    CHECK_INT(rows_pos, an.audit.rows_positive_offdiag);
+    CHECK_INT(mixed, (size_t)an.audit.lemma3_sign_mixed);
+    CHECK_INT(growing, an.vn.particles_over);
+    CHECK_NEAR(vmax, an.vn.max_abs, 0);
 
     char dir[64], path[128];
     if (test_scratch_dir(dir, sizeof dir, "test_analyse") == 0) {
+        snprintf(path, sizeof path, "%s/analysis.vtu", dir);
+        CHECK_INT(pst_analysis_write_vtu(&an, path, err, sizeof err), PST_OK);
+        pst_cloud *back = NULL;
+        CHECK_INT(pst_cloud_read_vtu(&back, path, err), PST_OK);
+        CHECK(back && pst_cloud_field_by_name(back, "vn_max_abs") != NULL);
+        pst_cloud_destroy(back);
         snprintf(path, sizeof path, "%s/analysis.json", dir);
         CHECK_INT(pst_analysis_write_json(&an, s.path, path, err, sizeof err), PST_OK);
         FILE *f = fopen(path, "rb");

@@ -343,7 +343,9 @@ check "spectrum.csv: header and 361 rows" \
   '[ "$(head -n 1 "$work/sp/spectrum.csv")" = "re,im" ] && [ "$(wc -l < "$work/sp/spectrum.csv")" -eq 362 ]'
 check "spectrum.png has the PNG signature" \
   '[ "$(head -c 8 "$work/sp/spectrum.png" | od -An -tx1 | tr -d " \n")" = "89504e470d0a1a0a" ]'
-check "analyse left no temporary file" '[ "$(ls -A "$work/sp" | wc -l)" -eq 5 ]'
+check "analyse left no temporary file" '[ "$(ls -A "$work/sp" | wc -l)" -eq 6 ]'
+check "analysis.vtu carries the status, audit bits and growth per particle" \
+  'grep -aq "Name=\"status\"" "$work/sp/analysis.vtu" && grep -aq "Name=\"audit_lemma3_mixed\"" "$work/sp/analysis.vtu" && grep -aq "Name=\"vn_max_abs\"" "$work/sp/analysis.vtu"'
 contains out "waves N              4 (24 wave vectors)" "analyse: the default wave-vector set"
 contains out "s0                   0.05 (cloud.spacing)" "analyse: s0 from the scene"
 contains out "^max |growth factor|  1\.0" "analyse: qsfdi growth slightly above 1 at K = 0.35"

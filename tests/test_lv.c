@@ -346,6 +346,22 @@ static void test_audit(void)
                     CHECK_INT(a.lemma3_xi_large, 0);
                 }
             }
+            /* the per-row flags add up to the totals; non-interior rows carry none */
+            size_t n = pst_cloud_size(c), cnt[4] = {0, 0, 0, 0}, boundary_flags = 0;
+            uint8_t *flags = malloc(n);
+            CHECK_INT(pst_op_audit_flags(op, flags), PST_OK);
+            const uint8_t *kind = pst_cloud_kinds_const(c);
+            for (size_t i = 0; i < n; ++i) {
+                for (int b = 0; b < 4; ++b)
+                    cnt[b] += (flags[i] >> b) & 1;
+                boundary_flags += kind[i] != PST_INTERIOR && flags[i];
+            }
+            CHECK_INT(cnt[0], a.rows_positive_offdiag);
+            CHECK_INT(cnt[1], a.rows_not_dominant);
+            CHECK_INT(cnt[2], s >= 2 ? (size_t)a.lemma3_sign_mixed : 0);
+            CHECK_INT(cnt[3], s >= 2 ? (size_t)a.lemma3_xi_large : 0);
+            CHECK_INT(boundary_flags, 0);
+            free(flags);
             pst_op_destroy(op);
         }
         pst_nlist_destroy(nl);
