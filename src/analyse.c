@@ -172,7 +172,8 @@ int pst_analysis_write_vtu(const pst_analysis *an, const char *path, char *err, 
     return st;
 }
 
-/* Rows of K = -L with a diagonal <= 0 among the unknowns (pst_op_diagonal gives L's). */
+/* Rows of K = -L with a diagonal <= 0 among the unknowns (pst_op_diagonal gives L's); a
+ * Neumann row with the inward-flux sign. */
 static int count_nonpositive_diag(const pst_cloud *c, const pst_op *op, pst_analysis *an)
 {
     size_t n = pst_cloud_size(c);
@@ -185,10 +186,22 @@ static int count_nonpositive_diag(const pst_cloud *c, const pst_op *op, pst_anal
         for (size_t i = 0; i < n; ++i)
             if (kind[i] != PST_DIRICHLET) {
                 ++an->diag_rows;
-                an->nonpositive_diag += -diag[i] <= 0;
+                an->nonpositive_diag += (kind[i] == PST_NEUMANN ? diag[i] : -diag[i]) <= 0;
             }
     free(diag);
     return st;
+}
+
+/* A Neumann row of L is the outward flux n . grad u (LV eq. 100): its diagonal has the sign
+ * opposite to a Laplacian row's. The spectrum takes the inward flux -n . grad u, so that -L
+ * of a well-posed mixed problem is positive stable as a pure Dirichlet one is. */
+static void neumann_inward(const pst_cloud *c, pst_csr *a)
+{
+    const uint8_t *kind = pst_cloud_kinds_const(c);
+    for (size_t i = 0; i < a->n; ++i)
+        if (kind[i] == PST_NEUMANN)
+            for (int64_t p = a->rowptr[i]; p < a->rowptr[i + 1]; ++p)
+                a->val[p] = -a->val[p];
 }
 
 int pst_analyse_scene_all(const pst_scene *s, const pst_analyse_opts *o, int quiet,
@@ -233,8 +246,10 @@ int pst_analyse_scene_all(const pst_scene *s, const pst_analyse_opts *o, int qui
     /* the maximum principle first: its dense block is freed before dgeev allocates its own */
     if (st == PST_OK)
         st = pst_dmp_check(c, &a, &an->dmp, err, errlen);
-    if (st == PST_OK)
+    if (st == PST_OK) {
+        neumann_inward(c, &a);
         st = pst_spectrum_compute(c, &a, s->path, &an->spectrum, err, errlen);
+    }
     if (st == PST_OK && (st = particle_fields(c, op, an)) != PST_OK)
         snprintf(err, errlen, "%s: per-particle findings: %s", s->path, pst_strerror(st));
     pst_csr_free(&a);

@@ -2,6 +2,8 @@
  * docs/stability.md. */
 #include "analyse_dmp.h"
 
+#include "internal.h"
+
 #include <lapacke.h>
 #include <math.h>
 #include <stdio.h>
@@ -9,14 +11,15 @@
 #include <string.h>
 
 /* Range, violations and overshoot of the unknowns' values u (m) against the data g (n) on
- * the Dirichlet particles. */
+ * the Dirichlet particles, and with `with_neumann` also on the Neumann particles (data with
+ * a non-zero flux there: the principle bounds u by g on the whole boundary). */
 static void judge(const uint8_t *kind, size_t n, const double *g, const double *u, size_t m,
-                  pst_dmp_case *r)
+                  int with_neumann, pst_dmp_case *r)
 {
     r->gmin = INFINITY;
     r->gmax = -INFINITY;
     for (size_t i = 0; i < n; ++i)
-        if (kind[i] == PST_DIRICHLET) {
+        if (kind[i] == PST_DIRICHLET || (with_neumann && kind[i] == PST_NEUMANN)) {
             r->gmin = fmin(r->gmin, g[i]);
             r->gmax = fmax(r->gmax, g[i]);
         }
@@ -73,11 +76,14 @@ int pst_dmp_check(const pst_cloud *c, const pst_csr *a, pst_dmp *d, char *err, s
         g[i] = x[i] > d->xmid ? 1.0 : 0.0;
         g[n + i] = x[i];
     }
-    /* rows of the unknowns: A_uu in A (column major), -A_ud g in b */
+    /* rows of the unknowns: A_uu in A (column major), the flux of g on a Neumann row (0 for
+     * the step, n_x for x) minus A_ud g in b */
     for (size_t i = 0; i < n; ++i) {
         size_t r = idx[i];
         if (r == (size_t)-1)
             continue;
+        if (kind[i] == PST_NEUMANN)
+            b[m + r] = c->normal[0][i];
         for (int64_t p = a->rowptr[i]; p < a->rowptr[i + 1]; ++p) {
             size_t j = a->col[p];
             if (idx[j] != (size_t)-1) {
@@ -108,8 +114,8 @@ int pst_dmp_check(const pst_cloud *c, const pst_csr *a, pst_dmp *d, char *err, s
                      "is numerically singular");
             goto done;
         }
-    judge(kind, n, g, b, m, &d->step);
-    judge(kind, n, g + n, b + m, m, &d->linear);
+    judge(kind, n, g, b, m, 0, &d->step);     /* zero flux on Neumann rows */
+    judge(kind, n, g + n, b + m, m, 1, &d->linear);
     d->linear.max_err = 0;
     for (size_t i = 0; i < n; ++i)
         if (idx[i] != (size_t)-1)

@@ -1,6 +1,7 @@
 /* The discrete maximum principle of an operator (LV §4.4, Definition 7; docs/stability.md):
- * solve L u = 0 on the unknowns (interior and Neumann rows) with the Dirichlet particles
- * holding data g, by dense LU, and count the unknowns outside the boundary range of g. */
+ * solve L u = 0 on the interior rows, with the Dirichlet particles holding data g and the
+ * Neumann rows the flux of g (0 for the step, n_x for g = x), by dense LU, and count the
+ * unknowns outside the boundary range of g. */
 #ifndef PSTENCIL_ANALYSE_DMP_H
 #define PSTENCIL_ANALYSE_DMP_H
 
@@ -9,7 +10,8 @@
 #include <stddef.h>
 
 typedef struct {
-    double gmin, gmax;   /* the boundary range [min g, max g] over the Dirichlet particles   */
+    double gmin, gmax;   /* the boundary range [min g, max g] over the Dirichlet particles
+                            (and the Neumann ones for the linear data, whose flux is not 0)  */
     size_t violations;   /* unknowns below gmin or above gmax by more than 1e-12 * range     */
     double overshoot;    /* the largest excursion outside [gmin, gmax] / range (0: none); the
                             absolute excursion when the range is 0                          */

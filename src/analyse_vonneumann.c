@@ -150,9 +150,10 @@ int pst_vonneumann_compute(const pst_cloud *c, const pst_nlist *nl, const pst_op
         }
         for (size_t r = 0; r < rows; ++r) {
             size_t i = vn->particle[r];
-            /* e^{-i ph} (L cos + i L sin) */
-            double re = 1 + scale * (co[i] * lco[i] + si[i] * lsi[i]);
-            double im = scale * (co[i] * lsi[i] - si[i] * lco[i]);
+            /* e^{-i ph} (L cos + i L sin); a Neumann row with the inward-flux sign */
+            double sc = kind[i] == PST_NEUMANN ? -scale : scale;
+            double re = 1 + sc * (co[i] * lco[i] + si[i] * lsi[i]);
+            double im = sc * (co[i] * lsi[i] - si[i] * lco[i]);
             if (!isfinite(re) || !isfinite(im)) {
                 snprintf(err, errlen, "von Neumann: a non-finite growth factor at particle "
                                       "%lld", (long long)ids[i]);

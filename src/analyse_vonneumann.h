@@ -1,6 +1,8 @@
 /* Von Neumann growth factors of an operator (LV §4.2, eqs. 81-83; docs/stability.md):
  *     lambda_j(k) = 1 + tau s0^2 e^{-i k.r_j} (L[e^{i k.r}])_j
- * for every unknown row j (interior and Neumann particles) and every wave vector k of the set
+ * for every unknown row j (interior and Neumann particles; a Neumann row, an outward flux
+ * n.grad u in L, enters with the inward-flux sign -n.grad u, the sign of a Laplacian row) and
+ * every wave vector k of the set
  *     k = (pi / s0) (a, b[, c]) / N,   a, b, c in 0..N,   k != 0.
  * tau is dimensionless: the time step (or Richardson step) is tau s0^2, so on the 5-point
  * Laplacian the checkerboard gives lambda = 1 - 8 tau (exactly -1 at the paper's tau = 0.25). */

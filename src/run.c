@@ -814,6 +814,26 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
     return st;
 }
 
+/* The boundary kinds (and Neumann normals) of the scene's first solve task with boundary
+ * groups, so that the operator is the one that task solves with; no such task: the cloud's
+ * own kinds. */
+static int solve_boundary_kinds(run_state *r)
+{
+    for (int k = 0; k < r->s->ntasks; ++k) {
+        if (r->s->tasks[k].type != SC_TASK_SOLVE || r->s->tasks[k].ngroups == 0)
+            continue;
+        size_t n = pst_cloud_size(r->c);
+        double *b = calloc(n ? n : 1, sizeof *b);
+        int8_t *claim = malloc(n ? n : 1);
+        int st = b && claim ? apply_groups(r, k, b, claim)
+                            : fail(r, PST_ENOMEM, "out of memory for the boundary groups");
+        free(b);
+        free(claim);
+        return st;
+    }
+    return PST_OK;
+}
+
 int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, pst_cloud **cloud,
                            pst_nlist **nl, pst_op **op, char *err, size_t errlen)
 {
@@ -830,6 +850,8 @@ int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, p
         st = build(&r);
     if (st == PST_OK && !r.nl)
         st = fail(&r, PST_EINPUT, "%s: no task of the scene uses the operator", s->path);
+    if (st == PST_OK)
+        st = solve_boundary_kinds(&r);
     if (st == PST_OK && max_unknowns) {
         size_t n = pst_cloud_size(r.c), m = 0;
         const uint8_t *kind = pst_cloud_kinds_const(r.c);

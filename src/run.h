@@ -25,10 +25,12 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
 /* The operator options of scene `s` (its "operator" object over pst_op_defaults). */
 void pst_scene_op_opts(const pst_scene *s, pst_op_opts *oo);
 
-/* Build scene `s`'s cloud, neighbour list and base operator (with Laplacian rows, on the
- * cloud's own boundary kinds), as pst_run_scene would, and hand them to the caller (destroy
- * op, then nl, then cloud). With max_unknowns > 0, a cloud with more interior + Neumann
- * particles is refused (PST_EINPUT) before the operator is built. Errors as pst_run_scene. */
+/* Build scene `s`'s cloud, neighbour list and base operator (with Laplacian rows), as
+ * pst_run_scene would, on the boundary kinds of the scene's first solve task with boundary
+ * groups (the operator that task solves with), else on the cloud's own kinds, and hand them
+ * to the caller (destroy op, then nl, then cloud). With max_unknowns > 0, a cloud with more
+ * interior + Neumann particles is refused (PST_EINPUT) before the operator is built. Errors
+ * as pst_run_scene. */
 int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, pst_cloud **cloud,
                            pst_nlist **nl, pst_op **op, char *err, size_t errlen);
 

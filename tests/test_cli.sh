@@ -384,6 +384,17 @@ expect 0 "analyse icspm" -- "$exe" analyse "$scenes/qsfdi_test_c.json" operator.
   cloud.h_ratio=1.2 cloud.jitter=0.35 cloud.spacing=0.05 --out "$work/sp2"
 check "icspm has wrong-sign eigenvalues at K = 0.35, h = 1.2 s0" \
   '[ "$(awk "/^wrong sign/ { print \$NF }" "$work/out")" -gt 0 ]'
+# a mixed problem: the solve task's Neumann groups are applied, and its flux rows enter with
+# the inward sign: no wrong-sign eigenvalue, no non-positive diagonal, g = x reproduced with
+# its flux on the Neumann rows
+expect 0 "analyse a mixed Dirichlet / Neumann scene" -- "$exe" --quiet analyse \
+  "$scenes/lv_mixed.json" cloud.spacing=0.05 --out "$work/sp4"
+contains out "unknowns             460" "the Neumann face particles are unknowns"
+contains out "wrong sign (re >= 0) 0" "the mixed operator is positive stable"
+contains out "K diagonal <= 0      0 of 460" "Neumann rows counted with the inward sign"
+contains out "DMP linear outside   0" "g = x with its flux stays in the boundary range"
+check "g = x is reproduced with Neumann rows" \
+  'awk "/^DMP linear \|u - x\|/ { n++; ok = \$NF < 1e-10 } END { exit !(n == 1 && ok) }" "$work/out"'
 expect 2 "analyse refuses more than 5000 unknowns" -- "$exe" analyse "$scenes/qsfdi_test_c.json" \
   --out "$work/sp3"
 contains err "more than 5000" "analyse names the limit"
