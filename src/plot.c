@@ -165,19 +165,6 @@ static int determined(const ctx *c, const unsigned char *keep, int col, int by)
     return 1;
 }
 
-/* mean and sample standard deviation (n - 1; NAN for one value), two-pass like the summary */
-static void mean_std(const double *v, size_t n, double *mean, double *sd)
-{
-    double s = 0;
-    for (size_t i = 0; i < n; ++i)
-        s += v[i];
-    *mean = s / (double)n;
-    double q = 0;
-    for (size_t i = 0; i < n; ++i)
-        q += (v[i] - *mean) * (v[i] - *mean);
-    *sd = n > 1 ? sqrt(q / (double)(n - 1)) : NAN;
-}
-
 /* Append to buf (size len) "sep" then text, when buf is not empty, else text. */
 static void append(char *buf, size_t len, const char *sep, const char *text)
 {
@@ -408,8 +395,8 @@ static void line_plot(ctx *c, const line_spec *sp, unsigned char *keep)
                         ++m;
                     }
                 double sx;
-                mean_std(xv, m, &se->x[se->n], &sx);
-                mean_std(yv, m, &se->y[se->n], &se->err[se->n]);
+                pst_mean_std(xv, m, &se->x[se->n], &sx);
+                pst_mean_std(yv, m, &se->y[se->n], &se->err[se->n]);
                 ++se->n;
             }
             sort_points(se);
@@ -646,7 +633,7 @@ static void phases_plot(ctx *c, unsigned char *keep)
                     ++m;
             se->x[g] = (double)g;
             if (m)
-                mean_std(v, m, &se->y[g], &se->err[g]);
+                pst_mean_std(v, m, &se->y[g], &se->err[g]);
             else {
                 se->y[g] = 0;
                 se->err[g] = NAN;

@@ -987,15 +987,14 @@ static const char *const stat_cols[] = {"rel_l2", "qsfdi11", "qsfdi11_normalised
                                         "peak_rss_bytes", "iterations"};
 enum { NSTAT = sizeof stat_cols / sizeof stat_cols[0] };
 
-/* Mean and sample standard deviation from the values (two-pass, for accuracy). */
-static void mean_std(const double *v, long n, double *mean, double *sd)
+void pst_mean_std(const double *v, size_t n, double *mean, double *sd)
 {
     double s = 0;
-    for (long i = 0; i < n; ++i)
+    for (size_t i = 0; i < n; ++i)
         s += v[i];
     *mean = s / (double)n;
     double q = 0;
-    for (long i = 0; i < n; ++i)
+    for (size_t i = 0; i < n; ++i)
         q += (v[i] - *mean) * (v[i] - *mean);
     *sd = n > 1 ? sqrt(q / (double)(n - 1)) : NAN;
 }
@@ -1116,7 +1115,7 @@ cJSON *pst_sweep_summary(const pst_csv_table *t, const char *slope_key, const ch
             if (m == 0)
                 continue;
             double mu, s;
-            mean_std(vals, m, &mu, &s);
+            pst_mean_std(vals, (size_t)m, &mu, &s);
             add_number_or_null(mean, stat_cols[q], mu);
             if (q + 1 < NSTAT) /* iterations: the mean only */
                 add_number_or_null(sd, stat_cols[q], s);

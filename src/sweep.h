@@ -86,6 +86,9 @@ void pst_csv_table_free(pst_csv_table *t);
 int pst_csv_column(const pst_csv_table *t, const char *name, int below);
 /* 1 and *v when the cell is a whole finite number, 0 for anything else (empty included). */
 int pst_csv_number(const char *cell, double *v);
+/* Mean and sample standard deviation (n - 1; NAN for one value) of v[0..n), n >= 1, two-pass
+ * for accuracy: the sweep summary's and the plots' error bars. */
+void pst_mean_std(const double *v, size_t n, double *mean, double *sd);
 
 /* The summary of a sweep CSV: groups (grid keys except repeat_key, per task: counts, means and
  * standard deviations of the norms and times, mean iterations) and convergence fits (grid
