@@ -75,7 +75,7 @@ static int make_cloud(int dim, size_t n, double ratio, pst_cloud **c, pst_nlist 
         fprintf(stderr, "bench_compare: %s\n", err);
         return -1;
     }
-    if (pst_cloud_morton_sort(*c, 3.0 * ratio) != PST_OK ||
+    if (pst_cloud_morton_sort(*c, 3.0 * ratio, NULL) != PST_OK ||
         pst_nlist_build(nl, *c, 3.0, err) != PST_OK) {
         fprintf(stderr, "bench_compare: %s\n", err);
         return -1;

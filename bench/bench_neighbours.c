@@ -39,7 +39,7 @@ static pst_cloud *sorted_cloud(int dim)
     if (!sorted[dim]) {
         sorted[dim] = lattice(dim);
         if (sorted[dim])
-            pst_cloud_morton_sort(sorted[dim], SUPPORT * H_RATIO);
+            pst_cloud_morton_sort(sorted[dim], SUPPORT * H_RATIO, NULL);
     }
     return sorted[dim];
 }
@@ -63,7 +63,7 @@ static void morton_sort(pstb_state *s)
             for (size_t i = 0; i < n; ++i)
                 pst_cloud_ids(c)[i] = (int64_t)i;
             pstb_resume(s);
-            pst_cloud_morton_sort(c, SUPPORT * H_RATIO);
+            pst_cloud_morton_sort(c, SUPPORT * H_RATIO, NULL);
         }
         pstb_counter(s, "particles/s", (double)n, 1);
     }

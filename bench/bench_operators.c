@@ -84,7 +84,7 @@ static setup *get_setup(int dim, int si)
     s->cloud = lattice(dim);
     if (!s->cloud)
         return NULL;
-    pst_cloud_morton_sort(s->cloud, supports[si] * H_RATIO);
+    pst_cloud_morton_sort(s->cloud, supports[si] * H_RATIO, NULL);
     if (pst_nlist_build(&s->nl, s->cloud, supports[si], err) != PST_OK) {
         fprintf(stderr, "bench_operators: neighbour list: %s\n", err);
         return NULL;

@@ -121,7 +121,7 @@ int main(int argc, char **argv)
         return 1;
     }
     double support = pst_kernel_support(pst_scheme_default_kernel(scheme));
-    pst_cloud_morton_sort(c, support * ratio * o.s0);
+    pst_cloud_morton_sort(c, support * ratio * o.s0, NULL);
     double t1 = omp_get_wtime();
     pst_nlist *nl = NULL;
     if (pst_nlist_build(&nl, c, support, err) != PST_OK) {

@@ -91,12 +91,12 @@ static cs_ctx make_ctx(const pst_op *op)
     const pst_cloud *c = op->cloud;
     const cs_data *d = op->data;
     cs_ctx k = {.dim = c->dim, .which = d->which, .kernel = op->kernel, .h = c->h,
-                .h_uniform = c->h_uniform, .kind = c->kind, .V = d->V, .K = d->K,
+                .h_uniform = c->h_uniform, .kind = op->kind, .V = d->V, .K = d->K,
                 .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
                 .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
-        k.normal[a] = c->normal[a];
+        k.normal[a] = op->normal[a];
     }
     return k;
 }

@@ -91,12 +91,12 @@ typedef struct {
 static wls_ctx make_ctx(const pst_op *op)
 {
     const pst_cloud *c = op->cloud;
-    wls_ctx k = {.dim = c->dim, .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind,
+    wls_ctx k = {.dim = c->dim, .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind,
                  .off = op->poff, .idx = op->pidx, .d = op->data,
                  .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
-        k.normal[a] = c->normal[a];
+        k.normal[a] = op->normal[a];
     }
     return k;
 }

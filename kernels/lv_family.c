@@ -58,12 +58,12 @@ static lv_ctx make_ctx(const pst_op *op)
     const pst_cloud *c = op->cloud;
     lv_ctx k = {.dim = c->dim, .variant = op->opts.gradient, .ncomp = c->mob_ncomp,
                 .harmonic = op->opts.mobility_mean == PST_MEAN_HARMONIC, .kernel = op->kernel,
-                .V = c->V, .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind, .d = op->data,
+                .V = c->V, .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind, .d = op->data,
                 .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.mob[a] = c->mob[a];
-        k.nnormal[a] = c->normal[a];
+        k.nnormal[a] = op->normal[a];
     }
     return k;
 }

@@ -67,13 +67,13 @@ static mx_ctx make_ctx(const pst_op *op)
 {
     const pst_cloud *c = op->cloud;
     mx_ctx k = {.dim = c->dim, .ncomp = c->mob_ncomp, .kernel = op->kernel, .V = c->V,
-                .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind,
+                .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind,
                 .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
                 .d = op->data, .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.mob[a] = c->mob[a];
-        k.normal[a] = c->normal[a];
+        k.normal[a] = op->normal[a];
     }
     return k;
 }

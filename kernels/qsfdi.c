@@ -83,12 +83,12 @@ static qs_ctx make_ctx(const pst_op *op)
 {
     const pst_cloud *c = op->cloud;
     qs_ctx k = {.dim = c->dim, .kernel = op->kernel, .supp = pst_kernel_support(op->kernel),
-                .h = c->h, .h_uniform = c->h_uniform, .kind = c->kind,
+                .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind,
                 .cond_max = op->opts.cond_max, .rank_tol = op->opts.rank_tol,
                 .pair_eps = op->opts.min_pair_distance};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
-        k.normal[a] = c->normal[a];
+        k.normal[a] = op->normal[a];
     }
     return k;
 }

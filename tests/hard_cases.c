@@ -176,7 +176,7 @@ static pst_cloud *grow(const pst_cloud *c, size_t extra)
     for (size_t i = n; i < n + extra; ++i)
         pst_cloud_volume(g)[i] = pst_cloud_volume_const(c)[0];
     memcpy(pst_cloud_kinds(g), pst_cloud_kinds_const(c), n);
-    must(pst_cloud_set_h_uniform(g, pst_cloud_h_max(c)), "h", NULL);
+    must(pst_cloud_set_h_uniform(g, pst_cloud_h_max(c), NULL), "h", NULL);
     return g;
 }
 
@@ -685,8 +685,8 @@ static void case_near_duplicate(void)
     /* p moves to 1e-12 s0 of q */
     pst_cloud_coord(c, 0)[p] = pst_cloud_coord(c, 0)[q] + 1e-12 * s0;
     pst_cloud_coord(c, 1)[p] = pst_cloud_coord(c, 1)[q];
-    HC(pst_cloud_validate(c) == PST_OK, "validate refuses a near duplicate: %s",
-       pst_cloud_error(c));
+    char why[PST_ERRLEN] = "";
+    HC(pst_cloud_validate(c, why) == PST_OK, "validate refuses a near duplicate: %s", why);
     run_spec sp = {.f = F2, .solve = 1, .solve_error = 1};
     for (int k = 0; k < pst_scheme_count(); ++k)
         run_pair(c, pst_scheme_name(k), &sp, p, q);
@@ -701,8 +701,8 @@ static void case_near_duplicate(void)
     q = nearest(c, nxt);
     pst_cloud_coord(c, 0)[p] = pst_cloud_coord(c, 0)[q];
     pst_cloud_coord(c, 1)[p] = pst_cloud_coord(c, 1)[q];
-    HC(pst_cloud_validate(c) == PST_EINPUT && strstr(pst_cloud_error(c), "same coordinates"),
-       "pst_cloud_validate accepted an exact duplicate (%s)", pst_cloud_error(c));
+    HC(pst_cloud_validate(c, why) == PST_EINPUT && strstr(why, "same coordinates"),
+       "pst_cloud_validate accepted an exact duplicate (%s)", why);
     for (int k = 0; k < pst_scheme_count(); ++k)
         run_pair(c, pst_scheme_name(k), &sp, p, q);
     pst_cloud_destroy(c);
@@ -747,7 +747,7 @@ static void case_line(void)
         pst_cloud_volume(c)[i] = s0 * s0;
     }
     pst_cloud_kinds(c)[0] = pst_cloud_kinds(c)[m - 1] = PST_DIRICHLET;
-    must(pst_cloud_set_h_uniform(c, 1.2 * s0), "h", NULL);
+    must(pst_cloud_set_h_uniform(c, 1.2 * s0, NULL), "h", NULL);
     run_spec sp = {.f = F2, .solve = 1, .solve_error = 1};
     for (int k = 0; k < pst_scheme_count(); ++k) {
         const char *s = pst_scheme_name(k);
@@ -902,7 +902,7 @@ static void case_thin_layer(void)
             if (i == 0 || j == 0 || i == m - 1 || j == m - 1)
                 pst_cloud_kinds(c)[p] = PST_DIRICHLET;
         }
-    must(pst_cloud_set_h_uniform(c, 1.2 * s0), "h", NULL);
+    must(pst_cloud_set_h_uniform(c, 1.2 * s0, NULL), "h", NULL);
     /* a z-independent field: its 3D Laplacian is the 2D one */
     run_spec sp = {.f = F2, .solve = 1, .solve_error = 1};
     for (int k = 0; k < pst_scheme_count(); ++k) {
@@ -955,7 +955,7 @@ static void case_scaled(void)
                 pst_cloud_coord(c, d)[i] *= sc;
         for (size_t i = 0; i < n; ++i)
             pst_cloud_volume(c)[i] *= sc * sc;
-        must(pst_cloud_set_h_uniform(c, pst_cloud_h_uniform(base) * sc), "h", NULL);
+        must(pst_cloud_set_h_uniform(c, pst_cloud_h_uniform(base) * sc, NULL), "h", NULL);
         for (int k = 0; k < ns; ++k) {
             const char *s = pst_scheme_name(k);
             run_spec sp = {.f = {NULL, NULL}};
@@ -1029,7 +1029,7 @@ static void case_checkerboard(void)
     pst_cloud *c = test_lattice(2, 0, 1, s0, 1.2, 0.3, 13, 1);
     pst_cloud *c0 = test_lattice(2, 0, 1, s0, 1.2, 0.0, 13, 1);
     size_t n = pst_cloud_size(c);
-    must(pst_cloud_set_mobility(c, 1), "mobility", NULL);
+    must(pst_cloud_set_mobility(c, 1, NULL), "mobility", NULL);
     double *m = pst_cloud_mobility(c, 0);
     for (size_t i = 0; i < n; ++i) {
         long ix = lround(pst_cloud_coord_const(c0, 0)[i] / s0);
@@ -1105,7 +1105,7 @@ static void case_hole(void)
         pst_cloud_kinds(c)[k] = pst_cloud_kinds_const(full)[i];
         ++k;
     }
-    must(pst_cloud_set_h_uniform(c, pst_cloud_h_uniform(full)), "h", NULL);
+    must(pst_cloud_set_h_uniform(c, pst_cloud_h_uniform(full), NULL), "h", NULL);
     pst_cloud_destroy(full);
     uint8_t *near = calloc(n, 1), *away = calloc(n, 1);
     for (int q = 0; q < pst_scheme_count(); ++q) {

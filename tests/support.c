@@ -110,7 +110,7 @@ void test_make_neumann(pst_cloud *c, size_t stride)
 void test_rough_mobility(pst_cloud *c, int ncomp)
 {
     size_t n = pst_cloud_size(c);
-    pst_cloud_set_mobility(c, ncomp);
+    pst_cloud_set_mobility(c, ncomp, NULL);
     for (int k = 0; k < ncomp; ++k) {
         double *m = pst_cloud_mobility(c, k);
         for (size_t i = 0; i < n; ++i)

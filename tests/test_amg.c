@@ -168,7 +168,7 @@ static void test_errors(void)
     memcpy(pst_cloud_kinds(c2), pst_cloud_kinds_const(c), n);
     for (size_t i = 0; i <= n; ++i)
         pst_cloud_volume(c2)[i] = 1.0 / 256;
-    pst_cloud_set_h_uniform(c2, 1.2 / 16);
+    pst_cloud_set_h_uniform(c2, 1.2 / 16, NULL);
     pst_nlist *nl = test_nlist(c2, 2.0);
     pst_op *op = test_op(c2, nl, "brookshaw", PST_GRAD_G1, 0);
     err[0] = 0;

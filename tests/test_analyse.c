@@ -188,7 +188,7 @@ static void test_degenerate(void)
                                                                            : PST_INTERIOR;
     }
     x[25] = y[25] = 5;
-    CHECK_INT(pst_cloud_set_h_uniform(c, 0.12), PST_OK);
+    CHECK_INT(pst_cloud_set_h_uniform(c, 0.12, NULL), PST_OK);
     pst_nlist *nl = test_nlist(c, 2);
     pst_op *op = test_op(c, nl, "brookshaw", PST_GRAD_G1, 0);
     pst_csr a = {0};

@@ -96,7 +96,7 @@ static void test_lattice_plain(void)
     for (size_t i = 0; i < 121; ++i)
         interior += pst_cloud_kinds(c)[i] == PST_INTERIOR && pst_cloud_normal(c, 0)[i] == 0;
     CHECK_INT(interior, 121);
-    CHECK_INT(pst_cloud_validate(c), PST_OK);
+    CHECK_INT(pst_cloud_validate(c, NULL), PST_OK);
     pst_cloud_destroy(c);
 
     /* 3D, an off-origin box with different lengths per axis */
@@ -145,7 +145,7 @@ static void test_lattice_jitter(void)
     CHECK(maxd > 0.99 * K * s0);
     CHECK(fabs(sum[0] / n) < 0.03 && fabs(sum[1] / n) < 0.03); /* std of the mean 0.0057 */
     CHECK(reproduced);
-    CHECK_INT(pst_cloud_validate(c), PST_OK);
+    CHECK_INT(pst_cloud_validate(c, NULL), PST_OK);
 
     /* same seed: the same cloud; another seed: another cloud */
     pst_cloud *c2, *c3;
@@ -287,7 +287,7 @@ static void check_cell_centred(int dim)
     CHECK(pst_cloud_coord(c, 0)[nint] == 0 && pst_cloud_coord(c, 1)[nint] == 0.5 * s0);
     CHECK(pst_cloud_coord(c, 1)[nint + 1] == 1.5 * s0);
     CHECK(pst_cloud_coord(c, 0)[nint + nface / (2 * dim)] == 1);
-    CHECK_INT(pst_cloud_validate(c), PST_OK);
+    CHECK_INT(pst_cloud_validate(c, NULL), PST_OK);
     pst_cloud_destroy(c);
     pst_cloud_destroy(c0);
 }
@@ -416,8 +416,8 @@ static void test_permute(void)
     CHECK_INT(pst_cloud_lattice(&c, &o, NULL), PST_OK);
     CHECK_INT(pst_cloud_lattice(&ref, &o, NULL), PST_OK);
     double *u;
-    CHECK_INT(pst_cloud_add_field(c, "u", &u), PST_OK);
-    CHECK_INT(pst_cloud_set_mobility(c, 1), PST_OK);
+    CHECK_INT(pst_cloud_add_field(c, "u", &u, NULL), PST_OK);
+    CHECK_INT(pst_cloud_set_mobility(c, 1, NULL), PST_OK);
     size_t n = pst_cloud_size(c);
     double *h = pst_cloud_h_per_particle(c);
     for (size_t i = 0; i < n; ++i) {
@@ -428,7 +428,7 @@ static void test_permute(void)
     uint32_t *perm = malloc(n * sizeof *perm);
     for (size_t i = 0; i < n; ++i)
         perm[i] = (uint32_t)((7 * i + 3) % n); /* 7 is prime to n = 25 */
-    CHECK_INT(pst_cloud_permute(c, perm), PST_OK);
+    CHECK_INT(pst_cloud_permute(c, perm, NULL), PST_OK);
     int ok = 1;
     for (size_t i = 0; i < n; ++i) {
         size_t p = perm[i];
@@ -445,10 +445,11 @@ static void test_permute(void)
     pst_cloud_to_input_order(c, pst_cloud_coord(c, 1), back);
     CHECK(!memcmp(back, pst_cloud_coord(ref, 1), n * sizeof *back));
     perm[0] = perm[1];
-    CHECK_INT(pst_cloud_permute(c, perm), PST_EINVAL);
-    CHECK(strstr(pst_cloud_error(c), "permutation") != NULL);
+    char why[PST_ERRLEN];
+    CHECK_INT(pst_cloud_permute(c, perm, why), PST_EINVAL);
+    CHECK(strstr(why, "permutation") != NULL);
     perm[0] = (uint32_t)n;
-    CHECK_INT(pst_cloud_permute(c, perm), PST_EINVAL);
+    CHECK_INT(pst_cloud_permute(c, perm, NULL), PST_EINVAL);
     free(back);
     free(perm);
     pst_cloud_destroy(c);
@@ -460,22 +461,23 @@ static void test_validate(void)
     pst_lattice_opts o = opts2(0.25, 0.1);
     pst_cloud *c;
     CHECK_INT(pst_cloud_lattice(&c, &o, NULL), PST_OK);
-    CHECK_INT(pst_cloud_validate(c), PST_OK);
+    CHECK_INT(pst_cloud_validate(c, NULL), PST_OK);
     double *x = pst_cloud_coord(c, 0), *y = pst_cloud_coord(c, 1), keep = x[4];
     x[4] = NAN;
-    CHECK_INT(pst_cloud_validate(c), PST_EINPUT);
-    CHECK(strstr(pst_cloud_error(c), "particle 4") && strstr(pst_cloud_error(c), "finite"));
+    char why[PST_ERRLEN];
+    CHECK_INT(pst_cloud_validate(c, why), PST_EINPUT);
+    CHECK(strstr(why, "particle 4") && strstr(why, "finite"));
     x[4] = keep;
     pst_cloud_volume(c)[6] = 0;
-    CHECK_INT(pst_cloud_validate(c), PST_EINPUT);
-    CHECK(strstr(pst_cloud_error(c), "particle 6") && strstr(pst_cloud_error(c), "volume"));
+    CHECK_INT(pst_cloud_validate(c, why), PST_EINPUT);
+    CHECK(strstr(why, "particle 6") && strstr(why, "volume"));
     pst_cloud_volume(c)[6] = -1;
-    CHECK_INT(pst_cloud_validate(c), PST_EINPUT);
+    CHECK_INT(pst_cloud_validate(c, NULL), PST_EINPUT);
     pst_cloud_volume(c)[6] = 1;
     x[9] = x[3];
     y[9] = y[3];
-    CHECK_INT(pst_cloud_validate(c), PST_EINPUT);
-    CHECK(strstr(pst_cloud_error(c), "particles 3 and 9") != NULL);
+    CHECK_INT(pst_cloud_validate(c, why), PST_EINPUT);
+    CHECK(strstr(why, "particles 3 and 9") != NULL);
     pst_cloud_destroy(c);
 }
 
@@ -484,8 +486,8 @@ static void test_fields_and_mobility(void)
     pst_cloud *c;
     CHECK_INT(pst_cloud_create(&c, 3, 10), PST_OK);
     double *a, *b;
-    CHECK_INT(pst_cloud_add_field(c, "u_exact", &a), PST_OK);
-    CHECK_INT(pst_cloud_add_field(c, "rhs2", &b), PST_OK);
+    CHECK_INT(pst_cloud_add_field(c, "u_exact", &a, NULL), PST_OK);
+    CHECK_INT(pst_cloud_add_field(c, "rhs2", &b, NULL), PST_OK);
     CHECK(a && b && a[9] == 0);
     CHECK_INT(pst_cloud_nfields(c), 2);
     CHECK(strcmp(pst_cloud_field_name(c, 1), "rhs2") == 0);
@@ -496,35 +498,35 @@ static void test_fields_and_mobility(void)
     const char *bad[] = {"u_exact", "2x", "x", "kind", "mz", "id", "a-b", "", "a b"};
     for (size_t k = 0; k < sizeof bad / sizeof *bad; ++k) {
         double *p = a;
-        CHECK_INT(pst_cloud_add_field(c, bad[k], &p), PST_EINVAL);
+        CHECK_INT(pst_cloud_add_field(c, bad[k], &p, NULL), PST_EINVAL);
         CHECK(p == NULL);
     }
-    CHECK_INT(pst_cloud_add_field(c, NULL, NULL), PST_EINVAL);
+    CHECK_INT(pst_cloud_add_field(c, NULL, NULL, NULL), PST_EINVAL);
     CHECK_INT(pst_cloud_nfields(c), 2);
 
     CHECK_INT(pst_cloud_mobility_ncomp(c), 0);
     CHECK(pst_cloud_mobility(c, 0) == NULL);
-    CHECK_INT(pst_cloud_set_mobility(c, 1), PST_OK);
+    CHECK_INT(pst_cloud_set_mobility(c, 1, NULL), PST_OK);
     CHECK(pst_cloud_mobility(c, 0)[9] == 1 && pst_cloud_mobility(c, 1) == NULL);
-    CHECK_INT(pst_cloud_set_mobility(c, 3), PST_OK);
+    CHECK_INT(pst_cloud_set_mobility(c, 3, NULL), PST_OK);
     CHECK_INT(pst_cloud_mobility_ncomp(c), 3);
     CHECK(pst_cloud_mobility(c, 2)[0] == 1 && pst_cloud_mobility(c, 3) == NULL);
-    CHECK_INT(pst_cloud_set_mobility(c, 2), PST_EINVAL);
+    CHECK_INT(pst_cloud_set_mobility(c, 2, NULL), PST_EINVAL);
     CHECK_INT(pst_cloud_mobility_ncomp(c), 3);
     pst_cloud_mobility(c, 1)[5] = -1;
-    CHECK_INT(pst_cloud_validate(c), PST_EINPUT); /* also: all particles at the origin */
-    CHECK_INT(pst_cloud_set_mobility(c, 0), PST_OK);
+    CHECK_INT(pst_cloud_validate(c, NULL), PST_EINPUT); /* also: all particles at the origin */
+    CHECK_INT(pst_cloud_set_mobility(c, 0, NULL), PST_OK);
     CHECK(pst_cloud_mobility(c, 0) == NULL);
 
     /* smoothing length layouts */
-    CHECK_INT(pst_cloud_set_h_uniform(c, 0.5), PST_OK);
+    CHECK_INT(pst_cloud_set_h_uniform(c, 0.5, NULL), PST_OK);
     CHECK(pst_cloud_h_max(c) == 0.5 && pst_cloud_h_array(c) == NULL);
     double *h = pst_cloud_h_per_particle(c);
     CHECK(h && h[3] == 0.5 && !pst_cloud_h_is_uniform(c));
     h[3] = 2;
     CHECK(pst_cloud_h_max(c) == 2);
-    CHECK_INT(pst_cloud_set_h_uniform(c, -1), PST_EINVAL);
-    CHECK_INT(pst_cloud_set_h_uniform(c, 0.25), PST_OK);
+    CHECK_INT(pst_cloud_set_h_uniform(c, -1, NULL), PST_EINVAL);
+    CHECK_INT(pst_cloud_set_h_uniform(c, 0.25, NULL), PST_OK);
     CHECK(pst_cloud_h_is_uniform(c) && pst_cloud_h_uniform(c) == 0.25);
     pst_cloud_destroy(c);
 

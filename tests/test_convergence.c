@@ -42,7 +42,7 @@ static double lap3(const double *x)
 static double error_eq14(int dim, double s0, uint64_t seed, const case_t *cs)
 {
     pst_cloud *c = test_lattice(dim, 2.0, 3.0, s0, 0.9, 0.4, seed, 0);
-    if (pst_cloud_morton_sort(c, 3.0 * 0.9 * s0) != PST_OK) {
+    if (pst_cloud_morton_sort(c, 3.0 * 0.9 * s0, NULL) != PST_OK) {
         fprintf(stderr, "setup: morton sort failed\n");
         exit(1);
     }

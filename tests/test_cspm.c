@@ -159,7 +159,7 @@ static void test_volumes(void)
     CHECK_INT(pst_cloud_create(&c, 2, 2), PST_OK);
     double h = 0.5, d = 0.7;
     pst_cloud_coord(c, 0)[1] = d;
-    pst_cloud_set_h_uniform(c, h);
+    pst_cloud_set_h_uniform(c, h, NULL);
     pst_nlist *nl = test_nlist(c, 3.0);
     pst_op *op = make_op(c, nl, "csph2g");
     double W0 = pst_kernel_w(PST_KERNEL_QUINTIC, 2, 0.0, h),
@@ -425,7 +425,7 @@ static void test_degenerate(void)
         size_t m = test_flat_layout(c);
         for (int d = 0; d < dim; ++d)
             pst_cloud_coord(c, d)[m] = 10.0;
-        pst_cloud_set_h_uniform(c, 0.1);
+        pst_cloud_set_h_uniform(c, 0.1, NULL);
         pst_nlist *nl = test_nlist(c, 3.0);
         double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y);
         for (size_t i = 0; i < n; ++i)
@@ -459,7 +459,7 @@ static void test_degenerate(void)
         pst_cloud_coord(c, 0)[i] = px[i];
         pst_cloud_coord(c, 1)[i] = py[i];
     }
-    pst_cloud_set_h_uniform(c, 0.1);
+    pst_cloud_set_h_uniform(c, 0.1, NULL);
     pst_nlist *nl = test_nlist(c, 3.0);
     pst_op *op = make_op(c, nl, "icspm");
     double u[5], y[5];
@@ -499,11 +499,11 @@ static void test_errors(void)
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     pst_op_defaults(&o);
     o.scheme = "csph2g";
-    pst_cloud_set_mobility(c, 1);
+    pst_cloud_set_mobility(c, 1, NULL);
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "mobility") != NULL);
     CHECK(op == NULL);
-    pst_cloud_set_mobility(c, 0);
+    pst_cloud_set_mobility(c, 0, NULL);
     CHECK_INT(pst_scheme_default_kernel("icspm"), PST_KERNEL_QUINTIC);
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_OK);
     double *h[6] = {NULL, NULL, NULL, NULL, NULL, NULL};

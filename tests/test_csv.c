@@ -64,9 +64,9 @@ static pst_cloud *make_cloud(int dim, int mob)
         return NULL;
     size_t n = pst_cloud_size(c);
     double *h = pst_cloud_h_per_particle(c), *u, *rhs;
-    pst_cloud_set_mobility(c, mob);
-    pst_cloud_add_field(c, "u", &u);
-    pst_cloud_add_field(c, "rhs_2", &rhs);
+    pst_cloud_set_mobility(c, mob, NULL);
+    pst_cloud_add_field(c, "u", &u, NULL);
+    pst_cloud_add_field(c, "rhs_2", &rhs, NULL);
     for (size_t i = 0; i < n; ++i) {
         h[i] = 0.3 + (double)i / 3;
         u[i] = i % 4 == 0 ? -0.0 : i % 4 == 1 ? 4.9e-320 : i % 4 == 2 ? 1e300 : -1.0 / 7;
@@ -79,7 +79,7 @@ static pst_cloud *make_cloud(int dim, int mob)
     uint32_t *perm = malloc(n * sizeof *perm);
     for (size_t i = 0; i < n; ++i)
         perm[i] = (uint32_t)(n - 1 - i);
-    pst_cloud_permute(c, perm);
+    pst_cloud_permute(c, perm, NULL);
     free(perm);
     return c;
 }

@@ -267,7 +267,7 @@ static pst_cloud *cloud_of(int dim, size_t n, const double *xyz, double h)
     for (size_t i = 0; i < n; ++i)
         for (int d = 0; d < dim; ++d)
             pst_cloud_coord(c, d)[i] = xyz[3 * i + (size_t)d];
-    pst_cloud_set_h_uniform(c, h);
+    pst_cloud_set_h_uniform(c, h, NULL);
     return c;
 }
 
@@ -396,10 +396,10 @@ static void test_errors(void)
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "variant") != NULL);
     o.variant = 0;
-    pst_cloud_set_mobility(c, 1);
+    pst_cloud_set_mobility(c, 1, NULL);
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "mobility") != NULL);
-    pst_cloud_set_mobility(c, 0);
+    pst_cloud_set_mobility(c, 0, NULL);
     CHECK_INT(pst_scheme_default_kernel("lsmps"), PST_KERNEL_QUINTIC);
     CHECK_INT(pst_scheme_default_kernel("lpmps"), PST_KERNEL_QUINTIC);
     /* another weight (Wendland C2, support 2h) is allowed and still quadratic-exact */

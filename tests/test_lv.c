@@ -73,14 +73,14 @@ static void test_patch(void)
                 double e3 = patch_error(c, op, u3, lap_cubic_sum, 0, margin);
                 pst_op_destroy(op);
                 /* div((x+y[+z]) grad(x+y[+z])) = dim, with the scalar mobility m = sum x */
-                pst_cloud_set_mobility(c, 1);
+                pst_cloud_set_mobility(c, 1, NULL);
                 double *m = pst_cloud_mobility(c, 0);
                 for (size_t i = 0; i < pst_cloud_size(c); ++i)
                     m[i] = u1[i];
                 op = make_op(c, nl, schemes[s], g);
                 double e1 = patch_error(c, op, u1, NULL, (double)dim, margin);
                 pst_op_destroy(op);
-                pst_cloud_set_mobility(c, 0);
+                pst_cloud_set_mobility(c, 0, NULL);
                 printf("patch %dD %-9s G%d: lap(x^3+..) rel err %.2e, div((x+..)grad(x+..)) "
                        "rel err %.2e\n",
                        dim, schemes[s], g, e3, e1);
@@ -170,7 +170,7 @@ static void test_symmetry(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         pst_cloud *c = patch(dim, 1.2, 0.4, 0);
-        pst_cloud_set_mobility(c, 1);
+        pst_cloud_set_mobility(c, 1, NULL);
         double *m = pst_cloud_mobility(c, 0);
         for (size_t i = 0; i < pst_cloud_size(c); ++i)
             m[i] = 1.0 + (double)(i % 7); /* heterogeneous */
@@ -252,7 +252,7 @@ static void test_neumann_and_tensor(void)
         uint8_t *kind = pst_cloud_kinds(c);
         size_t n = pst_cloud_size(c);
         test_make_neumann(c, 1);
-        pst_cloud_set_mobility(c, dim);
+        pst_cloud_set_mobility(c, dim, NULL);
         double mdiag[3] = {2.0, 5.0, 0.5};
         for (int k = 0; k < dim; ++k)
             for (size_t i = 0; i < n; ++i)
@@ -295,7 +295,7 @@ static void test_neumann_and_tensor(void)
         double *yt = malloc(n * sizeof *yt);
         pst_op_apply(op, u2, yt);
         pst_op_destroy(op);
-        pst_cloud_set_mobility(c, 1);
+        pst_cloud_set_mobility(c, 1, NULL);
         for (size_t i = 0; i < n; ++i)
             pst_cloud_mobility(c, 0)[i] = 3.0;
         op = make_op(c, nl, "lv", PST_GRAD_G2);
@@ -378,7 +378,7 @@ static void test_degenerate(void)
     test_flat_layout(c);
     pst_cloud_coord(c, 0)[11] = 10.0;
     pst_cloud_coord(c, 1)[11] = 10.0;
-    pst_cloud_set_h_uniform(c, 0.12);
+    pst_cloud_set_h_uniform(c, 0.12, NULL);
     pst_nlist *nl = test_nlist(c, 2.0);
     double u[12], y[12];
     for (int i = 0; i < 12; ++i)
@@ -436,7 +436,7 @@ static void test_mean_constant(void)
             pst_cloud *c = patch(dim, 1.2, 0.3, 1);
             size_t n = pst_cloud_size(c);
             test_make_neumann(c, 3);
-            pst_cloud_set_mobility(c, ncomp);
+            pst_cloud_set_mobility(c, ncomp, NULL);
             for (int k = 0; k < ncomp; ++k) {
                 double *m = pst_cloud_mobility(c, k);
                 for (size_t i = 0; i < n; ++i)
@@ -491,7 +491,7 @@ static void test_mean_two_valued(void)
     if (I == n || J == n)
         goto out;
     for (int ncomp = 1; ncomp <= 2; ++ncomp) {
-        pst_cloud_set_mobility(c, ncomp);
+        pst_cloud_set_mobility(c, ncomp, NULL);
         for (int k = 0; k < ncomp; ++k) {
             double *m = pst_cloud_mobility(c, k);
             for (size_t i = 0; i < n; ++i)
@@ -559,7 +559,7 @@ static void test_mean_smooth(void)
         for (int lev = 0; lev < 2; ++lev) {
             pst_cloud *c = test_lattice(dim, 2.0, 3.0, s0[lev], 1.2, 0.0, 7, 0);
             size_t n = pst_cloud_size(c);
-            pst_cloud_set_mobility(c, 1);
+            pst_cloud_set_mobility(c, 1, NULL);
             double *m = pst_cloud_mobility(c, 0), *mm = test_field(c, linear_m);
             memcpy(m, mm, n * sizeof *m);
             free(mm);
@@ -658,7 +658,7 @@ static void test_mean_zero(void)
 {
     pst_cloud *c = patch(2, 1.2, 0.2, 0);
     size_t n = pst_cloud_size(c);
-    pst_cloud_set_mobility(c, 1);
+    pst_cloud_set_mobility(c, 1, NULL);
     double *m = pst_cloud_mobility(c, 0);
     for (size_t i = 0; i < n; ++i)
         m[i] = i % 3 == 0 ? 0.0 : 2.0;
@@ -746,7 +746,7 @@ static void test_anisotropic_limit(void)
         for (int level = 0; level < 2; ++level) {
             double s0 = level ? 0.025 : 0.05;
             pst_cloud *c = test_lattice(2, 0, 1, s0, 1.2, 0, 1, 1);
-            pst_cloud_set_mobility(c, 2);
+            pst_cloud_set_mobility(c, 2, NULL);
             size_t n = pst_cloud_size(c);
             for (size_t i = 0; i < n; ++i) {
                 pst_cloud_mobility(c, 0)[i] = 1.0;

@@ -107,7 +107,7 @@ static double exactness(pst_cloud *c, const pst_nlist *nl, const char *scheme, d
     }
     pst_op_destroy(op);
     /* heterogeneous scalar mobility m = 1 + c . x */
-    pst_cloud_set_mobility(c, 1);
+    pst_cloud_set_mobility(c, 1, NULL);
     double *m = pst_cloud_mobility(c, 0);
     for (size_t i = 0; i < n; ++i) {
         double x[3];
@@ -131,7 +131,7 @@ static double exactness(pst_cloud *c, const pst_nlist *nl, const char *scheme, d
             e_qmob = fmax(e_qmob, fabs(y[i] - t) / fabs(t));
         }
     pst_op_destroy(op);
-    pst_cloud_set_mobility(c, 0);
+    pst_cloud_set_mobility(c, 0, NULL);
     printf("exact %dD %s (%zu rows): linear |Lu| %.2e, grad err %.2e, div(m grad lin) rel %.2e; "
            "quadratic: lap rel %.2e, div(m grad) rel %.2e, grad err %.2e, hessian err %.2e\n",
            dim, scheme, used, e_lin, e_grad, e_mob, e_quad, e_qmob, e_qgrad, e_hess);
@@ -293,7 +293,7 @@ static void test_degenerate(void)
         size_t nflat = test_flat_layout(c);
         for (int d = 0; d < dim; ++d)
             pst_cloud_coord(c, d)[nflat] = 10.0;
-        pst_cloud_set_h_uniform(c, dim == 2 ? 0.12 : 0.08); /* mixed2 gets >= 5 neighbours */
+        pst_cloud_set_h_uniform(c, dim == 2 ? 0.12 : 0.08, NULL); /* mixed2 gets >= 5 neighbours */
         pst_nlist *nl = test_nlist(c, 3.0);
         double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y), *g[3], *hs[6];
         for (int d = 0; d < 3; ++d)
@@ -356,7 +356,7 @@ static void test_degenerate(void)
         pst_cloud_coord(c, 0)[i] = px[i];
         pst_cloud_coord(c, 1)[i] = py[i];
     }
-    pst_cloud_set_h_uniform(c, 0.1);
+    pst_cloud_set_h_uniform(c, 0.1, NULL);
     pst_nlist *nl = test_nlist(c, 3.0);
     pst_op *op = make_op(c, nl, "mixed2");
     double u[4], gx[4], gy[4], *g[3] = {gx, gy, NULL};

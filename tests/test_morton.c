@@ -89,9 +89,9 @@ static pst_cloud *make_cloud(int dim, int side, uint64_t seed)
         pst_cloud_kinds(c)[i] = (uint8_t)(i % 3);
     }
     double *h = pst_cloud_h_per_particle(c);
-    pst_cloud_set_mobility(c, dim);
+    pst_cloud_set_mobility(c, dim, NULL);
     double *f;
-    pst_cloud_add_field(c, "u", &f);
+    pst_cloud_add_field(c, "u", &f, NULL);
     for (size_t i = 0; i < n; ++i) {
         h[i] = 2.0 + (double)i;
         f[i] = -(double)i;
@@ -111,7 +111,7 @@ static void test_sort(void)
         size_t n = pst_cloud_size(c);
         double lo[3], hi[3];
         pst_cloud_bbox(c, lo, hi);
-        CHECK_INT(pst_cloud_morton_sort(c, cell), PST_OK);
+        CHECK_INT(pst_cloud_morton_sort(c, cell, NULL), PST_OK);
         const int64_t *id = pst_cloud_ids_const(c);
         /* a permutation */
         uint8_t *seen = calloc(n, 1);
@@ -176,9 +176,9 @@ static void test_threads_and_limits(void)
         pst_cloud *a = make_cloud(dim, side, 9), *b = make_cloud(dim, side, 9);
         size_t n = pst_cloud_size(a);
         omp_set_num_threads(1);
-        CHECK_INT(pst_cloud_morton_sort(a, 0.7), PST_OK);
+        CHECK_INT(pst_cloud_morton_sort(a, 0.7, NULL), PST_OK);
         omp_set_num_threads(2);
-        CHECK_INT(pst_cloud_morton_sort(b, 0.7), PST_OK);
+        CHECK_INT(pst_cloud_morton_sort(b, 0.7, NULL), PST_OK);
         CHECK(memcmp(pst_cloud_ids(a), pst_cloud_ids(b), n * sizeof(int64_t)) == 0);
         pst_cloud_destroy(a);
         pst_cloud_destroy(b);
@@ -199,8 +199,8 @@ static void test_threads_and_limits(void)
             cell *= 2;
         }
         CHECK(cell > tiny);
-        CHECK_INT(pst_cloud_morton_sort(a, tiny), PST_OK);
-        CHECK_INT(pst_cloud_morton_sort(b, cell), PST_OK);
+        CHECK_INT(pst_cloud_morton_sort(a, tiny, NULL), PST_OK);
+        CHECK_INT(pst_cloud_morton_sort(b, cell, NULL), PST_OK);
         CHECK(memcmp(pst_cloud_ids(a), pst_cloud_ids(b), n * sizeof(int64_t)) == 0);
         pst_cloud_destroy(a);
         pst_cloud_destroy(b);
@@ -209,14 +209,15 @@ static void test_threads_and_limits(void)
 
     pst_cloud *c;
     pst_cloud_create(&c, 3, 0);
-    CHECK_INT(pst_cloud_morton_sort(c, 1.0), PST_OK);
+    CHECK_INT(pst_cloud_morton_sort(c, 1.0, NULL), PST_OK);
     pst_cloud_destroy(c);
     pst_cloud_create(&c, 2, 1);
-    CHECK_INT(pst_cloud_morton_sort(c, 1.0), PST_OK);
-    CHECK_INT(pst_cloud_morton_sort(c, 0.0), PST_EINVAL);
-    CHECK_INT(pst_cloud_morton_sort(c, -1.0), PST_EINVAL);
-    CHECK_INT(pst_cloud_morton_sort(c, NAN), PST_EINVAL);
-    CHECK(strlen(pst_cloud_error(c)) > 0);
+    CHECK_INT(pst_cloud_morton_sort(c, 1.0, NULL), PST_OK);
+    CHECK_INT(pst_cloud_morton_sort(c, 0.0, NULL), PST_EINVAL);
+    CHECK_INT(pst_cloud_morton_sort(c, -1.0, NULL), PST_EINVAL);
+    char why[PST_ERRLEN] = "";
+    CHECK_INT(pst_cloud_morton_sort(c, NAN, why), PST_EINVAL);
+    CHECK(strlen(why) > 0);
     pst_cloud_destroy(c);
 }
 

@@ -48,7 +48,7 @@ static pst_cloud *lattice(int dim, int side, double s0, double K, int shuffle, d
         }
     }
     free(slot);
-    pst_cloud_set_h_uniform(c, hfac * s0);
+    pst_cloud_set_h_uniform(c, hfac * s0, NULL);
     if (vary_h) {
         double *h = pst_cloud_h_per_particle(c);
         for (size_t i = 0; i < n; ++i)
@@ -191,7 +191,7 @@ static void test_exact_distances(void)
         pst_nlist_destroy(nl);
         /* R = 2 s0: axis neighbours at s0 and the diagonals (sqrt 2, sqrt 3 s0) are in, the
          * axis neighbours at exactly 2 s0 are out */
-        pst_cloud_set_h_uniform(c, 0.25);
+        pst_cloud_set_h_uniform(c, 0.25, NULL);
         nl = check_against_brute(c, 2.0);
         if (nl) {
             /* a particle far from the faces: 2D 3x3 - 1 = 8 (the 4 at 2 s0 excluded), plus the
@@ -274,7 +274,7 @@ static void test_sorted_vs_unsorted(void)
             size_t n = pst_cloud_size(c);
             pst_nlist *un = NULL, *so = NULL;
             CHECK_INT(pst_nlist_build(&un, c, support, NULL), PST_OK);
-            CHECK_INT(pst_cloud_morton_sort(c, cells[v]), PST_OK);
+            CHECK_INT(pst_cloud_morton_sort(c, cells[v], NULL), PST_OK);
             pst_nlist *nl = check_against_brute(c, support); /* rows sorted on sorted clouds */
             pst_nlist_destroy(nl);
             CHECK_INT(pst_nlist_build(&so, c, support, NULL), PST_OK);

@@ -364,7 +364,7 @@ static void test_degenerate(void)
         for (size_t i = 0; i < 4; ++i)
             for (int d = 0; d < 2; ++d)
                 pst_cloud_coord(c, d)[m + i] = far[i][d];
-        pst_cloud_set_h_uniform(c, 0.1);
+        pst_cloud_set_h_uniform(c, 0.1, NULL);
         nl = test_nlist(c, 3.0);
         op = make_op(c, nl);
         double *u = malloc(nn * sizeof *u), *yy = malloc(nn * sizeof *yy), *g[3], *hs[6];
@@ -434,11 +434,11 @@ static void test_errors(void)
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "variant") != NULL);
     o.variant = 0;
-    pst_cloud_set_mobility(c, 1);
+    pst_cloud_set_mobility(c, 1, NULL);
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "mobility") != NULL);
     CHECK(op == NULL);
-    pst_cloud_set_mobility(c, 0);
+    pst_cloud_set_mobility(c, 0, NULL);
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_OK);
     double nan = NAN, zero = 0, u[121] = {0}, v;
     const double *pts[3] = {&nan, &zero, &zero};

@@ -41,7 +41,7 @@ static problem make_h(int dim, double s0, const char *scheme, double K, double h
     problem p;
     p.c = test_lattice(dim, 0.0, 1.0, s0, h_ratio, K, seed, 1);
     double support = pst_kernel_support(pst_scheme_default_kernel(scheme));
-    if (pst_cloud_morton_sort(p.c, support * h_ratio * s0) != PST_OK)
+    if (pst_cloud_morton_sort(p.c, support * h_ratio * s0, NULL) != PST_OK)
         exit(1);
     p.nl = test_nlist(p.c, support);
     p.op = test_op(p.c, p.nl, scheme, PST_GRAD_G1, 0);

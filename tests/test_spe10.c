@@ -243,7 +243,7 @@ static void test_cloud_mapping(void)
     CHECK_INT(n, 3600 + 4 * 60);
     CHECK_INT(bad_interior, 0);
     CHECK_INT(bad_face, 0);
-    CHECK_INT(pst_cloud_validate(c), PST_OK); /* every mobility > 0 */
+    CHECK_INT(pst_cloud_validate(c, NULL), PST_OK); /* every mobility > 0 */
 
     /* Scalar: Kx only. A zero scale is refused and leaves the mobility as it was. */
     CHECK_INT(pst_cloud_mobility_from_grid(c, &g, NULL, scale, 0, err), PST_OK);

@@ -234,9 +234,9 @@ static pst_cloud *make_cloud(int dim, int mob, int per_particle_h)
         return NULL;
     size_t n = pst_cloud_size(c);
     double *h = per_particle_h ? pst_cloud_h_per_particle(c) : NULL, *u, *rhs;
-    pst_cloud_set_mobility(c, mob);
-    pst_cloud_add_field(c, "u", &u);
-    pst_cloud_add_field(c, "rhs_2", &rhs);
+    pst_cloud_set_mobility(c, mob, NULL);
+    pst_cloud_add_field(c, "u", &u, NULL);
+    pst_cloud_add_field(c, "rhs_2", &rhs, NULL);
     for (size_t i = 0; i < n; ++i) {
         if (h)
             h[i] = 0.3 + (double)i / 3;
@@ -251,7 +251,7 @@ static pst_cloud *make_cloud(int dim, int mob, int per_particle_h)
     uint32_t *perm = malloc(n * sizeof *perm);
     for (size_t i = 0; i < n; ++i)
         perm[i] = (uint32_t)((i * 7 + 3) % n); /* n is not a multiple of 7 below */
-    CHECK_INT(pst_cloud_permute(c, perm), PST_OK);
+    CHECK_INT(pst_cloud_permute(c, perm, NULL), PST_OK);
     free(perm);
     return c;
 }
@@ -346,7 +346,7 @@ static void check_file(const char *name, int dim, int mob, int per_particle_h, i
         perm[i] = (uint32_t)(n - 1 - i);
     for (size_t i = 0; status2 && i < n; ++i)
         status2[i] = status[perm[i]];
-    CHECK_INT(pst_cloud_permute(c, perm), PST_OK);
+    CHECK_INT(pst_cloud_permute(c, perm, NULL), PST_OK);
     CHECK_INT(pst_cloud_write_vtu(c, path_of("again.vtu"), status2, err), PST_OK);
     vtu_file w;
     CHECK(parse(&w, path_of("again.vtu")));
@@ -392,7 +392,7 @@ static void test_exact_bytes(void)
     CHECK_INT(pst_cloud_create(&c, 2, 1), PST_OK);
     pst_cloud_coord(c, 0)[0] = 1.5;
     pst_cloud_coord(c, 1)[0] = -2.0;
-    pst_cloud_set_h_uniform(c, 0.25);
+    pst_cloud_set_h_uniform(c, 0.25, NULL);
     pst_cloud_kinds(c)[0] = PST_DIRICHLET;
     CHECK_INT(pst_cloud_write_vtu(c, path_of("one.vtu"), NULL, err), PST_OK);
     vtu_file v;
@@ -475,14 +475,14 @@ static void test_failures(void)
 
     /* a field named like one of the file's arrays */
     double *x;
-    CHECK_INT(pst_cloud_add_field(c, "status", &x), PST_OK);
+    CHECK_INT(pst_cloud_add_field(c, "status", &x, NULL), PST_OK);
     CHECK_INT(pst_cloud_write_vtu(c, path_of("clash.vtu"), status, err), PST_EINVAL);
     CHECK(strstr(err, "clash.vtu") && strstr(err, "'status'"));
     CHECK(stat(path_of("clash.vtu"), &sb) != 0);
     /* ... which is fine when the file has no status array */
     CHECK_INT(pst_cloud_write_vtu(c, path_of("clash.vtu"), NULL, err), PST_OK);
     CHECK(unlink(path_of("clash.vtu")) == 0);
-    CHECK_INT(pst_cloud_add_field(c, "normal", &x), PST_OK);
+    CHECK_INT(pst_cloud_add_field(c, "normal", &x, NULL), PST_OK);
     CHECK_INT(pst_cloud_write_vtu(c, path_of("clash.vtu"), NULL, err), PST_EINVAL);
     CHECK(strstr(err, "'normal'") != NULL);
     CHECK(stat(path_of("clash.vtu"), &sb) != 0);
@@ -750,7 +750,7 @@ static void test_read_formats(void)
             CHECK(pst_cloud_field(r, 0)[i] == T[i]);
             CHECK_INT(pst_cloud_ids(r)[i], i);
         }
-        CHECK_INT(pst_cloud_validate(r), PST_OK);
+        CHECK_INT(pst_cloud_validate(r, NULL), PST_OK);
     }
     pst_cloud_destroy(r);
 
@@ -1022,7 +1022,7 @@ static void fuzz_file(const char *name, int rounds, uint64_t seed)
         int st = pst_cloud_read_vtu(&r, p, err);
         if (st == PST_OK) {
             ++ok;
-            other += r == NULL || pst_cloud_validate(r) != PST_OK;
+            other += r == NULL || pst_cloud_validate(r, NULL) != PST_OK;
         } else {
             ++input;
             other += st != PST_EINPUT || r != NULL || strncmp(err, p, strlen(p)) != 0;

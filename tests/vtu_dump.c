@@ -83,8 +83,8 @@ int main(int argc, char **argv)
     o.boundary_layer = 1;
     pst_cloud *c;
     int st = pst_cloud_lattice(&c, &o, err);
-    if (st == PST_OK && (st = pst_cloud_morton_sort(c, o.s0)) != PST_OK)
-        snprintf(err, sizeof err, "%s", pst_cloud_error(c));
+    if (st == PST_OK)
+        st = pst_cloud_morton_sort(c, o.s0, err);
     if (st != PST_OK) {
         fprintf(stderr, "vtu_dump: %s: %s\n", pst_strerror(st), err);
         return 1;
@@ -92,11 +92,11 @@ int main(int argc, char **argv)
     int dim = o.dim;
     size_t n = pst_cloud_size(c);
     double *h = pst_cloud_h_per_particle(c), *u, *rhs;
-    st = h ? pst_cloud_set_mobility(c, dim == 2 ? 2 : 1) : PST_ENOMEM;
+    st = h ? pst_cloud_set_mobility(c, dim == 2 ? 2 : 1, NULL) : PST_ENOMEM;
     if (st == PST_OK)
-        st = pst_cloud_add_field(c, "u", &u);
+        st = pst_cloud_add_field(c, "u", &u, NULL);
     if (st == PST_OK)
-        st = pst_cloud_add_field(c, "rhs", &rhs);
+        st = pst_cloud_add_field(c, "rhs", &rhs, NULL);
     uint8_t *status = malloc(n ? n : 1);
     if (st != PST_OK || !status) {
         fprintf(stderr, "vtu_dump: cannot fill the cloud\n");

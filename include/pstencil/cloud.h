@@ -1,0 +1,140 @@
+/* pstencil: Particle clouds and their generators. Part of the public API; include <pstencil.h>. */
+#ifndef PSTENCIL_PUBLIC_CLOUD_H
+#define PSTENCIL_PUBLIC_CLOUD_H
+
+#include "pstencil/core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------------------------------------ */
+/* Particle clouds                                                                            */
+/* ------------------------------------------------------------------------------------------ */
+
+/* Field names (pst_cloud_add_field) are C identifiers shorter than PST_MAX_NAME bytes (with
+ * the terminating 0) that are not one of the CSV format's own column names (x, y, z, V, h,
+ * kind, nx, ny, nz, m, mx, my, mz, id). The two checks, each 1 when it holds: */
+#define PST_MAX_NAME 64
+int pst_is_identifier(const char *name);
+int pst_is_reserved_column(const char *name);
+
+/* Role of a particle in a boundary-value problem. */
+typedef enum { PST_INTERIOR = 0, PST_DIRICHLET = 1, PST_NEUMANN = 2 } pst_kind;
+
+typedef struct pst_cloud pst_cloud;
+
+/* Create a cloud of `n` particles in `dim` (2 or 3) dimensions. Positions and normals start at
+ * 0, V at 1, h uniform at 1, every particle interior, mobility absent (meaning m = 1), ids
+ * 0..n-1. Returns PST_EINVAL for a bad dim, PST_ENOMEM when allocation fails. */
+int pst_cloud_create(pst_cloud **out, int dim, size_t n);
+
+/* Free a cloud and everything it owns. NULL is allowed. */
+void pst_cloud_destroy(pst_cloud *c);
+
+/* Dimension (2 or 3) and number of particles. */
+int pst_cloud_dim(const pst_cloud *c);
+size_t pst_cloud_size(const pst_cloud *c);
+
+/* The structure-of-arrays fields. Pointers stay valid until the cloud is destroyed or its
+ * smoothing-length or mobility layout is changed by the setters below. Writing through them
+ * is how callers fill a cloud. */
+double *pst_cloud_coord(pst_cloud *c, int axis);       /* axis < dim; NULL otherwise       */
+double *pst_cloud_volume(pst_cloud *c);
+double *pst_cloud_normal(pst_cloud *c, int axis);      /* outward unit normal (boundaries) */
+uint8_t *pst_cloud_kinds(pst_cloud *c);                /* pst_kind values                  */
+int64_t *pst_cloud_ids(pst_cloud *c);                  /* original (input) index           */
+const double *pst_cloud_coord_const(const pst_cloud *c, int axis);
+const double *pst_cloud_volume_const(const pst_cloud *c);
+const uint8_t *pst_cloud_kinds_const(const pst_cloud *c);
+const double *pst_cloud_normal_const(const pst_cloud *c, int axis);
+const int64_t *pst_cloud_ids_const(const pst_cloud *c);
+
+/* Smoothing length: one value for every particle, or one per particle. */
+int pst_cloud_set_h_uniform(pst_cloud *c, double h, char *err);   /* frees any per-particle array     */
+double *pst_cloud_h_per_particle(pst_cloud *c);        /* allocates (filled with the uniform
+                                                          value) on first call; NULL on OOM */
+int pst_cloud_h_is_uniform(const pst_cloud *c);
+double pst_cloud_h_uniform(const pst_cloud *c);        /* the uniform value (0 if per particle) */
+const double *pst_cloud_h_array(const pst_cloud *c);   /* per-particle array or NULL        */
+double pst_cloud_h_max(const pst_cloud *c);            /* largest h over the cloud          */
+
+/* Mobility: absent (m = 1 everywhere), a scalar per particle (ncomp = 1), or a diagonal
+ * tensor per particle (ncomp = dim). Setting a layout allocates it filled with 1. */
+int pst_cloud_set_mobility(pst_cloud *c, int ncomp, char *err);   /* ncomp in {0, 1, dim}               */
+int pst_cloud_mobility_ncomp(const pst_cloud *c);
+double *pst_cloud_mobility(pst_cloud *c, int comp);    /* comp < ncomp; NULL otherwise       */
+
+/* Named scalar fields. Adding a field allocates it filled with 0; names are unique and are
+ * C identifiers (letters, digits, '_', not starting with a digit) that do not collide with
+ * the reserved CSV column names. */
+int pst_cloud_add_field(pst_cloud *c, const char *name, double **data, char *err);
+size_t pst_cloud_nfields(const pst_cloud *c);
+const char *pst_cloud_field_name(const pst_cloud *c, size_t k);
+double *pst_cloud_field(pst_cloud *c, size_t k);
+double *pst_cloud_field_by_name(pst_cloud *c, const char *name);   /* NULL when absent */
+
+/* Axis-aligned bounding box of the positions (lo[d], hi[d] for d < dim). An empty cloud
+ * gives lo = hi = 0. */
+void pst_cloud_bbox(const pst_cloud *c, double lo[3], double hi[3]);
+
+/* Check a cloud: finite positions, V > 0, h > 0, known kinds, finite normals, mobility > 0,
+ * no two particles at the same coordinates. On failure the cloud's error names the first
+ * offending particle; returns PST_EINPUT. */
+int pst_cloud_validate(pst_cloud *c, char *err);
+
+/* Reorder every field (positions, V, h, kind, normals, mobility, ids, fields) by one
+ * permutation: new particle i is old particle perm[i]. `perm` must be a permutation of 0..n-1
+ * (checked: PST_EINVAL otherwise). */
+int pst_cloud_permute(pst_cloud *c, const uint32_t *perm, char *err);
+
+/* Scatter a per-particle array given in the cloud's current order back to input order:
+ * out[ids[i]] = in[i]. `in` and `out` must not alias. */
+void pst_cloud_to_input_order(const pst_cloud *c, const double *in, double *out);
+
+/* inv[r] = the particle whose id is r (the inverse of the ids, to write rows in input order).
+ * PST_EINVAL (message in err) when the ids are not a permutation of 0..n-1. Free with free(). */
+int pst_cloud_input_inverse(const pst_cloud *c, size_t **inv, char *err);
+
+/* --- Generators ---------------------------------------------------------------------------- */
+
+/* Lattice generator options. The lattice is x_i = lo + i*s0 for i = 0..n_d along each axis,
+ * n_d = round((hi - lo)/s0) (both ends included; the box must be a whole number of spacings,
+ * to 1e-9 relative). */
+typedef struct {
+    int dim;                 /* 2 or 3                                                          */
+    double lo[3], hi[3];     /* the box                                                         */
+    double s0;               /* lattice spacing                                                 */
+    double jitter;           /* K: each coordinate moves by K*delta*s0, delta uniform in [-1,1] */
+    uint64_t seed;           /* counter-based RNG seed: same cloud for every thread count       */
+    int boundary_layer;      /* 1: the outer layer stays unjittered and is marked Dirichlet     */
+    double h_ratio;          /* h = h_ratio * s0 (uniform)                                      */
+    double angle;            /* rotation of the lattice about the box centre, radians (2D: in
+                                the x-y plane; 3D: about the z axis). 0 for none.               */
+} pst_lattice_opts;
+
+/* Fill `o` with defaults: 2D unit box, s0 = 0.1, no jitter, seed 1, no boundary layer,
+ * h_ratio 1.2, no rotation. */
+void pst_lattice_defaults(pst_lattice_opts *o);
+
+/* Generate a jittered (optionally rotated) node lattice. V = s0^dim. On a rotated lattice the
+ * box is rotated with it (the particles are the rotated lattice points). `err` (PST_ERRLEN
+ * bytes, may be NULL) receives the reason of a failure. */
+int pst_cloud_lattice(pst_cloud **out, const pst_lattice_opts *o, char *err);
+
+/* Generate the Lukyanov–Vuik cell-centred layout: one interior particle at the centre of each
+ * of the cells of spacing s0 that tile the box, plus one Dirichlet particle at the centre of
+ * every cell face that lies on the box boundary (none on edges or corners), with its outward
+ * normal. Interior particles are jittered by K*delta*s0; face particles never move
+ * (o->boundary_layer is ignored). V = s0^dim for every particle (docs/clouds.md). */
+int pst_cloud_cell_centred(pst_cloud **out, const pst_lattice_opts *o, char *err);
+
+/* The counter-based RNG behind the generators: a uniform double in [-1, 1] from (seed, index,
+ * stream). Exposed so that tests and users can reproduce a jitter. */
+double pst_rng_symmetric(uint64_t seed, uint64_t index, uint64_t stream);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PSTENCIL_PUBLIC_CLOUD_H */

@@ -1,0 +1,61 @@
+/* pstencil: Status codes, the error convention, version, threads and atomic file writes. Part of the public API; include <pstencil.h>. */
+#ifndef PSTENCIL_PUBLIC_CORE_H
+#define PSTENCIL_PUBLIC_CORE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PSTENCIL_VERSION_MAJOR 0
+#define PSTENCIL_VERSION_MINOR 1
+#define PSTENCIL_VERSION_PATCH 0
+
+/* ------------------------------------------------------------------------------------------ */
+/* Status codes                                                                               */
+/* ------------------------------------------------------------------------------------------ */
+
+enum {
+    PST_OK = 0,
+    PST_EINVAL = -1,   /* a bad argument from the caller (wrong dimension, negative size, ...) */
+    PST_EINPUT = -2,   /* bad input data: malformed file, NaN, duplicate particles, ...        */
+    PST_ENOMEM = -3,   /* an allocation failed, or an estimate exceeds the allowed memory       */
+    PST_EIO = -4,      /* a file could not be opened, written or renamed                       */
+    PST_ENUMERIC = -5  /* a numerical failure (singular system, no convergence)                 */
+};
+
+/* A static, human-readable name of a status code ("ok", "invalid argument", ...). */
+const char *pst_strerror(int status);
+
+/* The library version as "MAJOR.MINOR.PATCH". */
+const char *pst_version(void);
+
+/* Size of the error-detail buffers (`char *err`, the last argument of every call that can fail
+ * for more than one reason; NULL is allowed and then no message is written). */
+#define PST_ERRLEN 512
+
+/* ------------------------------------------------------------------------------------------ */
+/* Files                                                                                      */
+/* ------------------------------------------------------------------------------------------ */
+
+/* Write `path` all or nothing: write(f, job) fills a temporary file in the same directory,
+ * which is synced and renamed over `path`. PST_EIO (message in err) on any failure, and then
+ * `path` is untouched and no temporary file is left. */
+int pst_write_atomic(const char *path, void (*write)(FILE *f, const void *job), const void *job,
+                     char *err);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Threads                                                                                    */
+/* ------------------------------------------------------------------------------------------ */
+
+/* The number of OpenMP threads the library will use (omp_get_max_threads). */
+int pst_threads(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PSTENCIL_PUBLIC_CORE_H */

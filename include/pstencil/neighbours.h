@@ -1,0 +1,58 @@
+/* pstencil: Morton order and neighbour lists. Part of the public API; include <pstencil.h>. */
+#ifndef PSTENCIL_PUBLIC_NEIGHBOURS_H
+#define PSTENCIL_PUBLIC_NEIGHBOURS_H
+
+#include "pstencil/cloud.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------------------------------------ */
+/* Morton order and neighbour lists                                                           */
+/* ------------------------------------------------------------------------------------------ */
+
+/* Sort the cloud along a Morton (Z-order) curve of cells of size `cell` (> 0): 64-bit keys,
+ * 21 bits per axis in 3D and 32 in 2D (coarser cells are used when the box needs more), a
+ * parallel LSD radix sort, and one permutation applied to every field. The ids keep the input
+ * order (pst_cloud_to_input_order). */
+int pst_cloud_morton_sort(pst_cloud *c, double cell, char *err);
+
+/* Morton key of integer cell coordinates (3D: 21 bits per axis; 2D: 32 bits per axis, iz
+ * ignored). */
+uint64_t pst_morton_key(int dim, uint32_t ix, uint32_t iy, uint32_t iz);
+
+typedef struct pst_nlist pst_nlist;
+
+/* Build the CSR neighbour list of spec choice 1: j is a neighbour of i iff j != i and
+ * |x_j - x_i| < support * (h_i + h_j)/2 (strict), with `support` the kernel's support radius
+ * in units of h (pst_kernel_support). Rows are sorted by neighbour index. Works on any order
+ * of the cloud; a Morton-sorted cloud is faster. */
+int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *err);
+
+void pst_nlist_destroy(pst_nlist *nl);
+
+/* Rows: the neighbours of particle i are index[offset[i] .. offset[i+1]). */
+size_t pst_nlist_rows(const pst_nlist *nl);
+const int64_t *pst_nlist_offsets(const pst_nlist *nl);   /* rows + 1 entries */
+const uint32_t *pst_nlist_indices(const pst_nlist *nl);
+int64_t pst_nlist_pairs(const pst_nlist *nl);            /* total entries (each pair twice) */
+
+/* The support (radius in units of h) the list was built with. */
+double pst_nlist_support(const pst_nlist *nl);
+
+/* Statistics of a list. */
+typedef struct {
+    int64_t pairs;             /* stored entries                                  */
+    int64_t min, max;          /* neighbours per particle                         */
+    double mean;
+    size_t isolated;           /* particles with no neighbour                     */
+    size_t bytes;              /* memory held by the list                         */
+} pst_nlist_stats;
+void pst_nlist_get_stats(const pst_nlist *nl, pst_nlist_stats *s);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PSTENCIL_PUBLIC_NEIGHBOURS_H */

@@ -1,0 +1,250 @@
+/* pstencil: Operators: the schemes, their rows, apply, assembly, audit, derivatives. Part of the public API; include <pstencil.h>. */
+#ifndef PSTENCIL_PUBLIC_OPERATOR_H
+#define PSTENCIL_PUBLIC_OPERATOR_H
+
+#include "pstencil/cloud.h"
+#include "pstencil/kernel.h"
+#include "pstencil/neighbours.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------------------------------------ */
+/* Operators                                                                                  */
+/* ------------------------------------------------------------------------------------------ */
+
+/* An operator is a discretisation of +div(M grad u) on a cloud, in two-point form: row I is
+ *     (L u)_I = sum_{J in N(I)} w_IJ (u_J - u_I)
+ * for interior particles (the scheme), the same form with the flux weights of LV eq. 100 for
+ * Neumann particles (n . M_I . corrected gradient, outward normal), and (L u)_I = u_I for
+ * Dirichlet particles (their values are data). The matrix of L has the sparsity of the
+ * neighbour list plus the diagonal -sum_J w_IJ (1 on Dirichlet rows). docs/operators.md. */
+typedef struct pst_op pst_op;
+
+/* Per-particle status of an operator row (one byte per particle). */
+typedef enum {
+    PST_ROW_OK = 0,
+    PST_ROW_FALLBACK = 1,        /* a documented fallback was used (e.g. Gamma-bar = Gamma)   */
+    PST_ROW_ILL_CONDITIONED = 2, /* a moment matrix is invertible but badly conditioned      */
+    PST_ROW_RANK_DEFICIENT = 3,  /* a moment matrix is singular: the row fell back            */
+    PST_ROW_TOO_FEW = 4          /* fewer neighbours than the scheme needs: the row fell back */
+} pst_row_status;
+#define PST_ROW_NSTATUS 5
+
+/* A short name of a row status ("ok", "fallback", "ill-conditioned", "rank-deficient",
+ * "too-few-neighbours"). */
+const char *pst_row_status_name(int status);
+
+/* Kernel-gradient variants of the Lukyanov-Vuik family (LV eqs. 15-18). */
+typedef enum {
+    PST_GRAD_G1 = 1, /* grad_I W_IJ                                   (15) */
+    PST_GRAD_G2 = 2, /* full Shepard gradient, non-radial             (16) */
+    PST_GRAD_G3 = 3, /* grad_I W_IJ / nu_I                            (17) */
+    PST_GRAD_G4 = 4  /* grad_I W_IJ / nu_I (1 - W_IJ V_J / nu_I)       (18) */
+} pst_gradient;
+
+typedef struct {
+    const char *scheme;   /* "brookshaw", "cb", "schwaiger", "lv", ... (pst_scheme_name)      */
+    int kernel;           /* a pst_kernel, or -1 for the scheme's default                     */
+    int gradient;         /* pst_gradient for the LV family (default G1)                      */
+    int variant;          /* scheme-specific variant: lsmps 0 = type B (default), 1 = type A;
+                             0 for every other scheme                                         */
+    double cond_max;      /* a moment matrix with condition estimate above this is flagged
+                             ill-conditioned (default 1e10)                                   */
+    double rank_tol;      /* ... and below 1/cond of rank_tol it is rank-deficient and the
+                             row falls back (default 1e-13)                                    */
+    double min_pair_distance; /* pairs closer than this fraction of the smoothing length (h~_IJ
+                             for the LV family, h_I otherwise) are degenerate and contribute
+                             nothing (default 1e-8; in (0, 0.5))                              */
+    int on_degenerate;    /* pst_on_degenerate: what a rank-deficient or too-few-neighbours
+                             row does (default PST_DEGENERATE_FALL_BACK)                      */
+    int mobility_mean;    /* pst_mobility_mean: how a pair (I, J) averages the mobility
+                             (default PST_MEAN_ARITHMETIC, the paper's)                        */
+    int laplacian;        /* 1 (default): precompute the rows of L. 0: the operator serves
+                             pst_op_gradient, _hessian and _interpolate only; schemes whose
+                             derivative estimates do not read the rows (PST_SUPPORTS_
+                             DERIVATIVES_ONLY) then skip the precompute, and every call that
+                             needs the rows (apply, store, diagonal, scale, assemble, audit)
+                             returns PST_EINVAL                                               */
+    /* The boundary description of the rows, instead of the cloud's own (a solve's boundary
+     * groups): kinds[i] is particle i's pst_kind and normals[d][i] its outward normal, in
+     * cloud order. NULL (the default) takes the cloud's kinds, and normals[0] == NULL the
+     * cloud's normals. The cloud is never modified; the arrays must outlive the operator and
+     * must not change. Checked: every kind known, every Neumann particle's normal finite. */
+    const uint8_t *kinds;
+    const double *normals[3];
+} pst_op_opts;
+
+/* Pair mobility of the LV family (brookshaw, cb, schwaiger, lv), the factor (m_I + m_J) of
+ * w_IJ = s_I V_J (m_I + m_J) T_IJ (LV eqs. 27, 29, 90), per component for a diagonal tensor:
+ *   PST_MEAN_ARITHMETIC: m_I + m_J = 2 x the arithmetic mean (LV eq. 29, the paper's choice);
+ *   PST_MEAN_HARMONIC:   4 m_I m_J / (m_I + m_J) = 2 x the harmonic mean, the transmissibility
+ *                        average of TPFA. An implementer extension, not from the paper (spec
+ *                        §3.6); for discontinuous, high-contrast mobility. Defined as 0 when
+ *                        m_I + m_J <= 0 (never NaN). Equal to the arithmetic sum where m_I = m_J.
+ * Only the LV family averages pairwise: harmonic with any other scheme is PST_EINVAL. Neumann
+ * rows (LV eq. 100) use M_I alone and are the same for both. docs/operators.md. */
+typedef enum {
+    PST_MEAN_ARITHMETIC = 0,
+    PST_MEAN_HARMONIC = 1
+} pst_mobility_mean;
+
+/* What pst_op_create does with rows that are rank-deficient or have too few neighbours. */
+typedef enum {
+    PST_DEGENERATE_FALL_BACK = 0, /* take the next level of the scheme's fallback chain
+                                     (pst_scheme_fallback), flag and count the row          */
+    PST_DEGENERATE_REFUSE = 1     /* refuse the operator: PST_ENUMERIC, the counts and the
+                                     first such particle in the message                     */
+} pst_on_degenerate;
+
+/* Defaults: scheme "lv", the scheme's default kernel, G1, variant 0, cond_max 1e10,
+ * rank_tol 1e-13, min_pair_distance 1e-8, on_degenerate PST_DEGENERATE_FALL_BACK,
+ * mobility_mean PST_MEAN_ARITHMETIC, laplacian 1.
+ * Degenerate rows are never regularised: they drop down the scheme's fallback chain. */
+void pst_op_defaults(pst_op_opts *o);
+
+/* The registered schemes: count, names (index < count) and a one-line description. */
+int pst_scheme_count(void);
+const char *pst_scheme_name(int index);
+const char *pst_scheme_description(int index);
+/* The kernel a scheme uses by default (a pst_kernel), or -1 for an unknown scheme name. */
+int pst_scheme_default_kernel(const char *name);
+/* The fallback chain of a scheme's degenerate rows, in the order it is tried, as one line
+ * ("quadric fit: too few neighbours or singular -> linear-exact row -> ..."); NULL for an
+ * unknown name. docs/operators.md, "Row status and fallbacks". */
+const char *pst_scheme_fallback(const char *name);
+
+/* What a scheme can do, for planning before an operator exists (0 for an unknown name). */
+enum {
+    PST_SUPPORTS_GRADIENT = 0,     /* pst_op_gradient                                          */
+    PST_SUPPORTS_HESSIAN,          /* pst_op_hessian                                           */
+    PST_SUPPORTS_INTERPOLATE,      /* pst_op_interpolate                                       */
+    PST_SUPPORTS_MOBILITY,         /* a per-particle mobility: div(M grad u)                   */
+    PST_SUPPORTS_SYMMETRIC,        /* CG through a symmetric scaling (with G1, no Neumann rows) */
+    PST_SUPPORTS_DERIVATIVES_ONLY  /* derivatives without the rows (opts.laplacian = 0)        */
+};
+int pst_scheme_supports(const char *name, int what);
+
+/* Build an operator: validate the inputs, precompute the per-particle data (one threaded
+ * pass), classify every row. The cloud and the list must outlive the operator and must not
+ * change. The list's support must cover the kernel's (pst_kernel_support), else PST_EINVAL.
+ * No output of an operator is ever NaN: degenerate rows fall back and are counted. */
+int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o,
+                  char *err);
+void pst_op_destroy(pst_op *op);
+
+/* Matrix-free apply: y = L u, pair geometry recomputed from the positions and the per-particle
+ * data. u and y have one value per particle (cloud order) and must not alias. PST_EINVAL for
+ * an operator built without rows (opts.laplacian = 0). */
+int pst_op_apply(const pst_op *op, const double *u, double *y);
+
+/* 1 when the operator has its rows (see pst_op_opts.laplacian); its scheme's name; its kernel
+ * (a pst_kernel). */
+int pst_op_has_rows(const pst_op *op);
+const char *pst_op_scheme(const pst_op *op);
+int pst_op_kernel(const pst_op *op);
+/* The options an operator was built with, as resolved (the kernel is the one in use, never
+ * -1; scheme points at the registry's name): what to report beside its results. */
+void pst_op_options(const pst_op *op, pst_op_opts *o);
+/* Entries of the operator's sparsity pattern without the diagonal: the neighbour list's
+ * pairs, or more for schemes with a wider stencil (the mixed schemes' neighbours of
+ * neighbours). pst_op_store keeps 8 bytes per entry. */
+int64_t pst_op_pattern_pairs(const pst_op *op);
+
+/* Compute and keep the stencil weights w_IJ (CSR, the list's layout: 8 bytes per pair). */
+int pst_op_store(pst_op *op);
+/* Apply from the stored weights (same rows as pst_op_apply, to rounding). PST_EINVAL when
+ * pst_op_store has not been called. */
+int pst_op_apply_stored(const pst_op *op, const double *u, double *y);
+
+/* The diagonal of L: -sum_J w_IJ on scheme and Neumann rows, 1 on Dirichlet rows. */
+int pst_op_diagonal(const pst_op *op, double *diag);   /* PST_ENOMEM possible */
+
+/* Per-row status (n bytes, pst_row_status) and the count of each status. */
+const uint8_t *pst_op_status(const pst_op *op);
+void pst_op_status_counts(const pst_op *op, size_t counts[PST_ROW_NSTATUS]);
+
+/* Per-phase wall-clock timers of an operator, in seconds. Schemes that run their precompute as
+ * separate passes fill the first four; fused single-pass schemes (the LV family) fill only
+ * PST_PHASE_PRECOMPUTE. PST_PHASE_APPLY is the time of the latest apply (either path). */
+enum {
+    PST_PHASE_GEOMETRY = 0,   /* neighbour geometry and kernel weights (incl. volume pre-passes) */
+    PST_PHASE_MOMENTS = 1,    /* moment accumulation                                            */
+    PST_PHASE_INVERSION = 2,  /* the per-particle inversions                                    */
+    PST_PHASE_WEIGHTS = 3,    /* formation of stencil weights or coefficients (kappa)           */
+    PST_PHASE_PRECOMPUTE = 4, /* the whole of pst_op_create                                     */
+    PST_PHASE_APPLY = 5
+};
+#define PST_NPHASES 6
+const char *pst_phase_name(int phase);
+void pst_op_phase_times(const pst_op *op, double t[PST_NPHASES]);
+
+/* The scheme's per-particle normalising factor s_I (1 where the scheme has none): tr C/n for
+ * cb, tr(Gamma^-1)/n for schwaiger, tr(Gamma-bar^-1)/n for lv. n values. */
+int pst_op_scale(const pst_op *op, double *s);
+
+/* An explicit sparse matrix in CSR form with 64-bit row offsets. */
+typedef struct {
+    size_t n;          /* rows = columns                         */
+    int64_t *rowptr;   /* n + 1                                  */
+    uint32_t *col;     /* rowptr[n], sorted by column in a row   */
+    double *val;       /* rowptr[n]                              */
+} pst_csr;
+void pst_csr_free(pst_csr *a);
+
+/* The explicit matrix of L (with the diagonal), rows and columns in cloud order. */
+int pst_op_assemble(const pst_op *op, pst_csr *a);
+
+/* Write a matrix as MatrixMarket "coordinate real general", 1-based. With `ids` (the cloud's
+ * ids, or NULL for the identity) row/column i is written as ids[i] + 1, i.e. in input order.
+ * All-or-nothing file write (PST_EIO on failure). */
+int pst_csr_write_mtx(const pst_csr *a, const int64_t *ids, const char *path, char *err);
+
+/* Monotonicity audit of an operator (LV §4.4): the discrete K = -L. */
+typedef struct {
+    size_t rows;                 /* interior rows audited                                     */
+    size_t rows_positive_offdiag;/* rows of K with a positive off-diagonal entry (w_IJ < 0)   */
+    int64_t positive_offdiag;    /* such entries                                              */
+    size_t rows_not_dominant;    /* rows of K that are not weakly diagonally dominant with a
+                                    positive diagonal                                        */
+    /* Lemma 3 diagnostics, for schemes with a bracket 1 - xi_I . x_IJ (schwaiger, lv);
+     * -1 for the others */
+    int64_t lemma3_sign_mixed;   /* rows whose brackets do not all share one sign (92)       */
+    int64_t lemma3_xi_large;     /* rows with |xi_I| * max_J d_IJ >= 1 (sufficient check)     */
+} pst_op_audit;
+int pst_op_audit_rows(const pst_op *op, pst_op_audit *a);  /* PST_ENOMEM possible */
+
+/* The same audit per row: flags[i] is an OR of the bits below for interior row i, 0 for the
+ * other rows (n bytes, cloud order). PST_EINVAL without rows, PST_ENOMEM possible. */
+enum {
+    PST_AUDIT_POSITIVE_OFFDIAG = 1, /* K = -L has a positive off-diagonal entry (w_IJ < 0)  */
+    PST_AUDIT_NOT_DOMINANT = 2,     /* not weakly diagonally dominant with K_II > 0         */
+    PST_AUDIT_LEMMA3_MIXED = 4,     /* the brackets 1 - xi_I . x_IJ change sign (LV eq. 92) */
+    PST_AUDIT_XI_LARGE = 8          /* |xi_I| max_J d_IJ >= 1 (the sufficient check fails)   */
+};
+int pst_op_audit_flags(const pst_op *op, uint8_t *flags);
+
+/* Corrected gradient <grad u>_I = sum_J V_J (u_J - u_I) C_I grad W_IJ (LV eq. 54) with the
+ * operator's kernel and gradient variant; exact for linear fields wherever C exists.
+ * grad has dim arrays of n values. PST_EINVAL for schemes without C (brookshaw). */
+int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3]);
+
+/* Second derivatives of u at the particles from the scheme's fit: hess[0..2] = u_xx, u_yy, u_xy
+ * in 2D; u_xx, u_yy, u_zz, u_xy, u_xz, u_yz in 3D (n values each). PST_EINVAL for schemes
+ * without a quadratic fit. */
+int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6]);
+
+/* Interpolate u, and its Laplacian, at m points that need not be particles (QSFDI eqs. 32-35
+ * and the schemes' own fits): pts[d][k] is coordinate d of point k; value and lap (either may
+ * be NULL) receive m values each. The smoothing length at a point is the largest h of the
+ * cloud. Points with too few neighbours get the nearest particle's value and a Laplacian of 0,
+ * and are counted in *fallbacks (may be NULL). PST_EINVAL for schemes without interpolation. */
+int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, const double *u,
+                       double *value, double *lap, size_t *fallbacks, char *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PSTENCIL_PUBLIC_OPERATOR_H */

@@ -1,0 +1,316 @@
+#include "report.h"
+
+#include "pstencil.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+
+cJSON *report_begin(const pst_scene *s)
+{
+    cJSON *r = cJSON_CreateObject();
+    cJSON_AddStringToObject(r, "pstencil", pst_version());
+    cJSON_AddStringToObject(r, "scene", s->path);
+    if (s->title)
+        cJSON_AddStringToObject(r, "title", s->title);
+    cJSON_AddNumberToObject(r, "threads", pst_threads());
+    cJSON_AddNumberToObject(r, "dim", s->dim);
+    cJSON_AddObjectToObject(r, "timers");
+    cJSON_AddArrayToObject(r, "operators");
+    return r;
+}
+
+void report_timer(cJSON *report, const char *name, double seconds)
+{
+    cJSON_AddNumberToObject(cJSON_GetObjectItem(report, "timers"), name, seconds);
+}
+
+void report_peak_memory(cJSON *report)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    cJSON_AddNumberToObject(report, "peak_rss_bytes", 1024.0 * (double)ru.ru_maxrss);
+}
+
+cJSON *report_parameters(const pst_op_opts *oo)
+{
+    cJSON *p = cJSON_CreateObject();
+    const char *fallback = pst_scheme_fallback(oo->scheme);
+    cJSON_AddStringToObject(p, "scheme", oo->scheme);
+    cJSON_AddNumberToObject(p, "gradient", oo->gradient);
+    cJSON_AddNumberToObject(p, "variant", oo->variant);
+    cJSON_AddStringToObject(p, "mobility_mean",
+                            oo->mobility_mean == PST_MEAN_HARMONIC ? "harmonic" : "arithmetic");
+    cJSON_AddNumberToObject(p, "cond_max", oo->cond_max);
+    cJSON_AddNumberToObject(p, "rank_tol", oo->rank_tol);
+    cJSON_AddNumberToObject(p, "min_pair_distance", oo->min_pair_distance);
+    cJSON_AddStringToObject(p, "on_degenerate",
+                            oo->on_degenerate == PST_DEGENERATE_REFUSE ? "refuse" : "fall_back");
+    cJSON_AddStringToObject(p, "regularisation", "none");
+    cJSON_AddStringToObject(p, "fallback", fallback ? fallback : "unknown scheme");
+    return p;
+}
+
+void report_operator(cJSON *report, const pst_op *op)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddItemToArray(cJSON_GetObjectItem(report, "operators"), o);
+    cJSON_AddStringToObject(o, "scheme", pst_op_scheme(op));
+    cJSON_AddStringToObject(o, "kernel", pst_kernel_name(pst_op_kernel(op)));
+    cJSON_AddBoolToObject(o, "laplacian_rows", pst_op_has_rows(op));
+    pst_op_opts oo;
+    pst_op_options(op, &oo);
+    cJSON_AddItemToObject(o, "parameters", report_parameters(&oo));
+    double t[PST_NPHASES];
+    pst_op_phase_times(op, t);
+    cJSON *ph = cJSON_AddObjectToObject(o, "phases");
+    for (int k = 0; k < PST_NPHASES; ++k)
+        if (k != PST_PHASE_APPLY)
+            cJSON_AddNumberToObject(ph, pst_phase_name(k), t[k]);
+    size_t counts[PST_ROW_NSTATUS];
+    pst_op_status_counts(op, counts);
+    cJSON *sc = cJSON_AddObjectToObject(o, "row_status");
+    for (int k = 0; k < PST_ROW_NSTATUS; ++k)
+        cJSON_AddNumberToObject(sc, pst_row_status_name(k), (double)counts[k]);
+}
+
+void report_task_header(cJSON *task, const sc_task *t)
+{
+    static const char *const types[] = {"laplacian", "divergence", "gradient",
+                                        "hessian",   "interpolate", "solve"};
+    cJSON_AddStringToObject(task, "name", t->name);
+    cJSON_AddStringToObject(task, "type", types[t->type]);
+    if (t->field)
+        cJSON_AddStringToObject(task, "field", t->field);
+}
+
+void report_solve(cJSON *task, const pst_solve_result *res)
+{
+    static const char *const solvers[] = {"auto", "cg", "gmres", "bicgstab"};
+    cJSON *s = cJSON_AddObjectToObject(task, "solver");
+    cJSON_AddStringToObject(s, "method", solvers[res->solver]);
+    cJSON_AddBoolToObject(s, "converged", res->converged);
+    cJSON_AddNumberToObject(s, "iterations", res->iterations);
+    cJSON_AddNumberToObject(s, "relative_residual", res->rel_residual);
+    cJSON_AddStringToObject(s, "message", res->message);
+    if (res->history)
+        cJSON_AddItemToObject(s, "history", cJSON_CreateDoubleArray(res->history, res->nhistory));
+}
+
+void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt,
+                   const pst_cloud *c)
+{
+    cJSON *pl = cJSON_AddObjectToObject(report, "plan");
+    cJSON_AddNumberToObject(pl, "particles", (double)pst_cloud_size(c));
+    cJSON_AddNumberToObject(pl, "neighbours_estimate", p->neighbours);
+    cJSON_AddNumberToObject(pl, "mobility_components", p->mobility_ncomp);
+    cJSON_AddNumberToObject(pl, "mobility_factor", p->mobility_factor);
+    cJSON_AddBoolToObject(pl, "base_operator", p->base_operator);
+    cJSON_AddBoolToObject(pl, "base_laplacian_rows", p->base_laplacian);
+    cJSON *m = cJSON_AddObjectToObject(pl, "memory_estimate_bytes");
+    cJSON_AddNumberToObject(m, "cloud", p->bytes_cloud);
+    cJSON_AddNumberToObject(m, "neighbours", p->bytes_neighbours);
+    cJSON_AddNumberToObject(m, "operators", p->bytes_operators);
+    cJSON_AddNumberToObject(m, "weights", p->bytes_weights);
+    cJSON_AddNumberToObject(m, "solver", p->bytes_solver);
+    cJSON_AddNumberToObject(m, "total", p->bytes_total);
+    cJSON_AddNumberToObject(m, "available", p->bytes_available);
+    cJSON *k = cJSON_AddObjectToObject(report, "counters");
+    const struct {
+        const char *name;
+        long v;
+    } rows[] = {{"mobility_arrays", cnt->mobility_arrays},
+                {"fields", cnt->fields},
+                {"neighbour_lists", cnt->neighbour_lists},
+                {"laplacian_precomputes", cnt->laplacian_precomputes},
+                {"derivative_operators", cnt->derivative_operators},
+                {"stored_weights", cnt->stored_weights},
+                {"applies", cnt->applies},
+                {"gradients", cnt->gradients},
+                {"hessians", cnt->hessians},
+                {"interpolations", cnt->interpolations},
+                {"solves", cnt->solves},
+                {"norms", cnt->norms}};
+    for (size_t q = 0; q < sizeof rows / sizeof rows[0]; ++q)
+        cJSON_AddNumberToObject(k, rows[q].name, (double)rows[q].v);
+}
+
+/* ---- files ------------------------------------------------------------------------------- */
+
+/* A copy of the cloud's particles with only the named fields, so that the writers (which
+ * write every field) write the selection. */
+static int select_fields(const pst_cloud *c, char *const *names, int nnames, pst_cloud **out,
+                         char *err, size_t errlen)
+{
+    const int dim = pst_cloud_dim(c);
+    size_t n = pst_cloud_size(c);
+    pst_cloud *o = NULL;
+    if (pst_cloud_create(&o, dim, n) != PST_OK) {
+        snprintf(err, errlen, "out of memory for the output selection");
+        return PST_ENOMEM;
+    }
+    pst_cloud *cm = (pst_cloud *)c; /* the accessors are not const; nothing is written */
+    for (int d = 0; d < dim; ++d) {
+        memcpy(pst_cloud_coord(o, d), pst_cloud_coord(cm, d), n * sizeof(double));
+        memcpy(pst_cloud_normal(o, d), pst_cloud_normal(cm, d), n * sizeof(double));
+    }
+    memcpy(pst_cloud_volume(o), pst_cloud_volume(cm), n * sizeof(double));
+    memcpy(pst_cloud_kinds(o), pst_cloud_kinds(cm), n);
+    memcpy(pst_cloud_ids(o), pst_cloud_ids(cm), n * sizeof(int64_t));
+    int st = PST_OK;
+    if (pst_cloud_h_is_uniform(c)) {
+        st = pst_cloud_set_h_uniform(o, pst_cloud_h_uniform(c), NULL);
+    } else {
+        double *h = pst_cloud_h_per_particle(o);
+        if (h)
+            memcpy(h, pst_cloud_h_array(c), n * sizeof(double));
+        else
+            st = PST_ENOMEM;
+    }
+    int nm = pst_cloud_mobility_ncomp(c);
+    if (st == PST_OK && nm)
+        st = pst_cloud_set_mobility(o, nm, NULL);
+    for (int a = 0; st == PST_OK && a < nm; ++a)
+        memcpy(pst_cloud_mobility(o, a), pst_cloud_mobility(cm, a), n * sizeof(double));
+    for (int f = 0; st == PST_OK && f < nnames; ++f) {
+        const double *src = pst_cloud_field_by_name(cm, names[f]);
+        double *dst;
+        if (!src) {
+            pst_cloud_destroy(o);
+            snprintf(err, errlen, "outputs.fields: no field named '%s' (the scene's fields "
+                                  "and task outputs are)", names[f]);
+            return PST_EINPUT;
+        }
+        st = pst_cloud_add_field(o, names[f], &dst, NULL);
+        if (st == PST_OK)
+            memcpy(dst, src, n * sizeof(double));
+    }
+    if (st != PST_OK) {
+        pst_cloud_destroy(o);
+        snprintf(err, errlen, "cannot build the output selection: %s", pst_strerror(st));
+        return st;
+    }
+    *out = o;
+    return PST_OK;
+}
+
+static void write_json(FILE *f, const void *job)
+{
+    char *text = cJSON_Print(job);
+    if (text) {
+        fputs(text, f);
+        fputc('\n', f);
+    }
+    free(text);
+}
+
+int report_write_outputs(const pst_scene *s, const pst_cloud *c, const pst_op *base,
+                         cJSON *report, pst_run_counters *cnt, char *err, size_t errlen)
+{
+    const pst_cloud *out = c;
+    pst_cloud *sel = NULL;
+    int st = PST_OK;
+    if ((s->out.csv || s->out.vtu) && s->out.nfields > 0) {
+        st = select_fields(c, s->out.fields, s->out.nfields, &sel, err, errlen);
+        out = sel;
+    }
+    char msg[PST_ERRLEN];
+    if (st == PST_OK && s->out.csv) {
+        st = pst_cloud_write_csv(out, s->out.csv, msg);
+        if (st != PST_OK)
+            snprintf(err, errlen, "outputs.csv: %s", msg);
+        else
+            cnt->files++;
+    }
+    if (st == PST_OK && s->out.vtu) {
+        st = pst_cloud_write_vtu(out, s->out.vtu, base ? pst_op_status(base) : NULL, msg);
+        if (st != PST_OK)
+            snprintf(err, errlen, "outputs.vtu: %s", msg);
+        else
+            cnt->files++;
+    }
+    pst_cloud_destroy(sel);
+    if (st == PST_OK && s->out.report) {
+        st = pst_write_atomic(s->out.report, write_json, report, msg);
+        if (st != PST_OK)
+            snprintf(err, errlen, "outputs.report: %s", msg);
+        else
+            cnt->files++;
+    }
+    return st;
+}
+
+typedef struct {
+    int dim;
+    double *const *pts;
+    size_t m;
+    const double *value, *lap;
+} points_job;
+
+static void write_points(FILE *f, const void *job)
+{
+    const points_job *j = job;
+    fprintf(f, j->dim == 2 ? "x,y,value,laplacian\n" : "x,y,z,value,laplacian\n");
+    for (size_t q = 0; q < j->m; ++q) {
+        for (int d = 0; d < j->dim; ++d)
+            fprintf(f, "%.17g,", j->pts[d][q]);
+        fprintf(f, "%.17g,%.17g\n", j->value[q], j->lap[q]);
+    }
+}
+
+int report_write_points(const char *csv, const char *task, int dim, double *const pts[3],
+                        size_t m, const double *value, const double *lap, char *err,
+                        size_t errlen)
+{
+    char path[4096];
+    const char *dot = strrchr(csv, '.'), *slash = strrchr(csv, '/');
+    int stem = dot && (!slash || dot > slash) ? (int)(dot - csv) : (int)strlen(csv);
+    snprintf(path, sizeof path, "%.*s_%s.csv", stem, csv, task);
+    points_job job = {dim, pts, m, value, lap};
+    char msg[PST_ERRLEN];
+    int st = pst_write_atomic(path, write_points, &job, msg);
+    if (st != PST_OK)
+        snprintf(err, errlen, "task '%s': points output: %s", task, msg);
+    return st;
+}
+
+void report_summary(FILE *f, const cJSON *report)
+{
+    const cJSON *plan = cJSON_GetObjectItem(report, "plan");
+    fprintf(f, "%s: %.0f particles, %d threads\n", cJSON_GetStringValue(cJSON_GetObjectItem(report, "scene")),
+            cJSON_GetNumberValue(cJSON_GetObjectItem(plan, "particles")),
+            (int)cJSON_GetNumberValue(cJSON_GetObjectItem(report, "threads")));
+    const cJSON *t;
+    cJSON_ArrayForEach(t, cJSON_GetObjectItem(report, "timers"))
+        fprintf(f, "  %-12s %.3f s\n", t->string, t->valuedouble);
+    cJSON_ArrayForEach(t, cJSON_GetObjectItem(report, "operators")) {
+        const cJSON *st, *ph = cJSON_GetObjectItem(t, "phases");
+        fprintf(f, "  operator %s (%s kernel): precompute %.3f s, rows:",
+                cJSON_GetStringValue(cJSON_GetObjectItem(t, "scheme")),
+                cJSON_GetStringValue(cJSON_GetObjectItem(t, "kernel")),
+                cJSON_GetNumberValue(cJSON_GetObjectItem(ph, "precompute")));
+        if (!cJSON_IsTrue(cJSON_GetObjectItem(t, "laplacian_rows")))
+            fprintf(f, " none (derivatives only)");
+        else
+            cJSON_ArrayForEach(st, cJSON_GetObjectItem(t, "row_status"))
+                if (st->valuedouble > 0)
+                    fprintf(f, " %s %.0f", st->string, st->valuedouble);
+        const cJSON *p = cJSON_GetObjectItem(t, "parameters");
+        fprintf(f, "\n    cond_max %g, rank_tol %g, min_pair_distance %g h; fallback: %s\n",
+                cJSON_GetNumberValue(cJSON_GetObjectItem(p, "cond_max")),
+                cJSON_GetNumberValue(cJSON_GetObjectItem(p, "rank_tol")),
+                cJSON_GetNumberValue(cJSON_GetObjectItem(p, "min_pair_distance")),
+                cJSON_GetStringValue(cJSON_GetObjectItem(p, "fallback")));
+    }
+    cJSON_ArrayForEach(t, cJSON_GetObjectItem(report, "tasks")) {
+        fprintf(f, "  task %s (%s)", cJSON_GetStringValue(cJSON_GetObjectItem(t, "name")),
+                cJSON_GetStringValue(cJSON_GetObjectItem(t, "type")));
+        const cJSON *sv = cJSON_GetObjectItem(t, "solver"), *nv;
+        if (sv)
+            fprintf(f, ": %s", cJSON_GetStringValue(cJSON_GetObjectItem(sv, "message")));
+        cJSON_ArrayForEach(nv, cJSON_GetObjectItem(t, "norms"))
+            fprintf(f, ", %s %.3e", nv->string, nv->valuedouble);
+        fprintf(f, ", %.3f s\n", cJSON_GetNumberValue(cJSON_GetObjectItem(t, "seconds")));
+    }
+}

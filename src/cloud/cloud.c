@@ -1,0 +1,407 @@
+/* The particle cloud: structure-of-arrays storage, accessors, validation and permutation. */
+#include "internal.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double *alloc_filled(size_t n, double value)
+{
+    double *a = pst_alloc(n * sizeof(double));
+    if (a)
+        for (size_t i = 0; i < n; ++i)
+            a[i] = value;
+    return a;
+}
+
+int pst_cloud_create(pst_cloud **out, int dim, size_t n)
+{
+    *out = NULL;
+    if (dim != 2 && dim != 3)
+        return PST_EINVAL;
+    if (n > (size_t)UINT32_MAX) /* neighbour indices are 32-bit */
+        return PST_EINVAL;
+    pst_cloud *c = calloc(1, sizeof *c);
+    if (!c)
+        return PST_ENOMEM;
+    c->dim = dim;
+    c->n = n;
+    c->h_uniform = 1.0;
+    int ok = 1;
+    for (int d = 0; d < dim; ++d) {
+        c->x[d] = pst_calloc(n, sizeof(double));
+        c->normal[d] = pst_calloc(n, sizeof(double));
+        ok = ok && c->x[d] && c->normal[d];
+    }
+    c->V = alloc_filled(n, 1.0);
+    c->kind = pst_calloc(n, 1);
+    c->id = pst_alloc(n * sizeof(int64_t));
+    if (!ok || !c->V || !c->kind || !c->id) {
+        pst_cloud_destroy(c);
+        return PST_ENOMEM;
+    }
+    for (size_t i = 0; i < n; ++i)
+        c->id[i] = (int64_t)i;
+    *out = c;
+    return PST_OK;
+}
+
+void pst_cloud_destroy(pst_cloud *c)
+{
+    if (!c)
+        return;
+    for (int d = 0; d < 3; ++d) {
+        pst_free(c->x[d]);
+        pst_free(c->normal[d]);
+        pst_free(c->mob[d]);
+    }
+    pst_free(c->V);
+    pst_free(c->h);
+    pst_free(c->kind);
+    pst_free(c->id);
+    for (size_t k = 0; k < c->nfields; ++k)
+        pst_free(c->field[k]);
+    free(c->field);
+    free(c->field_name);
+    free(c);
+}
+
+int pst_cloud_dim(const pst_cloud *c) { return c->dim; }
+size_t pst_cloud_size(const pst_cloud *c) { return c->n; }
+
+double *pst_cloud_coord(pst_cloud *c, int axis)
+{
+    return (axis >= 0 && axis < c->dim) ? c->x[axis] : NULL;
+}
+const double *pst_cloud_coord_const(const pst_cloud *c, int axis)
+{
+    return (axis >= 0 && axis < c->dim) ? c->x[axis] : NULL;
+}
+double *pst_cloud_volume(pst_cloud *c) { return c->V; }
+const double *pst_cloud_volume_const(const pst_cloud *c) { return c->V; }
+double *pst_cloud_normal(pst_cloud *c, int axis)
+{
+    return (axis >= 0 && axis < c->dim) ? c->normal[axis] : NULL;
+}
+const double *pst_cloud_normal_const(const pst_cloud *c, int axis)
+{
+    return (axis >= 0 && axis < c->dim) ? c->normal[axis] : NULL;
+}
+uint8_t *pst_cloud_kinds(pst_cloud *c) { return c->kind; }
+const uint8_t *pst_cloud_kinds_const(const pst_cloud *c) { return c->kind; }
+int64_t *pst_cloud_ids(pst_cloud *c) { return c->id; }
+const int64_t *pst_cloud_ids_const(const pst_cloud *c) { return c->id; }
+
+int pst_cloud_set_h_uniform(pst_cloud *c, double h, char *err)
+{
+    if (!(h > 0) || !isfinite(h)) {
+        pst_set_err(err, "smoothing length must be finite and > 0 (got %g)", h);
+        return PST_EINVAL;
+    }
+    pst_free(c->h);
+    c->h = NULL;
+    c->h_uniform = h;
+    return PST_OK;
+}
+
+double *pst_cloud_h_per_particle(pst_cloud *c)
+{
+    if (!c->h) {
+        c->h = alloc_filled(c->n, c->h_uniform);
+        if (!c->h)
+            return NULL;
+        c->h_uniform = 0;
+    }
+    return c->h;
+}
+
+int pst_cloud_h_is_uniform(const pst_cloud *c) { return c->h == NULL; }
+double pst_cloud_h_uniform(const pst_cloud *c) { return c->h ? 0.0 : c->h_uniform; }
+const double *pst_cloud_h_array(const pst_cloud *c) { return c->h; }
+
+double pst_cloud_h_max(const pst_cloud *c)
+{
+    if (!c->h)
+        return c->h_uniform;
+    double m = 0;
+    for (size_t i = 0; i < c->n; ++i)
+        m = c->h[i] > m ? c->h[i] : m;
+    return m;
+}
+
+int pst_cloud_set_mobility(pst_cloud *c, int ncomp, char *err)
+{
+    if (ncomp != 0 && ncomp != 1 && ncomp != c->dim) {
+        pst_set_err(err, "mobility has 0, 1 or %d components (got %d)", c->dim, ncomp);
+        return PST_EINVAL;
+    }
+    double *m[3] = {NULL, NULL, NULL};
+    for (int k = 0; k < ncomp; ++k) {
+        m[k] = alloc_filled(c->n, 1.0);
+        if (!m[k]) {
+            for (int j = 0; j < k; ++j)
+                pst_free(m[j]);
+            return PST_ENOMEM;
+        }
+    }
+    for (int k = 0; k < 3; ++k) {
+        pst_free(c->mob[k]);
+        c->mob[k] = m[k];
+    }
+    c->mob_ncomp = ncomp;
+    return PST_OK;
+}
+
+int pst_cloud_mobility_ncomp(const pst_cloud *c) { return c->mob_ncomp; }
+double *pst_cloud_mobility(pst_cloud *c, int comp)
+{
+    return (comp >= 0 && comp < c->mob_ncomp) ? c->mob[comp] : NULL;
+}
+
+/* Column names of the CSV format; a field may not shadow them. */
+static const char *const reserved_names[] = {"x",  "y",  "z",  "V",  "h",  "kind", "nx",
+                                             "ny", "nz", "m",  "mx", "my", "mz",   "id"};
+
+int pst_is_reserved_column(const char *name)
+{
+    for (size_t k = 0; k < sizeof reserved_names / sizeof *reserved_names; ++k)
+        if (strcmp(name, reserved_names[k]) == 0)
+            return 1;
+    return 0;
+}
+
+int pst_is_identifier(const char *name)
+{
+    size_t len = strlen(name);
+    if (len == 0 || len >= PST_MAX_NAME || isdigit((unsigned char)name[0]))
+        return 0;
+    for (size_t i = 0; i < len; ++i)
+        if (!isalnum((unsigned char)name[i]) && name[i] != '_')
+            return 0;
+    return 1;
+}
+
+int pst_cloud_add_field(pst_cloud *c, const char *name, double **data, char *err)
+{
+    if (data)
+        *data = NULL;
+    if (!name || !pst_is_identifier(name) || pst_is_reserved_column(name)) {
+        pst_set_err(err, "invalid field name '%s' (a C identifier, not a reserved column)",
+                    name ? name : "(null)");
+        return PST_EINVAL;
+    }
+    if (pst_cloud_field_by_name(c, name)) {
+        pst_set_err(err, "field '%s' already exists", name);
+        return PST_EINVAL;
+    }
+    double *a = pst_calloc(c->n, sizeof(double));
+    char(*names)[PST_MAX_NAME] = realloc(c->field_name, (c->nfields + 1) * sizeof *names);
+    if (names)
+        c->field_name = names;
+    double **fields = realloc(c->field, (c->nfields + 1) * sizeof *fields);
+    if (fields)
+        c->field = fields;
+    if (!a || !names || !fields) {
+        pst_free(a);
+        return PST_ENOMEM;
+    }
+    snprintf(c->field_name[c->nfields], PST_MAX_NAME, "%s", name);
+    c->field[c->nfields++] = a;
+    if (data)
+        *data = a;
+    return PST_OK;
+}
+
+size_t pst_cloud_nfields(const pst_cloud *c) { return c->nfields; }
+const char *pst_cloud_field_name(const pst_cloud *c, size_t k)
+{
+    return k < c->nfields ? c->field_name[k] : NULL;
+}
+double *pst_cloud_field(pst_cloud *c, size_t k) { return k < c->nfields ? c->field[k] : NULL; }
+double *pst_cloud_field_by_name(pst_cloud *c, const char *name)
+{
+    for (size_t k = 0; k < c->nfields; ++k)
+        if (strcmp(c->field_name[k], name) == 0)
+            return c->field[k];
+    return NULL;
+}
+
+void pst_cloud_bbox(const pst_cloud *c, double lo[3], double hi[3])
+{
+    for (int d = 0; d < 3; ++d)
+        lo[d] = hi[d] = 0;
+    for (int d = 0; d < c->dim; ++d) {
+        if (c->n == 0)
+            continue;
+        double a = c->x[d][0], b = a;
+        for (size_t i = 1; i < c->n; ++i) {
+            a = c->x[d][i] < a ? c->x[d][i] : a;
+            b = c->x[d][i] > b ? c->x[d][i] : b;
+        }
+        lo[d] = a;
+        hi[d] = b;
+    }
+}
+
+/* Lexicographic order of positions, for duplicate detection by sorting (qsort has no context
+ * argument, so the cloud travels in a thread-local). */
+static _Thread_local const pst_cloud *sort_cloud;
+
+static int cmp_position(const void *pa, const void *pb)
+{
+    size_t a = *(const size_t *)pa, b = *(const size_t *)pb;
+    for (int d = 0; d < sort_cloud->dim; ++d) {
+        double xa = sort_cloud->x[d][a], xb = sort_cloud->x[d][b];
+        if (xa < xb)
+            return -1;
+        if (xa > xb)
+            return 1;
+    }
+    return (a > b) - (a < b);
+}
+
+static int same_position(const pst_cloud *c, size_t a, size_t b)
+{
+    for (int d = 0; d < c->dim; ++d)
+        if (c->x[d][a] != c->x[d][b])
+            return 0;
+    return 1;
+}
+
+int pst_cloud_find_duplicate(const pst_cloud *c, size_t *a, size_t *b)
+{
+    if (c->n < 2)
+        return 0;
+    size_t *order = malloc(c->n * sizeof *order);
+    if (!order)
+        return PST_ENOMEM;
+    for (size_t i = 0; i < c->n; ++i)
+        order[i] = i;
+    sort_cloud = c;
+    qsort(order, c->n, sizeof *order, cmp_position);
+    int found = 0;
+    for (size_t k = 1; k < c->n && !found; ++k)
+        if (same_position(c, order[k - 1], order[k])) {
+            /* ties sort by index, so order[k-1] < order[k] */
+            *a = order[k - 1];
+            *b = order[k];
+            found = 1;
+        }
+    free(order);
+    return found;
+}
+
+int pst_cloud_validate(pst_cloud *c, char *err)
+{
+    static const char *const axis = "xyz";
+    for (size_t i = 0; i < c->n; ++i) {
+        for (int d = 0; d < c->dim; ++d) {
+            if (!isfinite(c->x[d][i])) {
+                pst_set_err(err, "particle %lld: coordinate %c is not finite",
+                            (long long)c->id[i], axis[d]);
+                return PST_EINPUT;
+            }
+            if (!isfinite(c->normal[d][i])) {
+                pst_set_err(err, "particle %lld: normal component n%c is not finite",
+                            (long long)c->id[i], axis[d]);
+                return PST_EINPUT;
+            }
+        }
+        if (!(c->V[i] > 0) || !isfinite(c->V[i])) {
+            pst_set_err(err, "particle %lld: volume V = %g must be finite and > 0",
+                        (long long)c->id[i], c->V[i]);
+            return PST_EINPUT;
+        }
+        double h = pst_cloud_h_at(c, i);
+        if (!(h > 0) || !isfinite(h)) {
+            pst_set_err(err, "particle %lld: smoothing length h = %g must be finite and > 0",
+                        (long long)c->id[i], h);
+            return PST_EINPUT;
+        }
+        if (c->kind[i] > PST_NEUMANN) {
+            pst_set_err(err, "particle %lld: unknown kind %d", (long long)c->id[i],
+                        c->kind[i]);
+            return PST_EINPUT;
+        }
+        for (int k = 0; k < c->mob_ncomp; ++k)
+            if (!(c->mob[k][i] > 0) || !isfinite(c->mob[k][i])) {
+                pst_set_err(err, "particle %lld: mobility component %d = %g must be > 0",
+                            (long long)c->id[i], k, c->mob[k][i]);
+                return PST_EINPUT;
+            }
+    }
+    size_t a, b;
+    int dup = pst_cloud_find_duplicate(c, &a, &b);
+    if (dup < 0)
+        return dup;
+    if (dup) {
+        pst_set_err(err, "particles %lld and %lld are at the same coordinates",
+                    (long long)c->id[a], (long long)c->id[b]);
+        return PST_EINPUT;
+    }
+    return PST_OK;
+}
+
+/* Gather one array through the permutation into scratch, then copy back. Bandwidth-bound:
+ * one streaming write and one random-ish read per element (the Morton order keeps it local). */
+static void permute_doubles(double *a, const uint32_t *perm, size_t n, double *scratch)
+{
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; ++i)
+        scratch[i] = a[perm[i]];
+    memcpy(a, scratch, n * sizeof *a);
+}
+
+int pst_cloud_permute(pst_cloud *c, const uint32_t *perm, char *err)
+{
+    size_t n = c->n;
+    uint8_t *seen = pst_calloc(n, 1);
+    double *scratch = pst_alloc(n * sizeof(double));
+    if (!seen || !scratch) {
+        pst_free(seen);
+        pst_free(scratch);
+        return PST_ENOMEM;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        if (perm[i] >= n || seen[perm[i]]) {
+            pst_set_err(err, "not a permutation: entry %zu is %u", i, perm[i]);
+            pst_free(seen);
+            pst_free(scratch);
+            return PST_EINVAL;
+        }
+        seen[perm[i]] = 1;
+    }
+    for (int d = 0; d < c->dim; ++d) {
+        permute_doubles(c->x[d], perm, n, scratch);
+        permute_doubles(c->normal[d], perm, n, scratch);
+    }
+    permute_doubles(c->V, perm, n, scratch);
+    if (c->h)
+        permute_doubles(c->h, perm, n, scratch);
+    for (int k = 0; k < c->mob_ncomp; ++k)
+        permute_doubles(c->mob[k], perm, n, scratch);
+    for (size_t k = 0; k < c->nfields; ++k)
+        permute_doubles(c->field[k], perm, n, scratch);
+    /* ids are 8 bytes and kinds 1 byte: reuse the scratch buffer for both */
+    int64_t *ids = (int64_t *)scratch;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; ++i)
+        ids[i] = c->id[perm[i]];
+    memcpy(c->id, ids, n * sizeof *ids);
+    uint8_t *kinds = seen;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; ++i)
+        kinds[i] = c->kind[perm[i]];
+    memcpy(c->kind, kinds, n);
+    pst_free(seen);
+    pst_free(scratch);
+    return PST_OK;
+}
+
+void pst_cloud_to_input_order(const pst_cloud *c, const double *in, double *out)
+{
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < c->n; ++i)
+        out[c->id[i]] = in[i];
+}

@@ -1,0 +1,305 @@
+/* Cloud generators: the jittered node lattice (spec choice 4, QSFDI §4.1) and the
+ * Lukyanov–Vuik cell-centred layout with face particles (LV §5.1). Every particle is computed
+ * from its own index alone (position, jitter from the counter-based RNG, kind, normal), so the
+ * parallel fill gives the same bits for every thread count. Formulas: docs/clouds.md. */
+#include "internal.h"
+
+#include <math.h>
+
+/* A validated description of the lattice, shared by both layouts. */
+typedef struct {
+    int dim;
+    uint32_t n[3];          /* spacings (cells) per axis                          */
+    double lo[3], hi[3];
+    double s0, jitter;
+    uint64_t seed;
+    int boundary_layer;
+    int rotate;             /* angle != 0: rotating by 0 would still round        */
+    double centre[2], cosa, sina;
+} grid;
+
+static const char axis_name[] = "xyz";
+
+static int setup_grid(grid *g, const pst_lattice_opts *o, const char *who, char *err)
+{
+    if (!o) {
+        pst_set_err(err, "%s: no options given", who);
+        return PST_EINVAL;
+    }
+    if (o->dim != 2 && o->dim != 3) {
+        pst_set_err(err, "%s: dim must be 2 or 3 (got %d)", who, o->dim);
+        return PST_EINVAL;
+    }
+    if (!(o->s0 > 0) || !isfinite(o->s0)) {
+        pst_set_err(err, "%s: spacing s0 must be finite and > 0 (got %g)", who, o->s0);
+        return PST_EINVAL;
+    }
+    if (!(o->jitter >= 0) || !isfinite(o->jitter)) {
+        pst_set_err(err, "%s: jitter K must be finite and >= 0 (got %g)", who, o->jitter);
+        return PST_EINVAL;
+    }
+    if (!(o->h_ratio > 0) || !isfinite(o->h_ratio * o->s0)) {
+        pst_set_err(err, "%s: h_ratio must be > 0 with h = h_ratio*s0 finite (got %g)", who,
+                    o->h_ratio);
+        return PST_EINVAL;
+    }
+    if (!isfinite(o->angle)) {
+        pst_set_err(err, "%s: rotation angle must be finite (got %g)", who, o->angle);
+        return PST_EINVAL;
+    }
+    if (o->boundary_layer != 0 && o->boundary_layer != 1) {
+        pst_set_err(err, "%s: boundary_layer must be 0 or 1 (got %d)", who, o->boundary_layer);
+        return PST_EINVAL;
+    }
+    g->dim = o->dim;
+    for (int d = 0; d < o->dim; ++d) {
+        double lo = o->lo[d], hi = o->hi[d];
+        if (!isfinite(lo) || !isfinite(hi) || !(hi > lo)) {
+            pst_set_err(err, "%s: box along %c must be finite with hi > lo (got [%g, %g])", who,
+                        axis_name[d], lo, hi);
+            return PST_EINVAL;
+        }
+        double r = (hi - lo) / o->s0;
+        if (!(r <= (double)UINT32_MAX)) {
+            pst_set_err(err, "%s: box along %c is %g spacings, too many", who, axis_name[d], r);
+            return PST_EINVAL;
+        }
+        double rn = round(r);
+        if (rn < 1 || fabs(r - rn) > 1e-9 * r) {
+            pst_set_err(err,
+                        "%s: box length along %c (%.17g) is not a whole number of spacings "
+                        "s0 = %.17g (ratio %.17g)",
+                        who, axis_name[d], hi - lo, o->s0, r);
+            return PST_EINVAL;
+        }
+        g->n[d] = (uint32_t)rn;
+        g->lo[d] = lo;
+        g->hi[d] = hi;
+    }
+    g->s0 = o->s0;
+    g->jitter = o->jitter;
+    g->seed = o->seed;
+    g->boundary_layer = o->boundary_layer;
+    g->rotate = o->angle != 0;
+    g->centre[0] = 0.5 * (o->lo[0] + o->hi[0]);
+    g->centre[1] = 0.5 * (o->lo[1] + o->hi[1]);
+    g->cosa = cos(o->angle);
+    g->sina = sin(o->angle);
+    return PST_OK;
+}
+
+/* Multiply counts, failing (0) above the 32-bit particle-index limit. */
+static int mul_count(uint64_t *acc, uint64_t f)
+{
+    if (f != 0 && *acc > (uint64_t)UINT32_MAX / f)
+        return 0;
+    *acc *= f;
+    return 1;
+}
+
+/* Create the cloud and set the properties common to every particle. */
+static int make_cloud(pst_cloud **out, const grid *g, uint64_t count, const pst_lattice_opts *o,
+                      const char *who, char *err)
+{
+    if (count > UINT32_MAX) {
+        pst_set_err(err, "%s: more than %lu particles (the 32-bit index limit)", who,
+                    (unsigned long)UINT32_MAX);
+        return PST_EINVAL;
+    }
+    int st = pst_cloud_create(out, g->dim, (size_t)count);
+    if (st != PST_OK) {
+        pst_set_err(err, "%s: cannot allocate a cloud of %llu particles", who,
+                    (unsigned long long)count);
+        return st;
+    }
+    pst_cloud_set_h_uniform(*out, o->h_ratio * o->s0, NULL); /* finite and > 0: checked */
+    return PST_OK;
+}
+
+/* Rotate a point about the box centre and a normal about the origin, in the x-y plane. */
+static void rotate_xy(const grid *g, double x[3], double nrm[3])
+{
+    double dx = x[0] - g->centre[0], dy = x[1] - g->centre[1];
+    x[0] = g->centre[0] + (g->cosa * dx - g->sina * dy);
+    x[1] = g->centre[1] + (g->sina * dx + g->cosa * dy);
+    double nx = nrm[0], ny = nrm[1];
+    nrm[0] = g->cosa * nx - g->sina * ny;
+    nrm[1] = g->sina * nx + g->cosa * ny;
+}
+
+static void jitter(const grid *g, uint64_t p, double x[3])
+{
+    for (int d = 0; d < g->dim; ++d)
+        x[d] += g->jitter * pst_rng_symmetric(g->seed, p, (uint64_t)d) * g->s0;
+}
+
+static void store(pst_cloud *c, size_t p, const double x[3], const double nrm[3], int kind,
+                  double V)
+{
+    for (int d = 0; d < c->dim; ++d) {
+        c->x[d][p] = x[d];
+        c->normal[d][p] = nrm[d];
+    }
+    c->kind[p] = (uint8_t)kind;
+    c->V[p] = V;
+}
+
+static double cell_volume(const grid *g)
+{
+    return g->dim == 2 ? g->s0 * g->s0 : g->s0 * g->s0 * g->s0;
+}
+
+void pst_lattice_defaults(pst_lattice_opts *o)
+{
+    *o = (pst_lattice_opts){
+        .dim = 2,
+        .lo = {0, 0, 0},
+        .hi = {1, 1, 1},
+        .s0 = 0.1,
+        .jitter = 0,
+        .seed = 1,
+        .boundary_layer = 0,
+        .h_ratio = 1.2,
+        .angle = 0,
+    };
+}
+
+/* Node p of the lattice, x fastest: p = i + (n_x+1)*(j + (n_y+1)*k). */
+static void lattice_point(const grid *g, size_t p, double x[3], double nrm[3], int *kind)
+{
+    size_t rest = p;
+    int faces = 0;
+    for (int d = 0; d < g->dim; ++d) {
+        size_t m = (size_t)g->n[d] + 1, i = rest % m;
+        rest /= m;
+        /* the far node is hi itself, so a boundary layer lies exactly on the box */
+        x[d] = i == g->n[d] ? g->hi[d] : g->lo[d] + (double)i * g->s0;
+        nrm[d] = i == 0 ? -1.0 : i == g->n[d] ? 1.0 : 0.0;
+        faces += nrm[d] != 0;
+    }
+    if (g->boundary_layer && faces > 0) {
+        /* edges and corners: the normalised sum of the face normals (the bisector) */
+        double scale = 1.0 / sqrt((double)faces);
+        for (int d = 0; d < g->dim; ++d)
+            nrm[d] *= scale;
+        *kind = PST_DIRICHLET;
+    } else {
+        for (int d = 0; d < g->dim; ++d)
+            nrm[d] = 0;
+        jitter(g, p, x);
+        *kind = PST_INTERIOR;
+    }
+    if (g->rotate)
+        rotate_xy(g, x, nrm);
+}
+
+int pst_cloud_lattice(pst_cloud **out, const pst_lattice_opts *o, char *err)
+{
+    static const char who[] = "lattice";
+    *out = NULL;
+    grid g;
+    int st = setup_grid(&g, o, who, err);
+    if (st != PST_OK)
+        return st;
+    uint64_t count = 1;
+    int ok = 1;
+    for (int d = 0; d < g.dim; ++d)
+        ok = ok && mul_count(&count, (uint64_t)g.n[d] + 1);
+    pst_cloud *c;
+    st = make_cloud(&c, &g, ok ? count : UINT64_MAX, o, who, err);
+    if (st != PST_OK)
+        return st;
+    double V = cell_volume(&g);
+    size_t n = c->n;
+#pragma omp parallel for schedule(static)
+    for (size_t p = 0; p < n; ++p) {
+        double x[3] = {0, 0, 0}, nrm[3] = {0, 0, 0};
+        int kind;
+        lattice_point(&g, p, x, nrm, &kind);
+        store(c, p, x, nrm, kind, V);
+    }
+    *out = c;
+    return PST_OK;
+}
+
+static uint64_t face_size(const grid *g, int axis)
+{
+    uint64_t s = 1;
+    for (int e = 0; e < g->dim; ++e)
+        if (e != axis)
+            s *= g->n[e];
+    return s;
+}
+
+/* Particle p of the cell-centred layout: first the n_x*n_y(*n_z) cell centres, x fastest;
+ * then the face particles, face by face in the order x = lo, x = hi, y = lo, y = hi,
+ * z = lo, z = hi, each face's cells with the lower remaining axis fastest. */
+static void cell_point(const grid *g, size_t p, size_t ninterior, double x[3], double nrm[3],
+                       int *kind)
+{
+    if (p < ninterior) {
+        size_t rest = p;
+        for (int d = 0; d < g->dim; ++d) {
+            size_t i = rest % g->n[d];
+            rest /= g->n[d];
+            x[d] = g->lo[d] + ((double)i + 0.5) * g->s0;
+            nrm[d] = 0;
+        }
+        jitter(g, p, x);
+        *kind = PST_INTERIOR;
+    } else {
+        size_t q = p - ninterior;
+        int face = 0;
+        while (q >= face_size(g, face / 2))
+            q -= face_size(g, face++ / 2);
+        int axis = face / 2, high = face % 2;
+        for (int d = 0; d < g->dim; ++d) {
+            nrm[d] = 0;
+            if (d == axis)
+                continue;
+            size_t i = q % g->n[d];
+            q /= g->n[d];
+            x[d] = g->lo[d] + ((double)i + 0.5) * g->s0;
+        }
+        x[axis] = high ? g->hi[axis] : g->lo[axis];
+        nrm[axis] = high ? 1.0 : -1.0;
+        *kind = PST_DIRICHLET;
+    }
+    if (g->rotate)
+        rotate_xy(g, x, nrm);
+}
+
+int pst_cloud_cell_centred(pst_cloud **out, const pst_lattice_opts *o, char *err)
+{
+    static const char who[] = "cell-centred layout";
+    *out = NULL;
+    grid g;
+    int st = setup_grid(&g, o, who, err);
+    if (st != PST_OK)
+        return st;
+    uint64_t ninterior = 1, count;
+    int ok = 1;
+    for (int d = 0; d < g.dim; ++d)
+        ok = ok && mul_count(&ninterior, g.n[d]);
+    count = ninterior;
+    for (int d = 0; ok && d < g.dim; ++d) {
+        uint64_t f = 2;
+        ok = mul_count(&f, face_size(&g, d));
+        count += f; /* at most 7 terms <= UINT32_MAX: no wrap */
+    }
+    pst_cloud *c;
+    st = make_cloud(&c, &g, ok ? count : UINT64_MAX, o, who, err);
+    if (st != PST_OK)
+        return st;
+    double V = cell_volume(&g);
+    size_t n = c->n, nint = (size_t)ninterior;
+#pragma omp parallel for schedule(static)
+    for (size_t p = 0; p < n; ++p) {
+        double x[3] = {0, 0, 0}, nrm[3] = {0, 0, 0};
+        int kind;
+        cell_point(&g, p, nint, x, nrm, &kind);
+        store(c, p, x, nrm, kind, V);
+    }
+    *out = c;
+    return PST_OK;
+}

@@ -1,0 +1,640 @@
+/* The operator object: scheme registry, creation, the stored-weight path, diagonal, assembly,
+ * status counts and the monotonicity audit. Everything here is derived from a scheme's
+ * emit_row, so a new scheme gets all of it by filling its table (operator.h). */
+#include "operator.h"
+#include "check.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* One entry per line; the order is the order of listings. */
+static const pst_scheme *const registry[] = {
+    &pst_scheme_brookshaw,
+    &pst_scheme_cb,
+    &pst_scheme_schwaiger,
+    &pst_scheme_lv,
+    &pst_scheme_cspm,
+    &pst_scheme_icspm,
+    &pst_scheme_csph2g,
+    &pst_scheme_mixed0,
+    &pst_scheme_mixed1,
+    &pst_scheme_mixed2,
+    &pst_scheme_qsfdi,
+    &pst_scheme_lsmps,
+    &pst_scheme_lpmps,
+};
+#define NSCHEMES ((int)(sizeof registry / sizeof *registry))
+
+int pst_scheme_count(void) { return NSCHEMES; }
+const char *pst_scheme_name(int i) { return i >= 0 && i < NSCHEMES ? registry[i]->name : NULL; }
+const char *pst_scheme_description(int i)
+{
+    return i >= 0 && i < NSCHEMES ? registry[i]->description : NULL;
+}
+
+const char *pst_phase_name(int phase)
+{
+    static const char *const names[PST_NPHASES] = {"geometry", "moments",    "inversion",
+                                                   "weights",  "precompute", "apply"};
+    return phase >= 0 && phase < PST_NPHASES ? names[phase] : "unknown";
+}
+
+void pst_op_phase_times(const pst_op *op, double t[PST_NPHASES])
+{
+    memcpy(t, op->phase, sizeof op->phase);
+}
+
+const char *pst_row_status_name(int status)
+{
+    static const char *const names[PST_ROW_NSTATUS] = {"ok", "fallback", "ill-conditioned",
+                                                       "rank-deficient", "too-few-neighbours"};
+    return status >= 0 && status < PST_ROW_NSTATUS ? names[status] : "unknown";
+}
+
+void pst_op_defaults(pst_op_opts *o)
+{
+    o->scheme = "lv";
+    o->kernel = -1;
+    o->gradient = PST_GRAD_G1;
+    o->variant = 0;
+    o->cond_max = 1e10;
+    o->rank_tol = 1e-13;
+    o->min_pair_distance = 1e-8;
+    o->on_degenerate = PST_DEGENERATE_FALL_BACK;
+    o->laplacian = 1;
+    o->mobility_mean = PST_MEAN_ARITHMETIC;
+    o->kinds = NULL;
+    o->normals[0] = o->normals[1] = o->normals[2] = NULL;
+}
+
+static const pst_scheme *find_scheme(const char *name)
+{
+    for (int i = 0; i < NSCHEMES && name; ++i)
+        if (strcmp(registry[i]->name, name) == 0)
+            return registry[i];
+    return NULL;
+}
+
+/* CG's symmetric scaling (spec lukyanov_vuik §4.5) exists for these two schemes only. */
+int pst_scheme_symmetrisable(const pst_scheme *s)
+{
+    return s == &pst_scheme_brookshaw || s == &pst_scheme_cb;
+}
+
+int pst_scheme_supports(const char *name, int what)
+{
+    const pst_scheme *s = find_scheme(name);
+    if (!s)
+        return 0;
+    switch (what) {
+    case PST_SUPPORTS_GRADIENT: return s->gradient != NULL;
+    case PST_SUPPORTS_HESSIAN: return s->hessian != NULL;
+    case PST_SUPPORTS_INTERPOLATE: return s->interpolate != NULL;
+    case PST_SUPPORTS_MOBILITY: return s->mobility;
+    case PST_SUPPORTS_SYMMETRIC: return pst_scheme_symmetrisable(s);
+    case PST_SUPPORTS_DERIVATIVES_ONLY: return s->derivatives_standalone;
+    default: return 0;
+    }
+}
+
+int pst_scheme_default_kernel(const char *name)
+{
+    const pst_scheme *s = find_scheme(name);
+    return s ? (int)s->default_kernel : -1;
+}
+
+const char *pst_scheme_fallback(const char *name)
+{
+    const pst_scheme *s = find_scheme(name);
+    return s ? s->fallback : NULL;
+}
+
+/* The boundary override of opts (kinds, normals): known kinds, finite Neumann normals. */
+static int check_boundary(const pst_op_opts *o, const pst_cloud *c, char *err)
+{
+    const uint8_t *kind = o->kinds ? o->kinds : c->kind;
+    for (int a = 0; a < c->dim && o->normals[0]; ++a)
+        PST_CHECK(!o->normals[a], PST_EINVAL, err, "boundary normals: component %d is NULL", a);
+    for (size_t i = 0; i < c->n; ++i) {
+        PST_CHECK(kind[i] > PST_NEUMANN, PST_EINVAL, err,
+                  "boundary kinds: particle %zu has unknown kind %d", i, kind[i]);
+        for (int a = 0; a < c->dim && o->normals[0] && kind[i] == PST_NEUMANN; ++a)
+            PST_CHECK(!isfinite(o->normals[a][i]), PST_EINVAL, err,
+                      "boundary normals: Neumann particle %zu has a non-finite normal", i);
+    }
+    return PST_OK;
+}
+
+static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist *nl,
+                      const pst_scheme **scheme, char *err)
+{
+    int st;
+    *scheme = find_scheme(o->scheme);
+    if (!*scheme) {
+        char names[256] = "";
+        for (int i = 0; i < NSCHEMES; ++i) {
+            strncat(names, i ? ", " : "", sizeof names - strlen(names) - 1);
+            strncat(names, registry[i]->name, sizeof names - strlen(names) - 1);
+        }
+        pst_set_err(err, "unknown scheme '%s' (known: %s)", o->scheme ? o->scheme : "(null)",
+                    names);
+        return PST_EINVAL;
+    }
+    if (o->kernel < -1 || o->kernel > PST_KERNEL_WENDLAND_C4) {
+        pst_set_err(err, "unknown kernel %d", o->kernel);
+        return PST_EINVAL;
+    }
+    if (o->gradient < PST_GRAD_G1 || o->gradient > PST_GRAD_G4) {
+        pst_set_err(err, "gradient variant must be G1..G4 (got %d)", o->gradient);
+        return PST_EINVAL;
+    }
+    if (!(o->cond_max >= 1) || !(o->rank_tol > 0 && o->rank_tol < 1)) {
+        pst_set_err(err, "cond_max must be >= 1 and rank_tol in (0, 1) (got %g, %g)",
+                    o->cond_max, o->rank_tol);
+        return PST_EINVAL;
+    }
+    if (!(o->min_pair_distance > 0 && o->min_pair_distance < 0.5)) {
+        pst_set_err(err, "min_pair_distance must be in (0, 0.5) (got %g)", o->min_pair_distance);
+        return PST_EINVAL;
+    }
+    if (o->on_degenerate != PST_DEGENERATE_FALL_BACK && o->on_degenerate != PST_DEGENERATE_REFUSE) {
+        pst_set_err(err, "on_degenerate must be PST_DEGENERATE_FALL_BACK (0) or "
+                         "PST_DEGENERATE_REFUSE (1) (got %d)",
+                    o->on_degenerate);
+        return PST_EINVAL;
+    }
+    if (o->mobility_mean != PST_MEAN_ARITHMETIC && o->mobility_mean != PST_MEAN_HARMONIC) {
+        pst_set_err(err, "mobility_mean must be PST_MEAN_ARITHMETIC (0) or PST_MEAN_HARMONIC "
+                         "(1) (got %d)",
+                    o->mobility_mean);
+        return PST_EINVAL;
+    }
+    if (o->mobility_mean == PST_MEAN_HARMONIC && !(*scheme)->pair_mobility) {
+        pst_set_err(err, "scheme '%s' does not average the mobility pairwise: the harmonic "
+                         "mobility mean applies only to brookshaw, cb, schwaiger and lv",
+                    (*scheme)->name);
+        return PST_EINVAL;
+    }
+    if (pst_nlist_rows(nl) != c->n) {
+        pst_set_err(err, "the neighbour list has %zu rows for a cloud of %zu particles",
+                    pst_nlist_rows(nl), c->n);
+        return PST_EINVAL;
+    }
+    if ((st = check_boundary(o, c, err)) != PST_OK)
+        return st;
+    pst_kernel k = o->kernel < 0 ? (*scheme)->default_kernel : (pst_kernel)o->kernel;
+    if (pst_nlist_support(nl) < pst_kernel_support(k)) {
+        pst_set_err(err, "the neighbour list's radius (%g h) is smaller than the support of "
+                         "the %s kernel (%g h): rebuild it with support %g",
+                    pst_nlist_support(nl), pst_kernel_name(k), pst_kernel_support(k),
+                    pst_kernel_support(k));
+        return PST_EINVAL;
+    }
+    return PST_OK;
+}
+
+/* PST_DEGENERATE_REFUSE: an operator with a rank-deficient or too-few-neighbours row is an
+ * error that names the counts and the first such particle (input order). */
+static int refuse_degenerate(const pst_op *op, char *err)
+{
+    size_t rank = op->counts[PST_ROW_RANK_DEFICIENT], few = op->counts[PST_ROW_TOO_FEW];
+    if (rank + few == 0)
+        return PST_OK;
+    const pst_cloud *c = op->cloud;
+    size_t first = 0;
+    int64_t first_id = INT64_MAX;
+    for (size_t i = 0; i < c->n; ++i)
+        if (op->status[i] >= PST_ROW_RANK_DEFICIENT && c->id[i] < first_id) {
+            first_id = c->id[i];
+            first = i;
+        }
+    pst_set_err(err, "%s: %zu degenerate rows (%zu rank-deficient, %zu too-few-neighbours); "
+                     "the first is particle %lld at (%g, %g, %g), %s; on_degenerate = refuse",
+                op->scheme->name, rank + few, rank, few, (long long)first_id, c->x[0][first],
+                c->x[1][first], c->dim == 3 ? c->x[2][first] : 0.0,
+                pst_row_status_name(op->status[first]));
+    return PST_ENUMERIC;
+}
+
+int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o,
+                  char *err)
+{
+    *out = NULL;
+    pst_op_opts defaults;
+    if (!o) {
+        pst_op_defaults(&defaults);
+        o = &defaults;
+    }
+    const pst_scheme *scheme;
+    int st = check_opts(o, c, nl, &scheme, err);
+    if (st != PST_OK)
+        return st;
+    pst_op *op = calloc(1, sizeof *op);
+    if (!op)
+        return PST_ENOMEM;
+    op->scheme = scheme;
+    op->cloud = c;
+    op->nl = nl;
+    op->opts = *o;
+    op->opts.scheme = scheme->name; /* static storage: the caller's string may go away */
+    op->kernel = o->kernel < 0 ? scheme->default_kernel : (pst_kernel)o->kernel;
+    op->dim = c->dim;
+    op->n = c->n;
+    op->kind = o->kinds ? o->kinds : c->kind;
+    for (int a = 0; a < c->dim; ++a)
+        op->normal[a] = o->normals[0] ? o->normals[a] : c->normal[a];
+    op->status = pst_calloc(c->n, 1);
+    if (!op->status) {
+        pst_op_destroy(op);
+        pst_set_err(err, "cannot allocate the row status of %zu particles", c->n);
+        return PST_ENOMEM;
+    }
+    op->poff = pst_nlist_offsets(nl);
+    op->pidx = pst_nlist_indices(nl);
+    /* Derivatives only: the rows are skipped when the scheme's derivative estimates do not
+     * read them (the planner's "model only what a scene needs"). */
+    op->rows = o->laplacian || !scheme->derivatives_standalone;
+    double t0 = omp_get_wtime();
+    st = op->rows ? scheme->precompute(op, err) : PST_OK;
+    if (st == PST_OK && op->rows)
+        pst_op_check_flat_rows(op);
+    op->phase[PST_PHASE_PRECOMPUTE] = omp_get_wtime() - t0;
+    if (st != PST_OK) {
+        pst_op_destroy(op);
+        return st;
+    }
+    for (size_t i = 0; i < c->n; ++i)
+        if (op->kind[i] == PST_DIRICHLET)
+            op->status[i] = PST_ROW_OK; /* identity rows need nothing */
+    for (size_t i = 0; i < c->n; ++i)
+        op->counts[op->status[i]]++;
+    if (o->on_degenerate == PST_DEGENERATE_REFUSE && (st = refuse_degenerate(op, err)) != PST_OK) {
+        pst_op_destroy(op);
+        return st;
+    }
+    *out = op;
+    return PST_OK;
+}
+
+void pst_op_destroy(pst_op *op)
+{
+    if (!op)
+        return;
+    if (op->data && op->scheme->free_data)
+        op->scheme->free_data(op->data);
+    pst_free(op->status);
+    pst_free(op->w);
+    free(op);
+}
+
+const uint8_t *pst_op_status(const pst_op *op) { return op->status; }
+void pst_op_status_counts(const pst_op *op, size_t counts[PST_ROW_NSTATUS])
+{
+    memcpy(counts, op->counts, sizeof op->counts);
+}
+
+/* Dirichlet rows are the identity: their values are data. */
+static void dirichlet_rows(const pst_op *op, const double *u, double *y)
+{
+    const uint8_t *kind = op->kind;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i)
+        if (kind[i] == PST_DIRICHLET)
+            y[i] = u[i];
+}
+
+/* The apply timer is the one field an apply writes; applies of one operator are not meant to
+ * run concurrently (they are parallel inside). */
+static void record_apply(const pst_op *op, double t0)
+{
+    ((pst_op *)op)->phase[PST_PHASE_APPLY] = omp_get_wtime() - t0;
+}
+
+int pst_op_apply(const pst_op *op, const double *u, double *y)
+{
+    if (!op->rows)
+        return PST_EINVAL;
+    double t0 = omp_get_wtime();
+    op->scheme->apply(op, u, y);
+    dirichlet_rows(op, u, y);
+    record_apply(op, t0);
+    return PST_OK;
+}
+
+int pst_op_has_rows(const pst_op *op) { return op->rows; }
+const char *pst_op_scheme(const pst_op *op) { return op->scheme->name; }
+int pst_op_kernel(const pst_op *op) { return op->kernel; }
+void pst_op_options(const pst_op *op, pst_op_opts *o)
+{
+    *o = op->opts;
+    o->scheme = op->scheme->name;
+    o->kernel = op->kernel;
+}
+int64_t pst_op_pattern_pairs(const pst_op *op) { return op->poff[op->n]; }
+
+int pst_op_store(pst_op *op)
+{
+    if (!op->rows)
+        return PST_EINVAL;
+    if (op->w)
+        return PST_OK;
+    const int64_t *off = op->poff;
+    double *w = pst_alloc((size_t)off[op->n] * sizeof *w);
+    if (!w)
+        return PST_ENOMEM;
+    const uint8_t *kind = op->kind;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < op->n; ++i) {
+        if (kind[i] == PST_DIRICHLET)
+            memset(w + off[i], 0, (size_t)(off[i + 1] - off[i]) * sizeof *w);
+        else
+            op->scheme->emit_row(op, i, w + off[i]);
+    }
+    op->w = w;
+    return PST_OK;
+}
+
+/* Stored apply, y_I = sum_J w_IJ (u_J - u_I): the matrix-free apply's weights, summed in SIMD
+ * partial sums, so the two paths agree to rounding. Per pair 8 bytes of weight + 4 of index
+ * streamed, u_J gathered (Morton order keeps it in cache); about 12 bytes and 3 flops. */
+int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
+{
+    if (!op->w)
+        return PST_EINVAL;
+    double t0 = omp_get_wtime();
+    const int64_t *off = op->poff;
+    const uint32_t *idx = op->pidx;
+    const double *w = op->w;
+    /* Bound: per-core load throughput (12 bytes of w and idx per pair plus the u gather), not
+     * the machine's bandwidth on 2 cores (bench/README.md). The simd reduction splits the row
+     * sum into independent partial sums, so consecutive pairs no longer wait on one add chain:
+     * about 20 % faster than the sequential sum, and still deterministic for any thread count. */
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i) {
+        double ui = u[i], s = 0;
+#pragma omp simd reduction(+ : s)
+        for (int64_t k = off[i]; k < off[i + 1]; ++k)
+            s += w[k] * (u[idx[k]] - ui);
+        y[i] = s;
+    }
+    dirichlet_rows(op, u, y);
+    record_apply(op, t0);
+    return PST_OK;
+}
+
+/* The weights of row i, from the store or emitted into `buf`. */
+static const double *row_weights(const pst_op *op, size_t i, double *buf)
+{
+    const int64_t *off = op->poff;
+    if (op->w)
+        return op->w + off[i];
+    op->scheme->emit_row(op, i, buf);
+    return buf;
+}
+
+/* Scratch for one row of weights per thread (rows are at most the pattern's longest row). */
+static double *row_scratch(const pst_op *op, size_t *len)
+{
+    int64_t longest = 0;
+    for (size_t i = 0; i < op->n; ++i)
+        longest = op->poff[i + 1] - op->poff[i] > longest ? op->poff[i + 1] - op->poff[i] : longest;
+    *len = (size_t)longest + 1;
+    return op->w ? NULL : pst_alloc((size_t)omp_get_max_threads() * *len * sizeof(double));
+}
+
+int pst_op_diagonal(const pst_op *op, double *diag)
+{
+    if (!op->rows)
+        return PST_EINVAL;
+    const int64_t *off = op->poff;
+    const uint8_t *kind = op->kind;
+    size_t L;
+    double *scratch = row_scratch(op, &L);
+    if (!op->w && !scratch)
+        return PST_ENOMEM;
+#pragma omp parallel
+    {
+        double *buf = scratch ? scratch + (size_t)omp_get_thread_num() * L : NULL;
+#pragma omp for schedule(dynamic, 256)
+        for (size_t i = 0; i < op->n; ++i) {
+            if (kind[i] == PST_DIRICHLET) {
+                diag[i] = 1.0;
+                continue;
+            }
+            const double *w = row_weights(op, i, buf);
+            double s = 0;
+            for (int64_t k = 0; k < off[i + 1] - off[i]; ++k)
+                s += w[k];
+            diag[i] = -s;
+        }
+    }
+    pst_free(scratch);
+    return PST_OK;
+}
+
+int pst_op_scale(const pst_op *op, double *s)
+{
+    if (!op->rows)
+        return PST_EINVAL;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i)
+        s[i] = op->scheme->scale ? op->scheme->scale(op, i) : 1.0;
+    return PST_OK;
+}
+
+void pst_csr_free(pst_csr *a)
+{
+    if (!a)
+        return;
+    pst_free(a->rowptr);
+    pst_free(a->col);
+    pst_free(a->val);
+    memset(a, 0, sizeof *a);
+}
+
+/* Row i of the explicit matrix: the off-diagonal weights and the diagonal merged in column
+ * order (list rows are sorted; the diagonal is inserted where it belongs). */
+int pst_op_assemble(const pst_op *op, pst_csr *a)
+{
+    if (!op->rows)
+        return PST_EINVAL;
+    memset(a, 0, sizeof *a);
+    size_t n = op->n;
+    const int64_t *off = op->poff;
+    const uint32_t *idx = op->pidx;
+    const uint8_t *kind = op->kind;
+    a->n = n;
+    a->rowptr = pst_alloc((n + 1) * sizeof *a->rowptr);
+    a->col = pst_alloc(((size_t)off[n] + n) * sizeof *a->col);
+    a->val = pst_alloc(((size_t)off[n] + n) * sizeof *a->val);
+    size_t L;
+    double *scratch = row_scratch(op, &L);
+    if (!a->rowptr || !a->col || !a->val || (!op->w && !scratch)) {
+        pst_csr_free(a);
+        pst_free(scratch);
+        return PST_ENOMEM;
+    }
+    for (size_t i = 0; i <= n; ++i)
+        a->rowptr[i] = off[i] + (int64_t)i;
+#pragma omp parallel
+    {
+        double *buf = scratch ? scratch + (size_t)omp_get_thread_num() * L : NULL;
+#pragma omp for schedule(dynamic, 256)
+        for (size_t i = 0; i < n; ++i) {
+            int64_t len = off[i + 1] - off[i], o = a->rowptr[i];
+            int dirichlet = kind[i] == PST_DIRICHLET;
+            const double *w = dirichlet ? NULL : row_weights(op, i, buf);
+            double diag = 0;
+            for (int64_t k = 0; k < len; ++k)
+                diag -= dirichlet ? 0 : w[k];
+            int64_t k = 0, p = o;
+            for (; k < len && idx[off[i] + k] < i; ++k, ++p) {
+                a->col[p] = idx[off[i] + k];
+                a->val[p] = dirichlet ? 0 : w[k];
+            }
+            a->col[p] = (uint32_t)i;
+            a->val[p++] = dirichlet ? 1.0 : diag;
+            for (; k < len; ++k, ++p) {
+                a->col[p] = idx[off[i] + k];
+                a->val[p] = dirichlet ? 0 : w[k];
+            }
+        }
+    }
+    pst_free(scratch);
+    return PST_OK;
+}
+
+typedef struct {
+    const pst_csr *a;
+    const int64_t *ids;
+} mtx_job;
+
+static void write_mtx(FILE *f, const void *job)
+{
+    const mtx_job *m = job;
+    const pst_csr *a = m->a;
+    fprintf(f, "%%%%MatrixMarket matrix coordinate real general\n");
+    fprintf(f, "%% written by pstencil %s; rows and columns in input order\n", pst_version());
+    fprintf(f, "%zu %zu %lld\n", a->n, a->n, (long long)a->rowptr[a->n]);
+    for (size_t i = 0; i < a->n && !ferror(f); ++i) {
+        long long r = m->ids ? m->ids[i] + 1 : (long long)i + 1;
+        for (int64_t k = a->rowptr[i]; k < a->rowptr[i + 1]; ++k) {
+            long long c = m->ids ? m->ids[a->col[k]] + 1 : (long long)a->col[k] + 1;
+            fprintf(f, "%lld %lld %.17g\n", r, c, a->val[k]);
+        }
+    }
+}
+
+int pst_csr_write_mtx(const pst_csr *a, const int64_t *ids, const char *path, char *err)
+{
+    mtx_job job = {a, ids};
+    return pst_write_atomic(path, write_mtx, &job, err);
+}
+
+/* The audit of interior row i from its weights w: the pst_op_audit_flags bits, and the
+ * count of positive off-diagonal entries of K in *npos. */
+static uint8_t audit_row(const pst_op *op, size_t i, const double *w, int64_t *npos)
+{
+    const int64_t *off = op->poff;
+    double sum = 0, abs_sum = 0;
+    *npos = 0;
+    for (int64_t k = 0; k < off[i + 1] - off[i]; ++k) {
+        *npos += w[k] < 0; /* K = -L: K_IJ = -w_IJ > 0 */
+        sum += w[k];
+        abs_sum += fabs(w[k]);
+    }
+    uint8_t f = *npos > 0 ? PST_AUDIT_POSITIVE_OFFDIAG : 0;
+    /* K_II = sum w >= sum |w| (to rounding) and > 0 */
+    if (!(sum > 0 && sum >= abs_sum * (1 - 1e-12)))
+        f |= PST_AUDIT_NOT_DOMINANT;
+    if (op->scheme->lemma3) {
+        int sm = 0, xl = 0;
+        op->scheme->lemma3(op, i, &sm, &xl);
+        f |= (sm ? PST_AUDIT_LEMMA3_MIXED : 0) | (xl ? PST_AUDIT_XI_LARGE : 0);
+    }
+    return f;
+}
+
+/* Audit every interior row (threaded): the flags into `flags` (may be NULL) and the totals
+ * into a (may be NULL). */
+static int audit(const pst_op *op, uint8_t *flags, pst_op_audit *a)
+{
+    if (!op->rows)
+        return PST_EINVAL;
+    const uint8_t *kind = op->kind;
+    size_t L;
+    double *scratch = row_scratch(op, &L);
+    size_t rows = 0, rows_pos = 0, rows_nd = 0;
+    int64_t pos = 0, mixed = 0, large = 0;
+    if (!op->w && !scratch)
+        return PST_ENOMEM;
+#pragma omp parallel reduction(+ : rows, rows_pos, rows_nd, pos, mixed, large)
+    {
+        double *buf = scratch ? scratch + (size_t)omp_get_thread_num() * L : NULL;
+#pragma omp for schedule(dynamic, 256)
+        for (size_t i = 0; i < op->n; ++i) {
+            uint8_t f = 0;
+            if (kind[i] == PST_INTERIOR) { /* boundary rows are data or fluxes */
+                int64_t npos;
+                f = audit_row(op, i, row_weights(op, i, buf), &npos);
+                rows++;
+                pos += npos;
+                rows_pos += (f & PST_AUDIT_POSITIVE_OFFDIAG) != 0;
+                rows_nd += (f & PST_AUDIT_NOT_DOMINANT) != 0;
+                mixed += (f & PST_AUDIT_LEMMA3_MIXED) != 0;
+                large += (f & PST_AUDIT_XI_LARGE) != 0;
+            }
+            if (flags)
+                flags[i] = f;
+        }
+    }
+    pst_free(scratch);
+    if (a) {
+        int has_lemma3 = op->scheme->lemma3 != NULL;
+        a->rows = rows;
+        a->rows_positive_offdiag = rows_pos;
+        a->positive_offdiag = pos;
+        a->rows_not_dominant = rows_nd;
+        a->lemma3_sign_mixed = has_lemma3 ? mixed : -1;
+        a->lemma3_xi_large = has_lemma3 ? large : -1;
+    }
+    return PST_OK;
+}
+
+int pst_op_audit_rows(const pst_op *op, pst_op_audit *a)
+{
+    memset(a, 0, sizeof *a);
+    return audit(op, NULL, a);
+}
+
+int pst_op_audit_flags(const pst_op *op, uint8_t *flags) { return audit(op, flags, NULL); }
+
+int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
+{
+    if (!op->scheme->gradient)
+        return PST_EINVAL;
+    op->scheme->gradient(op, u, grad);
+    return PST_OK;
+}
+
+int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6])
+{
+    if (!op->scheme->hessian)
+        return PST_EINVAL;
+    op->scheme->hessian(op, u, hess);
+    return PST_OK;
+}
+
+int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, const double *u,
+                       double *value, double *lap, size_t *fallbacks, char *err)
+{
+    if (!op->scheme->interpolate) {
+        pst_set_err(err, "scheme %s has no interpolation", op->scheme->name);
+        return PST_EINVAL;
+    }
+    size_t none = 0;
+    return op->scheme->interpolate(op, pts, m, u, value, lap, fallbacks ? fallbacks : &none,
+                                   err);
+}

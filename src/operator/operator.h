@@ -1,0 +1,102 @@
+/* The operator object and the scheme table every discretisation plugs into. Internal. */
+#ifndef PSTENCIL_OPERATOR_H
+#define PSTENCIL_OPERATOR_H
+
+#include "internal.h"
+
+/* One scheme: a kernel file in kernels/ fills this table and operator.c registers it.
+ *
+ * A scheme owns the interior and Neumann rows; operator.c owns the Dirichlet rows (identity),
+ * the stored weights, the stored apply, the diagonal, assembly, audit and status counts, all
+ * derived from `emit_row`. `apply` and `emit_row` must produce the same weights bit for bit
+ * (share one inline function for w_IJ), so the two apply paths agree to rounding. */
+typedef struct pst_scheme {
+    const char *name;
+    const char *description;
+    /* the fallback chain of a degenerate row, in order (pst_scheme_fallback) */
+    const char *fallback;
+    pst_kernel default_kernel;
+    /* 1 when the rows average the mobility pairwise, (M_I + M_J), and honour
+     * opts.mobility_mean (the LV family); 0: PST_MEAN_HARMONIC is refused */
+    int pair_mobility;
+    /* 1 when the rows accept a per-particle mobility (div(M grad u)); 0: refused */
+    int mobility;
+    /* 1 when gradient, hessian and interpolate do not read the precomputed rows, so an
+     * operator for derivatives only (opts.laplacian = 0) can skip the precompute */
+    int derivatives_standalone;
+    /* minimum neighbours (j != i) of a row in dimension dim (spec choice 6) */
+    int (*min_neighbours)(int dim);
+    /* Precompute the per-particle data into op->data (op->status is zeroed, fill it); one
+     * threaded pass over particles. Returns PST_OK or an error with a message in err. */
+    int (*precompute)(pst_op *op, char *err);
+    /* y_I = sum_J w_IJ (u_J - u_I) for every non-Dirichlet row I (threaded). */
+    void (*apply)(const pst_op *op, const double *u, double *y);
+    /* The weights w_IJ of non-Dirichlet row i, in the order of the row's pattern. */
+    void (*emit_row)(const pst_op *op, size_t i, double *w);
+    /* s_I of the scheme (NULL: 1 everywhere). */
+    double (*scale)(const pst_op *op, size_t i);
+    /* Gradient of u at the particles, or NULL when the scheme has none. */
+    void (*gradient)(const pst_op *op, const double *u, double *const grad[3]);
+    /* Second derivatives (pst_op_hessian's layout), or NULL. */
+    void (*hessian)(const pst_op *op, const double *u, double *const hess[6]);
+    /* Value and Laplacian at arbitrary points (pst_op_interpolate), or NULL. */
+    int (*interpolate)(const pst_op *op, const double *const pts[3], size_t m, const double *u,
+                       double *value, double *lap, size_t *fallbacks, char *err);
+    /* Switch interior row i to the scheme's last-resort row, writing row i's data only: called
+     * by pst_op_check_flat_rows for rows whose neighbours are flat. NULL when the scheme's rows
+     * do not need it (non-negative rows; rows coupled through the neighbours' fits; a scheme
+     * whose own fallback already guards its diagonal) and then no row is checked. */
+    void (*degrade)(pst_op *op, size_t i);
+    /* Lemma 3 diagnostics of row i into the two counters, or NULL (not applicable). */
+    void (*lemma3)(const pst_op *op, size_t i, int *sign_mixed, int *xi_large);
+    void (*free_data)(void *data);
+} pst_scheme;
+
+struct pst_op {
+    const pst_scheme *scheme;
+    const pst_cloud *cloud;
+    const pst_nlist *nl;
+    /* the boundary description the rows use: the cloud's, or opts.kinds / opts.normals */
+    const uint8_t *kind;
+    const double *normal[3];
+    pst_op_opts opts;
+    pst_kernel kernel;
+    int dim;
+    size_t n;
+    void *data;            /* the scheme's per-particle data                         */
+    uint8_t *status;       /* pst_row_status per particle                            */
+    size_t counts[PST_ROW_NSTATUS];
+    double *w;             /* stored weights (pattern layout) or NULL                */
+    /* The sparsity pattern of the rows (without the diagonal), sorted by column in a row: the
+     * neighbour list by default; a scheme with a wider stencil (e.g. the mixed schemes'
+     * neighbours of neighbours) points these at its own arrays in precompute. */
+    const int64_t *poff;
+    const uint32_t *pidx;
+    double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
+    int rows;              /* 1 when the Laplacian rows were precomputed (opts.laplacian)     */
+};
+
+/* Flag interior rows whose live neighbours are flat (on one line in 2D, one plane in 3D):
+ * rank-deficient and degraded (scheme->degrade) when the condition of their centred second
+ * moment reaches 1/rank_tol, ill-conditioned above cond_max (src/operator_flat.c). */
+void pst_op_check_flat_rows(pst_op *op);
+
+/* 1 for the schemes CG can solve through their symmetric scaling (brookshaw, cb). */
+int pst_scheme_symmetrisable(const pst_scheme *s);
+
+/* The registered schemes (one file each under kernels/), one declaration per line. */
+extern const pst_scheme pst_scheme_brookshaw;
+extern const pst_scheme pst_scheme_cb;
+extern const pst_scheme pst_scheme_schwaiger;
+extern const pst_scheme pst_scheme_lv;
+extern const pst_scheme pst_scheme_cspm;
+extern const pst_scheme pst_scheme_icspm;
+extern const pst_scheme pst_scheme_csph2g;
+extern const pst_scheme pst_scheme_mixed0;
+extern const pst_scheme pst_scheme_mixed1;
+extern const pst_scheme pst_scheme_mixed2;
+extern const pst_scheme pst_scheme_qsfdi;
+extern const pst_scheme pst_scheme_lsmps;
+extern const pst_scheme pst_scheme_lpmps;
+
+#endif
