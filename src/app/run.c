@@ -232,9 +232,10 @@ int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, p
         for (size_t i = 0; i < n; ++i)
             m += kind[i] != PST_DIRICHLET;
         if (m > max_unknowns)
-            st = run_fail(&r, PST_EINPUT, "%s: %zu unknowns (interior and Neumann particles), more "
-                                      "than %zu: use a coarser cloud.spacing", s->path, m,
-                      max_unknowns);
+            st = run_fail(&r, PST_EINPUT,
+                          "%s: %zu unknowns (interior and Neumann particles), more "
+                          "than %zu: use a coarser cloud.spacing",
+                          s->path, m, max_unknowns);
     }
     if (st == PST_OK)
         st = run_make_operator(&r, 1, NULL, &r.base);

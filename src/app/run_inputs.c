@@ -24,8 +24,8 @@ static int eval_columns(run_state *r, const char *key, const char *text,
     for (size_t k = 0; k < n; ++k)
         if (!isfinite(out[k]))
             return run_fail(r, PST_EINPUT, "%s: %s: '%s' is not finite at %s %lld", r->s->path, key,
-                        text, ids ? "particle (input order)" : "point",
-                        ids ? (long long)ids[k] : (long long)k);
+                            text, ids ? "particle (input order)" : "point",
+                            ids ? (long long)ids[k] : (long long)k);
     return PST_OK;
 }
 
@@ -39,7 +39,7 @@ int run_eval_at_particles(run_state *r, const char *key, const char *text, doubl
 }
 
 int run_eval_at_points(run_state *r, const char *key, const char *text, double *const pts[3],
-                          size_t m, double *out)
+                       size_t m, double *out)
 {
     const double *cols[3] = {pts[0], pts[1], pts[2]};
     return eval_columns(r, key, text, cols, m, NULL, out);
@@ -58,7 +58,7 @@ int run_make_cloud(run_state *r)
                  : pst_cloud_read_csv(&r->c, sc->file, msg);
         if (st == PST_OK && pst_cloud_dim(r->c) != s->dim)
             return run_fail(r, PST_EINPUT, "%s: cloud.file %s is %dD, the scene is %dD", s->path,
-                        sc->file, pst_cloud_dim(r->c), s->dim);
+                            sc->file, pst_cloud_dim(r->c), s->dim);
         if (st == PST_OK && sc->h_ratio_set)
             st = pst_cloud_set_h_uniform(r->c, sc->h_ratio * sc->spacing, NULL);
     } else {
@@ -112,8 +112,8 @@ int run_make_mobility(run_state *r)
             return run_fail(r, PST_ENOMEM, "out of memory for the mobility");
         for (int a = 0; a < ncomp; ++a) {
             char key[64];
-            snprintf(key, sizeof key, ncomp == 1 ? "mobility.expression" : "mobility.expression[%d]",
-                     a);
+            snprintf(key, sizeof key,
+                     ncomp == 1 ? "mobility.expression" : "mobility.expression[%d]", a);
             double *mob = pst_cloud_mobility(r->c, a);
             int st = run_eval_at_particles(r, key, m->expr[a], mob);
             if (st != PST_OK)
@@ -121,9 +121,10 @@ int run_make_mobility(run_state *r)
             size_t n = pst_cloud_size(r->c);
             for (size_t i = 0; i < n; ++i)
                 if (!(mob[i] > 0))
-                    return run_fail(r, PST_EINPUT, "%s: %s: the mobility must be positive, got %g "
-                                               "at particle %lld (input order)",
-                                s->path, key, mob[i], (long long)pst_cloud_ids_const(r->c)[i]);
+                    return run_fail(r, PST_EINPUT,
+                                    "%s: %s: the mobility must be positive, got %g "
+                                    "at particle %lld (input order)",
+                                    s->path, key, mob[i], (long long)pst_cloud_ids_const(r->c)[i]);
         }
     }
     r->cnt.mobility_arrays += ncomp;

@@ -53,14 +53,15 @@ static int read_points_csv(run_state *r, const char *path, double *pts[3], size_
             }
         }
         int c = 0;
-        for (char *tok = strtok(line, ",\r\n"); tok && st == PST_OK; tok = strtok(NULL, ",\r\n"), ++c)
+        for (char *tok = strtok(line, ",\r\n"); tok && st == PST_OK;
+             tok = strtok(NULL, ",\r\n"), ++c)
             for (int d = 0; d < r->s->dim; ++d)
                 if (c == col[d] && !parse_number(tok, &pts[d][n]))
                     st = run_fail(r, PST_EINPUT, "%s:%ld: column %c: '%s' is not a finite number",
-                              path, lineno, "xyz"[d], tok);
+                                  path, lineno, "xyz"[d], tok);
         if (st == PST_OK && c != ncols)
             st = run_fail(r, PST_EINPUT, "%s:%ld: %d columns, the header has %d", path, lineno, c,
-                      ncols);
+                          ncols);
         ++n;
     }
     fclose(f);
@@ -113,8 +114,9 @@ int run_interpolate(run_state *r, int k, cJSON *tj)
     if (st == PST_OK) {
         char msg[PST_ERRLEN];
         double t0 = omp_get_wtime();
-        st = pst_op_interpolate(r->base, (const double *const *)pts, m, pst_cloud_field_by_name(r->c, t->field),
-                                value, lap, &fallbacks, msg);
+        st = pst_op_interpolate(r->base, (const double *const *)pts, m,
+                                pst_cloud_field_by_name(r->c, t->field), value, lap, &fallbacks,
+                                msg);
         cJSON_AddNumberToObject(tj, "seconds", omp_get_wtime() - t0);
         r->cnt.interpolations++;
         if (st != PST_OK)

@@ -32,14 +32,16 @@ static uint8_t *region_mask(run_state *r, const sc_task *t)
 /* Evaluate the task's exact expressions and its norms of approx against them; the norms go
  * into the task's report object. `pts` non-NULL: values at m points instead of particles. */
 int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *approx,
-                      double *const pts[3], size_t m)
+                   double *const pts[3], size_t m)
 {
     const sc_task *t = &r->s->tasks[k];
     if (!t->nexact || !t->nnorms)
         return PST_OK;
     if (t->nexact != ncomp)
-        return run_fail(r, PST_EINPUT, "%s: tasks[%d].exact: %d expressions for a result with %d "
-                                   "components", r->s->path, k, t->nexact, ncomp);
+        return run_fail(r, PST_EINPUT,
+                        "%s: tasks[%d].exact: %d expressions for a result with %d "
+                        "components",
+                        r->s->path, k, t->nexact, ncomp);
     size_t n = pts ? m : pst_cloud_size(r->c);
     double *exact[6] = {NULL};
     uint8_t *mask = pts ? NULL : region_mask(r, t);
@@ -96,7 +98,7 @@ int run_add_outputs(run_state *r, const sc_task *t, int ncomp, double *out[6])
         char why[PST_ERRLEN];
         if (pst_cloud_add_field(r->c, name, &out[a], why) != PST_OK)
             return run_fail(r, PST_EINPUT, "%s: task '%s': output field %s: %s", r->s->path,
-                        t->name, name, why);
+                            t->name, name, why);
     }
     return PST_OK;
 }

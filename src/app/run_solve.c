@@ -53,12 +53,16 @@ static int unclaimed_values(run_state *r, int k, const int8_t *claim, const doub
         if (kind[i] == PST_INTERIOR || (claim && claim[i] >= 0))
             continue;
         if (kind[i] == PST_NEUMANN)
-            return run_fail(r, PST_EINPUT, "%s: task '%s': the cloud's Neumann particles need a "
-                                           "boundary group with their flux", r->s->path, t->name);
+            return run_fail(r, PST_EINPUT,
+                            "%s: task '%s': the cloud's Neumann particles need a "
+                            "boundary group with their flux",
+                            r->s->path, t->name);
         if (!ue)
-            return run_fail(r, PST_EINPUT, "%s: task '%s': boundary particles outside every "
-                                           "boundary group take the exact solution, which is "
-                                           "not given (tasks[%d].exact)", r->s->path, t->name, k);
+            return run_fail(r, PST_EINPUT,
+                            "%s: task '%s': boundary particles outside every "
+                            "boundary group take the exact solution, which is "
+                            "not given (tasks[%d].exact)",
+                            r->s->path, t->name, k);
         b[i] = ue[i];
     }
     return PST_OK;
@@ -74,8 +78,8 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
         int st = pst_op_store(op);
         r->cnt.stored_weights++;
         if (st != PST_OK)
-            return run_fail(r, st, "%s: task '%s': cannot store the operator's weights",
-                            r->s->path, t->name);
+            return run_fail(r, st, "%s: task '%s': cannot store the operator's weights", r->s->path,
+                            t->name);
     }
     pst_solve_opts so;
     pst_solve_defaults(&so);

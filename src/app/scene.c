@@ -72,9 +72,12 @@ static int read_scene(ctx *c, cJSON *root, pst_scene *s, int noverrides)
     s->dim = c->dim;
     const char *title = scene_get_string(root, "title");
     if ((rc = scene_set_str(c, &s->title, title ? title : s->path)) != PST_OK ||
-        (rc = scene_read_cloud(c, root, s)) != PST_OK || (rc = scene_read_mobility(c, root, s)) != PST_OK ||
-        (rc = scene_read_operator(c, root, s)) != PST_OK || (rc = scene_read_fields(c, root, s)) != PST_OK ||
-        (rc = scene_read_tasks(c, root, s)) != PST_OK || (rc = scene_read_outputs(c, root, s)) != PST_OK)
+        (rc = scene_read_cloud(c, root, s)) != PST_OK ||
+        (rc = scene_read_mobility(c, root, s)) != PST_OK ||
+        (rc = scene_read_operator(c, root, s)) != PST_OK ||
+        (rc = scene_read_fields(c, root, s)) != PST_OK ||
+        (rc = scene_read_tasks(c, root, s)) != PST_OK ||
+        (rc = scene_read_outputs(c, root, s)) != PST_OK)
         return rc;
     s->memory_fraction = scene_get_real(scene_member(root, "limits"), "limits.memory_fraction");
     return PST_OK;

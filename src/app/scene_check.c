@@ -75,7 +75,8 @@ static const sc_param *selector_of(const char *parent)
 static int check_number(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
 {
     if (!cJSON_IsNumber(v))
-        return scene_error(c, NULL, "expected %s, got %s", scene_expected_kind(type), scene_json_kind(v));
+        return scene_error(c, NULL, "expected %s, got %s", scene_expected_kind(type),
+                           scene_json_kind(v));
     double x = v->valuedouble;
     if (!isfinite(x))
         return scene_error(c, NULL, "number out of range (not a finite double)");
@@ -86,7 +87,7 @@ static int check_number(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
         snprintf(word, sizeof word, "%.0f", x);
         if (scene_value_index(p->values, word) < 0)
             return scene_error(c, NULL, "must be one of %s, got %.0f",
-                          scene_listed(p->values, word, sizeof word), x);
+                               scene_listed(p->values, word, sizeof word), x);
     }
     int below = p->lo_kind && (p->lo_kind == '[' ? x < p->lo : x <= p->lo);
     int above = p->hi_kind && (p->hi_kind == ']' ? x > p->hi : x >= p->hi);
@@ -94,12 +95,12 @@ static int check_number(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
         return PST_OK;
     if (p->lo_kind && p->hi_kind)
         return scene_error(c, NULL, "must be in %c%.15g, %.15g%c, got %.15g", p->lo_kind, p->lo,
-                      p->hi, p->hi_kind, x);
+                           p->hi, p->hi_kind, x);
     if (p->lo_kind)
         return scene_error(c, NULL, "must be %s %.15g, got %.15g", p->lo_kind == '[' ? ">=" : ">",
-                      p->lo, x);
-    return scene_error(c, NULL, "must be %s %.15g, got %.15g", p->hi_kind == ']' ? "<=" : "<", p->hi,
-                  x);
+                           p->lo, x);
+    return scene_error(c, NULL, "must be %s %.15g, got %.15g", p->hi_kind == ']' ? "<=" : "<",
+                       p->hi, x);
 }
 
 static int check_enum(ctx *c, const cJSON *v, const sc_param *p)
@@ -128,7 +129,7 @@ static int check_enum(ctx *c, const cJSON *v, const sc_param *p)
         if (best) {
             size_t n = strcspn(best, "|");
             return scene_error(c, NULL, "unknown value '%s' (one of %s; did you mean '%.*s'?)", s,
-                          list, (int)n, best);
+                               list, (int)n, best);
         }
         return scene_error(c, NULL, "unknown value '%s' (one of %s)", s, list);
     }
@@ -142,7 +143,7 @@ static int check_enum(ctx *c, const cJSON *v, const sc_param *p)
     }
     if (best)
         return scene_error(c, NULL, "unknown scheme '%s' (one of %s; did you mean '%s'?)", s, list,
-                      best);
+                           best);
     return scene_error(c, NULL, "unknown scheme '%s' (one of %s)", s, list);
 }
 
@@ -162,7 +163,8 @@ static int check_expr(ctx *c, const cJSON *v, sc_type type)
         w->valuestring = copy;
     }
     if (!cJSON_IsString(v))
-        return scene_error(c, NULL, "expected %s, got %s", scene_expected_kind(type), scene_json_kind(v));
+        return scene_error(c, NULL, "expected %s, got %s", scene_expected_kind(type),
+                           scene_json_kind(v));
     if (v->valuestring[strspn(v->valuestring, " \t\r\n")] == '\0')
         return scene_error(c, NULL, "the expression is empty");
     return PST_OK;
@@ -176,8 +178,8 @@ static int check_items(ctx *c, const cJSON *v, const sc_param *p, sc_type item,
     for (const cJSON *e = v->child; e && rc == PST_OK; e = e->next, ++n) {
         scene_push(c, e, NULL, n);
         if (range && range->hi_kind && n >= (int)range->hi)
-            rc = scene_error(c, NULL, "too many items in '%s' (at most %d)", scene_last_segment(p->key),
-                        (int)range->hi);
+            rc = scene_error(c, NULL, "too many items in '%s' (at most %d)",
+                             scene_last_segment(p->key), (int)range->hi);
         else
             rc = scene_check_value(c, e, p, item);
         scene_pop(c);
@@ -185,21 +187,23 @@ static int check_items(ctx *c, const cJSON *v, const sc_param *p, sc_type item,
     return rc;
 }
 
-
 int scene_check_value(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
 {
     switch (type) {
     case SC_T_INT:
     case SC_T_REAL: return check_number(c, v, p, type);
     case SC_T_BOOL:
-        return cJSON_IsBool(v) ? PST_OK
-                               : scene_error(c, NULL, "expected true or false, got %s", scene_json_kind(v));
+        return cJSON_IsBool(v)
+                   ? PST_OK
+                   : scene_error(c, NULL, "expected true or false, got %s", scene_json_kind(v));
     case SC_T_STRING:
-        return cJSON_IsString(v) ? PST_OK
-                                 : scene_error(c, NULL, "expected a string, got %s", scene_json_kind(v));
+        return cJSON_IsString(v)
+                   ? PST_OK
+                   : scene_error(c, NULL, "expected a string, got %s", scene_json_kind(v));
     case SC_T_PATH:
         if (!cJSON_IsString(v))
-            return scene_error(c, NULL, "expected a file name (a string), got %s", scene_json_kind(v));
+            return scene_error(c, NULL, "expected a file name (a string), got %s",
+                               scene_json_kind(v));
         return *v->valuestring ? PST_OK : scene_error(c, NULL, "the file name is empty");
     case SC_T_ENUM: return check_enum(c, v, p);
     case SC_T_EXPR: return check_expr(c, v, type);
@@ -213,10 +217,12 @@ int scene_check_value(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
     }
     case SC_T_VEC: {
         if (!cJSON_IsArray(v))
-            return scene_error(c, NULL, "expected a list of %d numbers, got %s", c->dim, scene_json_kind(v));
+            return scene_error(c, NULL, "expected a list of %d numbers, got %s", c->dim,
+                               scene_json_kind(v));
         int n = cJSON_GetArraySize(v);
         if (n != c->dim)
-            return scene_error(c, NULL, "expected %d numbers (dim = %d), got %d", c->dim, c->dim, n);
+            return scene_error(c, NULL, "expected %d numbers (dim = %d), got %d", c->dim, c->dim,
+                               n);
         return check_items(c, v, p, SC_T_REAL, NULL);
     }
     case SC_T_LIST:
@@ -230,7 +236,7 @@ int scene_check_value(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
                 scene_push(c, e, NULL, n);
                 if (p->hi_kind && n >= (int)p->hi)
                     rc = scene_error(c, NULL, "too many items in '%s' (at most %d)",
-                                scene_last_segment(p->key), (int)p->hi);
+                                     scene_last_segment(p->key), (int)p->hi);
                 else
                     rc = scene_check_object(c, e, p, tpath);
                 scene_pop(c);
@@ -242,7 +248,8 @@ int scene_check_value(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
         if (cJSON_IsString(v))
             return check_enum(c, v, p);
         if (!cJSON_IsObject(v))
-            return scene_error(c, NULL, "expected a string or an object, got %s", scene_json_kind(v));
+            return scene_error(c, NULL, "expected a string or an object, got %s",
+                               scene_json_kind(v));
         return scene_check_object(c, v, p, p->key);
     case SC_T_OBJECT: return scene_check_object(c, v, p, p->key);
     }
@@ -271,7 +278,8 @@ int scene_check_object(ctx *c, const cJSON *obj, const sc_param *p, const char *
     const sc_param *sel = selector_of(tpath);
     const char *selected = NULL; /* the selector's value when given and valid */
     int rc;
-    const cJSON *sv = sel ? cJSON_GetObjectItemCaseSensitive(obj, scene_last_segment(sel->key)) : NULL;
+    const cJSON *sv =
+        sel ? cJSON_GetObjectItemCaseSensitive(obj, scene_last_segment(sel->key)) : NULL;
     if (sv) {
         scene_push_member(c, sv);
         rc = scene_check_value(c, sv, sel, sel->type);
@@ -289,10 +297,10 @@ int scene_check_object(ctx *c, const cJSON *obj, const sc_param *p, const char *
         rc = PST_OK;
         if (c->steps[c->depth - 1].index > 0) {
             rc = scene_error(c, NULL, "duplicate key (an earlier '%s' is in the same object)",
-                        m->string);
+                             m->string);
         } else if (p && p->hi_kind && p->type == SC_T_OBJECT && count >= (int)p->hi) {
-            rc = scene_error(c, NULL, "too many entries in '%s' (at most %d)", scene_last_segment(p->key),
-                        (int)p->hi);
+            rc = scene_error(c, NULL, "too many entries in '%s' (at most %d)",
+                             scene_last_segment(p->key), (int)p->hi);
         } else if (!mp) {
             const char *best = scene_suggest_member(tpath, m->string);
             char key[256];
@@ -305,7 +313,7 @@ int scene_check_object(ctx *c, const cJSON *obj, const sc_param *p, const char *
             char cond[300];
             if (scene_value_index(mp->applies, word) < 0)
                 rc = scene_error(c, NULL, "applies only %s",
-                            condition(sel, mp->applies, "to", cond, sizeof cond));
+                                 condition(sel, mp->applies, "to", cond, sizeof cond));
         }
         if (rc == PST_OK && mp && mp != sel)
             rc = scene_check_value(c, m, mp, mp->type);
@@ -329,7 +337,7 @@ int scene_check_object(ctx *c, const cJSON *obj, const sc_param *p, const char *
                 continue;
             char cond[300];
             return scene_error(c, name, "missing required key (%s)",
-                          condition(sel, word, "for", cond, sizeof cond));
+                               condition(sel, word, "for", cond, sizeof cond));
         }
         return scene_error(c, name, "missing required key");
     }

@@ -16,7 +16,7 @@ static int check_box(ctx *c, const double lo[3], const double hi[3], const char 
     for (int d = 0; d < c->dim; ++d)
         if (!(hi[d] > lo[d]))
             return scene_error(c, hi_name, "must exceed lo along %c (lo %.15g, hi %.15g)",
-                          axis_name[d], lo[d], hi[d]);
+                               axis_name[d], lo[d], hi[d]);
     return PST_OK;
 }
 
@@ -44,9 +44,9 @@ int scene_read_cloud(ctx *c, const cJSON *root, pst_scene *s)
             double r = (cl->hi[d] - cl->lo[d]) / cl->spacing, rn = round(r);
             if (!(r <= 4294967295.0) || rn < 1 || fabs(r - rn) > 1e-9 * r)
                 rc = scene_error(c, "spacing",
-                            "the box length along %c (%.15g) is not a whole number of "
-                            "spacings (ratio %.15g)",
-                            axis_name[d], cl->hi[d] - cl->lo[d], r);
+                                 "the box length along %c (%.15g) is not a whole number of "
+                                 "spacings (ratio %.15g)",
+                                 axis_name[d], cl->hi[d] - cl->lo[d], r);
         }
     }
     scene_pop(c);
@@ -63,11 +63,11 @@ static int read_exprs(ctx *c, const cJSON *obj, const char *name, int need, cons
         return PST_OK;
     int n = cJSON_IsArray(v) ? cJSON_GetArraySize(v) : 1;
     if (need == 0 && n != 1 && n != c->dim)
-        return scene_error(c, name, "expected one expression or a list of %d (one per axis), got %d",
-                      c->dim, n);
+        return scene_error(
+            c, name, "expected one expression or a list of %d (one per axis), got %d", c->dim, n);
     if (need > 1 && n != need)
         return scene_error(c, name, "%s needs a list of %d expressions, got %s%d", what, need,
-                      cJSON_IsArray(v) ? "" : "a single expression, not ", n);
+                           cJSON_IsArray(v) ? "" : "a single expression, not ", n);
     if (need == 1 && n != 1)
         return scene_error(c, name, "%s needs a single expression, got a list of %d", what, n);
     for (int k = 0; k < n; ++k) {
@@ -112,7 +112,7 @@ int scene_read_operator(ctx *c, const cJSON *root, pst_scene *s)
     s->op.on_degenerate = scene_get_enum(o, "operator.on_degenerate");
     s->op.mobility_mean = scene_get_enum(o, "operator.mobility_mean");
     return scene_set_str(c, &s->op.scheme,
-                   scheme ? scheme : scene_default_text("operator.scheme", buf, sizeof buf));
+                         scheme ? scheme : scene_default_text("operator.scheme", buf, sizeof buf));
 }
 
 int scene_read_fields(ctx *c, const cJSON *root, pst_scene *s)
@@ -122,12 +122,13 @@ int scene_read_fields(ctx *c, const cJSON *root, pst_scene *s)
     for (const cJSON *m = o ? o->child : NULL; m && rc == PST_OK; m = m->next) {
         scene_push_member(c, m);
         if (!pst_is_identifier(m->string))
-            rc = scene_error(c, NULL, "a field name must be a C identifier (letters, digits and _, "
-                                 "not starting with a digit, at most %d characters)",
-                        PST_MAX_NAME - 1);
+            rc = scene_error(c, NULL,
+                             "a field name must be a C identifier (letters, digits and _, "
+                             "not starting with a digit, at most %d characters)",
+                             PST_MAX_NAME - 1);
         else if (pst_is_reserved_column(m->string))
             rc = scene_error(c, NULL, "'%s' is a column of the CSV format, not a field name",
-                        m->string);
+                             m->string);
         scene_pop(c);
         if (rc == PST_OK) {
             sc_field *f = &s->fields[s->nfields++];
@@ -157,7 +158,7 @@ static int unknown_name(ctx *c, const char *extra, const char *what, const char 
         scene_consider(name, known[k], &best, &bestd);
     if (best)
         return scene_error(c, extra, "%s '%s' is not %s (did you mean '%s'?)", what, name, where,
-                      best);
+                           best);
     return scene_error(c, extra, "%s '%s' is not %s", what, name, where);
 }
 
@@ -187,8 +188,11 @@ static int read_points(ctx *c, const cJSON *task, pst_scene *s, sc_task *t)
         if (file && nbox)
             rc = scene_error(c, NULL, "give either 'file' or 'lo', 'hi' and 'spacing', not both");
         else if (!file && nbox < 3)
-            rc = scene_error(c, !scene_member(o, "lo") ? "lo" : !scene_member(o, "hi") ? "hi" : "spacing",
-                        "missing (a point lattice needs lo, hi and spacing)");
+            rc = scene_error(c,
+                             !scene_member(o, "lo")   ? "lo"
+                             : !scene_member(o, "hi") ? "hi"
+                                                      : "spacing",
+                             "missing (a point lattice needs lo, hi and spacing)");
         else if (file)
             rc = scene_set_path(c, &t->points_file, s->dir, file);
         else {
@@ -213,7 +217,8 @@ static int read_boundary(ctx *c, const cJSON *task, sc_task *t)
         gr->neumann = scene_get_enum(g, "tasks[].boundary[].type");
         if (c->dim == 2 && (gr->where == SC_SIDE_ZLO || gr->where == SC_SIDE_ZHI))
             rc = scene_error(c, "where", "there is no z side in 2D");
-        if (rc == PST_OK && (rc = scene_set_str(c, &gr->value, scene_get_string(g, "value"))) == PST_OK)
+        if (rc == PST_OK &&
+            (rc = scene_set_str(c, &gr->value, scene_get_string(g, "value"))) == PST_OK)
             ++t->ngroups;
         scene_pop(c);
     }
@@ -290,7 +295,8 @@ static int read_task(ctx *c, const cJSON *o, pst_scene *s, sc_task *t)
     if (rc == PST_OK)
         rc = read_boundary(c, o, t);
     if (rc == PST_OK && t->type == SC_TASK_SOLVE && t->ngroups == 0 && t->nexact == 0)
-        rc = scene_error(c, NULL, "a solve without 'boundary' needs 'exact' (its Dirichlet values)");
+        rc =
+            scene_error(c, NULL, "a solve without 'boundary' needs 'exact' (its Dirichlet values)");
     t->solver = scene_get_enum(o, "tasks[].solver");
     t->precond = scene_get_enum(o, "tasks[].precond");
     t->amg_source = scene_get_enum(o, "tasks[].amg_source");
@@ -325,14 +331,16 @@ static int name_tasks(ctx *c, const cJSON *list, pst_scene *s)
             continue;
         scene_push(c, cJSON_GetArrayItem(list, i), NULL, i);
         if (!pst_is_identifier(name) || pst_is_reserved_column(name))
-            rc = scene_error(c, "name", "a task name must be a C identifier (at most %d characters) "
-                                   "and not a CSV column name, got '%s'",
-                        PST_MAX_NAME - 1, name);
+            rc = scene_error(c, "name",
+                             "a task name must be a C identifier (at most %d characters) "
+                             "and not a CSV column name, got '%s'",
+                             PST_MAX_NAME - 1, name);
         else if (find_field(s, name) >= 0)
             rc = scene_error(c, "name", "'%s' is already the name of a field", name);
         for (int k = 0; k < i && rc == PST_OK; ++k)
             if (s->tasks[k].name && strcmp(s->tasks[k].name, name) == 0)
-                rc = scene_error(c, "name", "duplicate task name '%s' (also tasks.%d.name)", name, k);
+                rc = scene_error(c, "name", "duplicate task name '%s' (also tasks.%d.name)", name,
+                                 k);
         scene_pop(c);
     }
     for (int i = 0; i < s->ntasks && rc == PST_OK; ++i) {

@@ -54,7 +54,8 @@ int scene_get_enum(const cJSON *obj, const char *key)
 {
     const cJSON *v = scene_member(obj, scene_last_segment(key));
     char buf[64];
-    const char *word = cJSON_IsString(v) ? v->valuestring : scene_default_text(key, buf, sizeof buf);
+    const char *word =
+        cJSON_IsString(v) ? v->valuestring : scene_default_text(key, buf, sizeof buf);
     return scene_value_index(sc_param_find(key)->values, word);
 }
 
