@@ -170,9 +170,10 @@ static int check_expr(ctx *c, const cJSON *v, sc_type type)
     return PST_OK;
 }
 
-/* Items of a list: each is checked at its own index. */
+/* Items of a list: each is checked at its own index, as `item` or, with tpath, as an object
+ * of the table path tpath; range (when given) bounds their number. */
 static int check_items(ctx *c, const cJSON *v, const sc_param *p, sc_type item,
-                       const sc_param *range)
+                       const sc_param *range, const char *tpath)
 {
     int n = 0, rc = PST_OK;
     for (const cJSON *e = v->child; e && rc == PST_OK; e = e->next, ++n) {
@@ -181,7 +182,7 @@ static int check_items(ctx *c, const cJSON *v, const sc_param *p, sc_type item,
             rc = scene_error(c, NULL, "too many items in '%s' (at most %d)",
                              scene_last_segment(p->key), (int)range->hi);
         else
-            rc = scene_check_value(c, e, p, item);
+            rc = tpath ? scene_check_object(c, e, p, tpath) : scene_check_value(c, e, p, item);
         scene_pop(c);
     }
     return rc;
@@ -213,7 +214,7 @@ int scene_check_value(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
         int n = cJSON_GetArraySize(v);
         if (n < 1 || n > 6)
             return scene_error(c, NULL, "expected 1 to 6 expressions, got %d", n);
-        return check_items(c, v, p, SC_T_EXPR, NULL);
+        return check_items(c, v, p, SC_T_EXPR, NULL, NULL);
     }
     case SC_T_VEC: {
         if (!cJSON_IsArray(v))
@@ -223,7 +224,7 @@ int scene_check_value(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
         if (n != c->dim)
             return scene_error(c, NULL, "expected %d numbers (dim = %d), got %d", c->dim, c->dim,
                                n);
-        return check_items(c, v, p, SC_T_REAL, NULL);
+        return check_items(c, v, p, SC_T_REAL, NULL, NULL);
     }
     case SC_T_LIST:
         if (!cJSON_IsArray(v))
@@ -231,19 +232,9 @@ int scene_check_value(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
         if (p->item == SC_T_OBJECT) {
             char tpath[TPATH_LEN];
             child_path(p, 1, tpath);
-            int n = 0, rc = PST_OK;
-            for (const cJSON *e = v->child; e && rc == PST_OK; e = e->next, ++n) {
-                scene_push(c, e, NULL, n);
-                if (p->hi_kind && n >= (int)p->hi)
-                    rc = scene_error(c, NULL, "too many items in '%s' (at most %d)",
-                                     scene_last_segment(p->key), (int)p->hi);
-                else
-                    rc = scene_check_object(c, e, p, tpath);
-                scene_pop(c);
-            }
-            return rc;
+            return check_items(c, v, p, SC_T_OBJECT, p, tpath);
         }
-        return check_items(c, v, p, p->item, p);
+        return check_items(c, v, p, p->item, p, NULL);
     case SC_T_ENUM_OR_OBJECT:
         if (cJSON_IsString(v))
             return check_enum(c, v, p);

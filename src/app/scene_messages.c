@@ -99,18 +99,15 @@ void scene_push_member(ctx *c, const cJSON *child)
 
 const char *scene_json_kind(const cJSON *v)
 {
-    if (cJSON_IsNumber(v))
-        return "a number";
-    if (cJSON_IsString(v))
-        return "a string";
-    if (cJSON_IsBool(v))
-        return "a boolean";
-    if (cJSON_IsNull(v))
-        return "null";
-    if (cJSON_IsArray(v))
-        return "a list";
-    if (cJSON_IsObject(v))
-        return "an object";
+    static const struct {
+        cJSON_bool (*is)(const cJSON *);
+        const char *name;
+    } kinds[] = {{cJSON_IsNumber, "a number"}, {cJSON_IsString, "a string"},
+                 {cJSON_IsBool, "a boolean"},  {cJSON_IsNull, "null"},
+                 {cJSON_IsArray, "a list"},     {cJSON_IsObject, "an object"}};
+    for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; ++k)
+        if (kinds[k].is(v))
+            return kinds[k].name;
     return "an invalid value";
 }
 
