@@ -160,14 +160,14 @@ static int select_fields(const pst_cloud *c, char *const *names, int nnames, pst
         snprintf(err, errlen, "out of memory for the output selection");
         return PST_ENOMEM;
     }
-    pst_cloud *cm = (pst_cloud *)c; /* the accessors are not const; nothing is written */
     for (int d = 0; d < dim; ++d) {
-        memcpy(pst_cloud_coord(o, d), pst_cloud_coord(cm, d), n * sizeof(double));
-        memcpy(pst_cloud_normal(o, d), pst_cloud_normal(cm, d), n * sizeof(double));
+        memcpy(pst_cloud_coord(o, d), pst_cloud_coord_const(c, d), n * sizeof(double));
+        memcpy(pst_cloud_normal(o, d), pst_cloud_normal_const(c, d), n * sizeof(double));
     }
-    memcpy(pst_cloud_volume(o), pst_cloud_volume(cm), n * sizeof(double));
-    memcpy(pst_cloud_kinds(o), pst_cloud_kinds(cm), n);
-    memcpy(pst_cloud_ids(o), pst_cloud_ids(cm), n * sizeof(int64_t));
+    memcpy(pst_cloud_volume(o), pst_cloud_volume_const(c), n * sizeof(double));
+    memcpy(pst_cloud_kinds(o), pst_cloud_kinds_const(c), n);
+    memcpy(pst_cloud_ids(o), pst_cloud_ids_const(c), n * sizeof(int64_t));
+    pst_cloud *cm = (pst_cloud *)c; /* mobility and fields have no const accessors; read only */
     int st = PST_OK;
     if (pst_cloud_h_is_uniform(c)) {
         st = pst_cloud_set_h_uniform(o, pst_cloud_h_uniform(c), NULL);
