@@ -316,20 +316,17 @@ static void test_threads(void)
     for (int dim = 2; dim <= 3; ++dim)
         for (int vary = 0; vary <= 1; ++vary) {
             pst_cloud *c = lattice(dim, dim == 2 ? 120 : 24, 1.0, 0.9, 1, 1.2, vary, 31);
-            pst_nlist *a = NULL, *b = NULL, *d = NULL;
-            omp_set_num_threads(1);
-            CHECK_INT(pst_nlist_build(&a, c, 3.0, NULL), PST_OK);
-            omp_set_num_threads(2);
-            CHECK_INT(pst_nlist_build(&b, c, 3.0, NULL), PST_OK);
-            omp_set_num_threads(5);
-            CHECK_INT(pst_nlist_build(&d, c, 3.0, NULL), PST_OK);
-            if (a && b && d) {
-                CHECK(same_nlists(a, b));
-                CHECK(same_nlists(a, d));
+            static const int threads[3] = {1, 2, 5};
+            pst_nlist *nl[3] = {NULL, NULL, NULL};
+            for (int k = 0; k < 3; ++k) {
+                omp_set_num_threads(threads[k]);
+                CHECK_INT(pst_nlist_build(&nl[k], c, 3.0, NULL), PST_OK);
             }
-            pst_nlist_destroy(a);
-            pst_nlist_destroy(b);
-            pst_nlist_destroy(d);
+            for (int k = 1; k < 3; ++k)
+                if (nl[0] && nl[k])
+                    CHECK(same_nlists(nl[0], nl[k]));
+            for (int k = 0; k < 3; ++k)
+                pst_nlist_destroy(nl[k]);
             pst_cloud_destroy(c);
         }
     omp_set_num_threads(saved);

@@ -117,43 +117,43 @@ static void test_mobility_factor(void)
 {
     const char *lap[] = {"tasks=[{\"type\":\"laplacian\",\"field\":\"u\"}]",
                          "operator.scheme=lv"};
-    pst_scene s = scene(lap, 2);
-    pst_run_counters k;
-    pst_plan p;
-    pst_cloud *c1 = run(&s, &k, &p, PST_OK);
-    pst_scene_free(&s);
     const char *div[] = {"tasks=[{\"type\":\"divergence\",\"field\":\"u\"}]",
                          "operator.scheme=lv", "mobility.type=constant", "mobility.value=2.5"};
-    s = scene(div, 4);
-    pst_cloud *c2 = run(&s, &k, &p, PST_OK);
-    CHECK_INT(k.mobility_arrays, 0);
-    CHECK(p.mobility_factor == 2.5);
-    pst_scene_free(&s);
     const char *expr[] = {"tasks=[{\"type\":\"divergence\",\"field\":\"u\"}]",
                           "operator.scheme=lv", "mobility.type=expression",
                           "mobility.expression=2.5 + 0*x"};
-    s = scene(expr, 4);
-    pst_cloud *c3 = run(&s, &k, &p, PST_OK);
-    CHECK_INT(k.mobility_arrays, 1);
-    pst_scene_free(&s);
-    size_t n = pst_cloud_size(c1);
-    double *l1 = field(c1, "laplacian"), *l2 = field(c2, "divergence"),
-           *l3 = field(c3, "divergence"), scale = 0;
-    for (size_t i = 0; i < n; ++i) {
-        l1[i] *= 2.5;
-        scale = fmax(scale, fabs(l1[i]));
+    const struct {
+        const char *const *ov;
+        int nov, arrays;
+        const char *field;
+    } runs[3] = {{lap, 2, 0, "laplacian"}, {div, 4, 0, "divergence"}, {expr, 4, 1, "divergence"}};
+    pst_cloud *c[3];
+    double *l[3];
+    for (int r = 0; r < 3; ++r) {
+        pst_scene s = scene(runs[r].ov, runs[r].nov);
+        pst_run_counters k;
+        pst_plan p;
+        c[r] = run(&s, &k, &p, PST_OK);
+        CHECK_INT(k.mobility_arrays, runs[r].arrays);
+        CHECK(p.mobility_factor == (r == 1 ? 2.5 : 1.0));
+        pst_scene_free(&s);
+        l[r] = field(c[r], runs[r].field);
     }
-    double d12 = max_diff(l1, l2, n) / scale, d13 = max_diff(l1, l3, n) / scale;
+    size_t n = pst_cloud_size(c[0]);
+    double scale = 0;
+    for (size_t i = 0; i < n; ++i) {
+        l[0][i] *= 2.5;
+        scale = fmax(scale, fabs(l[0][i]));
+    }
+    double d12 = max_diff(l[0], l[1], n) / scale, d13 = max_diff(l[0], l[2], n) / scale;
     printf("constant mobility: factor vs 2.5 L %.1e, per-particle array vs 2.5 L %.1e\n", d12,
            d13);
     CHECK(d12 <= 1e-15);
     CHECK(d13 <= 1e-13);
-    free(l1);
-    free(l2);
-    free(l3);
-    pst_cloud_destroy(c1);
-    pst_cloud_destroy(c2);
-    pst_cloud_destroy(c3);
+    for (int r = 0; r < 3; ++r) {
+        free(l[r]);
+        pst_cloud_destroy(c[r]);
+    }
 }
 
 /* Solves: the plan stores the weights (many applies), picks CG for cb and GMRES for qsfdi,

@@ -98,42 +98,52 @@ void report_solve(cJSON *task, const pst_solve_result *res)
         cJSON_AddItemToObject(s, "history", cJSON_CreateDoubleArray(res->history, res->nhistory));
 }
 
+/* Numbers of a report object, in the order given. */
+typedef struct {
+    const char *name;
+    double v;
+} named_number;
+
+static void add_numbers(cJSON *o, const named_number *rows, size_t nrows)
+{
+    for (size_t q = 0; q < nrows; ++q)
+        cJSON_AddNumberToObject(o, rows[q].name, rows[q].v);
+}
+
 void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt,
                    const pst_cloud *c)
 {
     cJSON *pl = cJSON_AddObjectToObject(report, "plan");
-    cJSON_AddNumberToObject(pl, "particles", (double)pst_cloud_size(c));
-    cJSON_AddNumberToObject(pl, "neighbours_estimate", p->neighbours);
-    cJSON_AddNumberToObject(pl, "mobility_components", p->mobility_ncomp);
-    cJSON_AddNumberToObject(pl, "mobility_factor", p->mobility_factor);
+    const named_number plan[] = {{"particles", (double)pst_cloud_size(c)},
+                                 {"neighbours_estimate", p->neighbours},
+                                 {"mobility_components", p->mobility_ncomp},
+                                 {"mobility_factor", p->mobility_factor}};
+    add_numbers(pl, plan, sizeof plan / sizeof plan[0]);
     cJSON_AddBoolToObject(pl, "base_operator", p->base_operator);
     cJSON_AddBoolToObject(pl, "base_laplacian_rows", p->base_laplacian);
-    cJSON *m = cJSON_AddObjectToObject(pl, "memory_estimate_bytes");
-    cJSON_AddNumberToObject(m, "cloud", p->bytes_cloud);
-    cJSON_AddNumberToObject(m, "neighbours", p->bytes_neighbours);
-    cJSON_AddNumberToObject(m, "operators", p->bytes_operators);
-    cJSON_AddNumberToObject(m, "weights", p->bytes_weights);
-    cJSON_AddNumberToObject(m, "solver", p->bytes_solver);
-    cJSON_AddNumberToObject(m, "total", p->bytes_total);
-    cJSON_AddNumberToObject(m, "available", p->bytes_available);
-    cJSON *k = cJSON_AddObjectToObject(report, "counters");
-    const struct {
-        const char *name;
-        long v;
-    } rows[] = {{"mobility_arrays", cnt->mobility_arrays},
-                {"fields", cnt->fields},
-                {"neighbour_lists", cnt->neighbour_lists},
-                {"laplacian_precomputes", cnt->laplacian_precomputes},
-                {"derivative_operators", cnt->derivative_operators},
-                {"stored_weights", cnt->stored_weights},
-                {"applies", cnt->applies},
-                {"gradients", cnt->gradients},
-                {"hessians", cnt->hessians},
-                {"interpolations", cnt->interpolations},
-                {"solves", cnt->solves},
-                {"norms", cnt->norms}};
-    for (size_t q = 0; q < sizeof rows / sizeof rows[0]; ++q)
-        cJSON_AddNumberToObject(k, rows[q].name, (double)rows[q].v);
+    const named_number memory[] = {{"cloud", p->bytes_cloud},
+                                   {"neighbours", p->bytes_neighbours},
+                                   {"operators", p->bytes_operators},
+                                   {"weights", p->bytes_weights},
+                                   {"solver", p->bytes_solver},
+                                   {"total", p->bytes_total},
+                                   {"available", p->bytes_available}};
+    add_numbers(cJSON_AddObjectToObject(pl, "memory_estimate_bytes"), memory,
+                sizeof memory / sizeof memory[0]);
+    const named_number counters[] = {{"mobility_arrays", (double)cnt->mobility_arrays},
+                                     {"fields", (double)cnt->fields},
+                                     {"neighbour_lists", (double)cnt->neighbour_lists},
+                                     {"laplacian_precomputes", (double)cnt->laplacian_precomputes},
+                                     {"derivative_operators", (double)cnt->derivative_operators},
+                                     {"stored_weights", (double)cnt->stored_weights},
+                                     {"applies", (double)cnt->applies},
+                                     {"gradients", (double)cnt->gradients},
+                                     {"hessians", (double)cnt->hessians},
+                                     {"interpolations", (double)cnt->interpolations},
+                                     {"solves", (double)cnt->solves},
+                                     {"norms", (double)cnt->norms}};
+    add_numbers(cJSON_AddObjectToObject(report, "counters"), counters,
+                sizeof counters / sizeof counters[0]);
 }
 
 /* ---- files ------------------------------------------------------------------------------- */
@@ -150,14 +160,14 @@ static int select_fields(const pst_cloud *c, char *const *names, int nnames, pst
         snprintf(err, errlen, "out of memory for the output selection");
         return PST_ENOMEM;
     }
-    pst_cloud *cm = (pst_cloud *)c; /* the accessors are not const; nothing is written */
     for (int d = 0; d < dim; ++d) {
-        memcpy(pst_cloud_coord(o, d), pst_cloud_coord(cm, d), n * sizeof(double));
-        memcpy(pst_cloud_normal(o, d), pst_cloud_normal(cm, d), n * sizeof(double));
+        memcpy(pst_cloud_coord(o, d), pst_cloud_coord_const(c, d), n * sizeof(double));
+        memcpy(pst_cloud_normal(o, d), pst_cloud_normal_const(c, d), n * sizeof(double));
     }
-    memcpy(pst_cloud_volume(o), pst_cloud_volume(cm), n * sizeof(double));
-    memcpy(pst_cloud_kinds(o), pst_cloud_kinds(cm), n);
-    memcpy(pst_cloud_ids(o), pst_cloud_ids(cm), n * sizeof(int64_t));
+    memcpy(pst_cloud_volume(o), pst_cloud_volume_const(c), n * sizeof(double));
+    memcpy(pst_cloud_kinds(o), pst_cloud_kinds_const(c), n);
+    memcpy(pst_cloud_ids(o), pst_cloud_ids_const(c), n * sizeof(int64_t));
+    pst_cloud *cm = (pst_cloud *)c; /* mobility and fields have no const accessors; read only */
     int st = PST_OK;
     if (pst_cloud_h_is_uniform(c)) {
         st = pst_cloud_set_h_uniform(o, pst_cloud_h_uniform(c), NULL);

@@ -28,7 +28,9 @@ void pst_scene_op_opts(const pst_scene *s, pst_op_opts *oo);
 /* Build scene `s`'s cloud, neighbour list and base operator (with Laplacian rows), as
  * pst_run_scene would, on the boundary kinds of the scene's first solve task with boundary
  * groups (the operator that task solves with), else on the cloud's own kinds, and hand them
- * to the caller (destroy op, then nl, then cloud). With max_unknowns > 0, a cloud with more
+ * to the caller (destroy op, then nl, then cloud). The cloud handed over carries that
+ * boundary (its kinds and normals are the task's), so that whatever reads it sees the
+ * problem the operator was built for; unlike pst_run_scene's, it is the caller's alone. With max_unknowns > 0, a cloud with more
  * interior + Neumann particles is refused (PST_EINPUT) before the operator is built. Errors
  * as pst_run_scene. */
 int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, pst_cloud **cloud,

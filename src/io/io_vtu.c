@@ -4,7 +4,7 @@
  * block itself (per array a UInt64 byte count, then the values). Values are stored byte by
  * byte in little-endian order, so the file is the same on any host; rows are emitted in input
  * order (by ids) through small gather buffers, and the file goes through pst_write_atomic. */
-#include "internal.h"
+#include "check.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -209,20 +209,15 @@ int pst_cloud_write_vtu(const pst_cloud *c, const char *path, const uint8_t *row
      * column names, which no field can have) */
     for (size_t k = 0; k < c->nfields; ++k) {
         const char *name = c->field_name[k];
-        if (!strcmp(name, "normal") || (row_status && !strcmp(name, "status")) ||
-            (c->mob_ncomp > 1 && !strcmp(name, "M"))) {
-            pst_set_err(err, "%s: field '%s' has the name of one of the file's own arrays", path,
-                        name);
-            return PST_EINVAL;
-        }
+        PST_CHECK(!strcmp(name, "normal") || (row_status && !strcmp(name, "status")) ||
+                      (c->mob_ncomp > 1 && !strcmp(name, "M")),
+                  PST_EINVAL, err, "%s: field '%s' has the name of one of the file's own arrays",
+                  path, name);
     }
     size_t *inv;
     char msg[PST_ERRLEN] = "";
     int st = pst_cloud_input_inverse(c, &inv, msg);
-    if (st != PST_OK) {
-        pst_set_err(err, "%s: %s", path, msg);
-        return st;
-    }
+    PST_CHECK(st != PST_OK, st, err, "%s: %s", path, msg);
     vtu_job job = {.c = c, .inv = inv};
     job.a = malloc((c->nfields + 12) * sizeof *job.a);
     if (!job.a) {

@@ -116,7 +116,7 @@ int pst_cells_build(pst_cells *g, const pst_cloud *c, double min_size, char *err
             ++level;
     uint32_t next = 0;
     morton_number(g, cellat, &next, level, 0, 0, 0);
-    uint32_t blocksum[SCAN_BLOCKS + 1];
+    int64_t blocksum[SCAN_BLOCKS + 1];
 
 #pragma omp parallel
     {
@@ -140,17 +140,10 @@ int pst_cells_build(pst_cells *g, const pst_cloud *c, double min_size, char *err
             blocksum[b] = s;
         }
 #pragma omp single
-        {
-            uint32_t s = 0;
-            for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
-                uint32_t v = blocksum[b];
-                blocksum[b] = s;
-                s += v;
-            }
-        }
+        pst_exclusive_scan(blocksum, SCAN_BLOCKS); /* n < 2^32: every sum fits a uint32_t */
 #pragma omp for schedule(static)
         for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
-            uint32_t s = blocksum[b];
+            uint32_t s = (uint32_t)blocksum[b];
             for (size_t r = b * nc / SCAN_BLOCKS; r < (b + 1) * nc / SCAN_BLOCKS; ++r) {
                 size_t k = cellat[r];
                 g->start[r] = s;

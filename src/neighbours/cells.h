@@ -32,6 +32,18 @@ static inline uint32_t pst_cell_coord(double x, double lo, double inv, uint32_t 
     return (uint32_t)u;
 }
 
+/* Exclusive prefix sum in place: v[b] becomes v[0] + .. + v[b-1]. The block sums of the
+ * parallel scans (cells and neighbour lists), in a fixed order. */
+static inline void pst_exclusive_scan(int64_t *v, size_t nblocks)
+{
+    int64_t s = 0;
+    for (size_t b = 0; b < nblocks; ++b) {
+        int64_t x = v[b];
+        v[b] = s;
+        s += x;
+    }
+}
+
 /* Bin the particles of `c` into cells of edge >= min_size (> 0, finite). The edge is
  * min_size * 2^k with the smallest k for which the grid has at most 8n + 1024 cells (and fewer
  * than 2^32 in all): a sparse cloud in a huge box cannot blow up the memory. The cells are laid

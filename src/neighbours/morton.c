@@ -1,33 +1,41 @@
 /* Morton (Z-order) keys and the cloud's Morton sort: keys of the cell coordinates, a parallel
  * stable LSD radix sort, one permutation of every field (docs/neighbours.md). */
 #include "cells.h"
+#include "check.h"
 
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 
-/* Spread the low 21 bits of v to every third bit (bit k goes to bit 3k). */
-static uint64_t spread3(uint64_t v)
+/* Spread the low bits of v (those of `keep`) apart: each step doubles the gaps, shifting by
+ * shift[k] and keeping mask[k]. */
+static inline uint64_t spread(uint64_t v, uint64_t keep, const int shift[5],
+                              const uint64_t mask[5])
 {
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x001f00000000ffffULL;
-    v = (v | v << 16) & 0x001f0000ff0000ffULL;
-    v = (v | v << 8) & 0x100f00f00f00f00fULL;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-    v = (v | v << 2) & 0x1249249249249249ULL;
+    v &= keep;
+    for (int k = 0; k < 5; ++k)
+        v = (v | v << shift[k]) & mask[k];
     return v;
 }
 
-/* Spread the 32 bits of v to every second bit. */
+/* The low 21 bits of v to every third bit (bit k goes to bit 3k). */
+static uint64_t spread3(uint64_t v)
+{
+    static const int shift[5] = {32, 16, 8, 4, 2};
+    static const uint64_t mask[5] = {0x001f00000000ffffULL, 0x001f0000ff0000ffULL,
+                                     0x100f00f00f00f00fULL, 0x10c30c30c30c30c3ULL,
+                                     0x1249249249249249ULL};
+    return spread(v, 0x1fffff, shift, mask);
+}
+
+/* The 32 bits of v to every second bit. */
 static uint64_t spread2(uint64_t v)
 {
-    v &= 0xffffffffULL;
-    v = (v | v << 16) & 0x0000ffff0000ffffULL;
-    v = (v | v << 8) & 0x00ff00ff00ff00ffULL;
-    v = (v | v << 4) & 0x0f0f0f0f0f0f0f0fULL;
-    v = (v | v << 2) & 0x3333333333333333ULL;
-    v = (v | v << 1) & 0x5555555555555555ULL;
-    return v;
+    static const int shift[5] = {16, 8, 4, 2, 1};
+    static const uint64_t mask[5] = {0x0000ffff0000ffffULL, 0x00ff00ff00ff00ffULL,
+                                     0x0f0f0f0f0f0f0f0fULL, 0x3333333333333333ULL,
+                                     0x5555555555555555ULL};
+    return spread(v, 0xffffffffULL, shift, mask);
 }
 
 uint64_t pst_morton_key(int dim, uint32_t ix, uint32_t iy, uint32_t iz)
@@ -97,10 +105,8 @@ static void radix_sort(uint64_t **key, uint32_t **val, uint64_t **kbuf, uint32_t
 
 int pst_cloud_morton_sort(pst_cloud *c, double cell, char *err)
 {
-    if (!(cell > 0) || !isfinite(cell)) {
-        pst_set_err(err, "Morton sort: cell size must be finite and > 0 (got %g)", cell);
-        return PST_EINVAL;
-    }
+    PST_CHECK(!(cell > 0) || !isfinite(cell), PST_EINVAL, err,
+              "Morton sort: cell size must be finite and > 0 (got %g)", cell);
     size_t n = c->n;
     int dim = c->dim;
     if (n < 2)
@@ -108,10 +114,8 @@ int pst_cloud_morton_sort(pst_cloud *c, double cell, char *err)
     double lo[3], hi[3];
     pst_cloud_bbox(c, lo, hi);
     for (int d = 0; d < dim; ++d)
-        if (!isfinite(lo[d]) || !isfinite(hi[d])) {
-            pst_set_err(err, "Morton sort: coordinates are not finite");
-            return PST_EINPUT;
-        }
+        PST_CHECK(!isfinite(lo[d]) || !isfinite(hi[d]), PST_EINPUT, err,
+                  "Morton sort: coordinates are not finite");
     /* A key holds 21 (3D) or 32 (2D) bits per axis: coarsen the cells by doubling (which keeps
      * them nested with the finer grid) until the box fits. */
     double maxcells = dim == 3 ? 2097152.0 : 4294967295.0; /* 2D: the count fits uint32 */

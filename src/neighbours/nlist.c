@@ -19,6 +19,7 @@
  * support*h_max or a power-of-two fraction of it (the slot order is then the identity);
  * otherwise each row is sorted afterwards by a natural merge sort of its runs. */
 #include "cells.h"
+#include "check.h"
 
 #include <float.h>
 #include <math.h>
@@ -299,16 +300,11 @@ static size_t first_cell(const pst_cells *g, size_t pos)
 
 static int check_input(const pst_cloud *c, double support, char *err)
 {
-    if (!(support > 0) || !isfinite(support)) {
-        pst_set_err(err, "neighbour list: support must be finite and > 0 (got %g)", support);
-        return PST_EINVAL;
-    }
+    PST_CHECK(!(support > 0) || !isfinite(support), PST_EINVAL, err,
+              "neighbour list: support must be finite and > 0 (got %g)", support);
     size_t n = c->n, bad_h = n, bad_x = n;
-    if (!c->h && (!(c->h_uniform > 0) || !isfinite(c->h_uniform))) {
-        pst_set_err(err, "neighbour list: smoothing length h = %g must be finite and > 0",
-                    c->h_uniform);
-        return PST_EINVAL;
-    }
+    PST_CHECK(!c->h && (!(c->h_uniform > 0) || !isfinite(c->h_uniform)), PST_EINVAL, err,
+              "neighbour list: smoothing length h = %g must be finite and > 0", c->h_uniform);
 #pragma omp parallel for schedule(static) reduction(min : bad_h, bad_x)
     for (size_t i = 0; i < n; ++i) {
         if (c->h && (!(c->h[i] > 0) || !isfinite(c->h[i])))
@@ -317,125 +313,149 @@ static int check_input(const pst_cloud *c, double support, char *err)
             if (!isfinite(c->x[d][i]))
                 bad_x = i < bad_x ? i : bad_x;
     }
-    if (bad_h < n) {
-        pst_set_err(err, "neighbour list: particle %lld: h = %g must be finite and > 0",
-                    (long long)c->id[bad_h], c->h[bad_h]);
-        return PST_EINVAL;
-    }
-    if (bad_x < n) {
-        pst_set_err(err, "neighbour list: particle %lld: a coordinate is not finite",
-                    (long long)c->id[bad_x]);
-        return PST_EINPUT;
-    }
+    PST_CHECK(bad_h < n, PST_EINVAL, err,
+              "neighbour list: particle %lld: h = %g must be finite and > 0",
+              (long long)c->id[bad_h], c->h[bad_h]);
+    PST_CHECK(bad_x < n, PST_EINPUT, err,
+              "neighbour list: particle %lld: a coordinate is not finite",
+              (long long)c->id[bad_x]);
     double hmax = pst_cloud_h_max(c), rmax = support * hmax;
-    if (!isfinite(rmax * rmax) || !isfinite(2 * hmax)) {
-        pst_set_err(err, "neighbour list: support radius %g * %g is too large", support, hmax);
-        return PST_EINVAL;
-    }
+    PST_CHECK(!isfinite(rmax * rmax) || !isfinite(2 * hmax), PST_EINVAL, err,
+              "neighbour list: support radius %g * %g is too large", support, hmax);
     return PST_OK;
 }
 
-int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *err)
+/* An empty list of n rows (offsets only; the index too when n < 2, which has no pairs). */
+static int new_list(pst_nlist **out, size_t n, double support, char *err)
 {
-    *out = NULL;
-    int status = check_input(c, support, err);
-    if (status != PST_OK)
-        return status;
-    size_t n = c->n;
-    int dim = c->dim;
     pst_nlist *nl = calloc(1, sizeof *nl);
     if (nl)
         nl->offset = pst_calloc(n + 1, sizeof *nl->offset);
-    if (!nl || !nl->offset) {
+    if (nl && n < 2)
+        nl->index = pst_alloc(0);
+    if (!nl || !nl->offset || (n < 2 && !nl->index)) {
         pst_nlist_destroy(nl);
         pst_set_err(err, "neighbour list: cannot allocate the offsets of %zu rows", n);
         return PST_ENOMEM;
     }
     nl->n = n;
     nl->support = support;
-    if (n < 2) {
-        nl->index = pst_alloc(0);
-        if (!nl->index) {
-            pst_nlist_destroy(nl);
-            return PST_ENOMEM;
-        }
-        *out = nl;
-        return PST_OK;
-    }
+    *out = nl;
+    return PST_OK;
+}
 
-    double hmax = pst_cloud_h_max(c);
-    pst_cells g;
-    status = pst_cells_build(&g, c, support * hmax / CELL_DIV, err);
-    if (status != PST_OK) {
-        pst_nlist_destroy(nl);
-        return status;
-    }
-    int nth = omp_get_max_threads();
-    int varh = c->h != NULL;
-    double *copy = pst_alloc(n * (size_t)(dim + varh) * sizeof *copy);
-    cand *cl = NULL;
-    uint32_t *tmp = NULL;
-    /* per-thread per-slot counters of the count pass, turned into the write cursors of the
-     * fill: deterministic integer sums */
-    uint32_t *cnts = pst_calloc((size_t)nth * n, sizeof *cnts);
-    int64_t *bsum = calloc(SCAN_BLOCKS, sizeof *bsum);
-    size_t L = 0;         /* the longest row */
-    int identity = 1;     /* slot order == cloud order: rows come out sorted */
-    int64_t pairs = 0;
-    if (!copy || !cnts || !bsum) {
-        status = PST_ENOMEM;
-        pst_set_err(err, "neighbour list: cannot allocate the cell-ordered copy of %zu "
-                    "particles", n);
-        goto done;
-    }
-
-    ctx k = {.dim = dim, .g = &g, .pid = g.order, .halfs = 0.5 * support, .hmax = hmax};
+/* The search context over the cell-ordered copy, and the rounding margin of the cell bounds. */
+static ctx search_ctx(const pst_cloud *c, const pst_cells *g, double *copy, double support,
+                      double hmax)
+{
+    size_t n = c->n;
+    int dim = c->dim;
+    ctx k = {.dim = dim, .g = g, .pid = g->order, .halfs = 0.5 * support, .hmax = hmax};
     for (int d = 0; d < dim; ++d)
         k.x[d] = copy + (size_t)d * n;
-    k.h = varh ? copy + (size_t)dim * n : NULL;
-    k.huni = varh ? 0 : c->h_uniform;
+    k.h = c->h ? copy + (size_t)dim * n : NULL;
+    k.huni = c->h ? 0 : c->h_uniform;
     k.r2uni = (support * k.huni) * (support * k.huni);
     double maxabs = 0, span = 0;
     for (int d = 0; d < dim; ++d) {
-        double ext = (g.dims[d] + 1.0) * g.size;
-        maxabs = fmax(maxabs, fabs(g.lo[d]) + ext);
+        double ext = (g->dims[d] + 1.0) * g->size;
+        maxabs = fmax(maxabs, fabs(g->lo[d]) + ext);
         span = fmax(span, ext);
     }
     k.margin = 64 * DBL_EPSILON * (maxabs + span);
+    return k;
+}
 
-    /* Bound on the candidate cells of one cell: the reach spans at most this many per axis. */
-    double rmax = support * hmax * (1.0 + 64 * DBL_EPSILON) + k.margin;
+/* Bound on the candidate cells of one cell: the reach spans at most this many per axis. */
+static size_t max_candidates(const ctx *k, double support)
+{
+    const pst_cells *g = k->g;
+    double rmax = support * k->hmax * (1.0 + 64 * DBL_EPSILON) + k->margin;
     size_t maxcand = 1;
-    for (int d = 0; d < dim; ++d) {
-        double per_axis = floor((2 * rmax + g.size) * g.inv) + 3;
-        maxcand *= per_axis < g.dims[d] ? (size_t)per_axis : g.dims[d];
+    for (int d = 0; d < k->dim; ++d) {
+        double per_axis = floor((2 * rmax + g->size) * g->inv) + 3;
+        maxcand *= per_axis < g->dims[d] ? (size_t)per_axis : g->dims[d];
     }
+    return maxcand;
+}
 
-    cl = pst_alloc((size_t)nth * maxcand * sizeof *cl);
-    if (!cl) {
-        status = PST_ENOMEM;
-        pst_set_err(err, "neighbour list: cannot allocate %d x %zu candidate cells", nth,
-                    maxcand);
-        goto done;
+/* Row lengths offset[i + 1] into row offsets offset[i], in fixed blocks (called by every
+ * thread of the region); offset[n] keeps the last row's length. */
+static void scan_offsets(int64_t *offset, int64_t *bsum, size_t n)
+{
+#pragma omp for schedule(static)
+    for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
+        int64_t s = 0;
+        for (size_t i = b * n / SCAN_BLOCKS; i < (b + 1) * n / SCAN_BLOCKS; ++i)
+            s += offset[i + 1];
+        bsum[b] = s;
     }
-    /* One parallel region, so that the fill runs with the same threads and cell partition as
-     * the count its cursors come from. */
+#pragma omp single
+    pst_exclusive_scan(bsum, SCAN_BLOCKS); /* no overflow: n < 2^32 rows of < 2^32 entries */
+#pragma omp for schedule(static)
+    for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
+        int64_t s = bsum[b];
+        for (size_t i = b * n / SCAN_BLOCKS; i < (b + 1) * n / SCAN_BLOCKS; ++i) {
+            int64_t v = offset[i + 1];
+            offset[i] = s;
+            s += v;
+        }
+    }
+}
+
+/* The list's index for the pairs the offsets count, and the merge buffers for the rows of a
+ * cloud not in slot order (tmp, nth rows of L + 1). */
+static int alloc_index(pst_nlist *nl, int identity, size_t L, int nth, uint32_t **tmp,
+                       char *err)
+{
+    size_t n = nl->n;
+    int64_t pairs = nl->offset[n - 1] + nl->offset[n]; /* offset[n]: the last row's count */
+    nl->offset[n] = pairs;
+    PST_CHECK((uint64_t)pairs > SIZE_MAX / sizeof(uint32_t), PST_ENOMEM, err,
+              "neighbour list: %lld pairs overflow the address space", (long long)pairs);
+    nl->index = pst_alloc((size_t)pairs * sizeof *nl->index);
+    if (!identity)
+        *tmp = pst_alloc((size_t)nth * (L + 1) * sizeof **tmp);
+    PST_CHECK(!nl->index || (!identity && !*tmp), PST_ENOMEM, err,
+              "neighbour list: cannot allocate %lld pairs (%.3g GB)", (long long)pairs,
+              (double)pairs * 4e-9);
+    return PST_OK;
+}
+
+/* The buffers of a build: the cell-ordered copy, the candidate cells of every thread, the
+ * per-thread per-slot counters, the scan's block sums and the merge buffers. */
+typedef struct {
+    double *copy;
+    cand *cl;
+    uint32_t *cnts, *tmp;
+    int64_t *bsum;
+} build_buffers;
+
+/* Count, scan and fill the list of n >= 2 rows, in one parallel region, so that the fill runs
+ * with the same threads and cell partition as the count its cursors come from. */
+static int fill_list(pst_nlist *nl, const pst_cloud *c, ctx *k, build_buffers *bb,
+                     size_t maxcand, char *err)
+{
+    const pst_cells *g = k->g;
+    size_t n = c->n, L = 0; /* the longest row */
+    int dim = c->dim, varh = c->h != NULL, nth = omp_get_max_threads(), status = PST_OK;
+    int identity = 1; /* slot order == cloud order: rows come out sorted */
 #pragma omp parallel
     {
         int t = omp_get_thread_num(), nt = omp_get_num_threads();
 #pragma omp for schedule(static) reduction(&& : identity)
         for (size_t p = 0; p < n; ++p) {
-            uint32_t i = g.order[p];
+            uint32_t i = g->order[p];
             identity = identity && i == p;
             for (int d = 0; d < dim; ++d)
-                copy[(size_t)d * n + p] = c->x[d][i];
+                bb->copy[(size_t)d * n + p] = c->x[d][i];
             if (varh)
-                copy[(size_t)dim * n + p] = c->h[i];
+                bb->copy[(size_t)dim * n + p] = c->h[i];
         }
-        size_t c0 = first_cell(&g, (size_t)t * n / (size_t)nt);
-        size_t c1 = t + 1 == nt ? g.ncells : first_cell(&g, (size_t)(t + 1) * n / (size_t)nt);
-        uint32_t *cur = cnts + (size_t)t * n;
-        pass(&k, c0, c1, cl + (size_t)t * maxcand, cur);
+        size_t c0 = first_cell(g, (size_t)t * n / (size_t)nt);
+        size_t c1 = t + 1 == nt ? g->ncells : first_cell(g, (size_t)(t + 1) * n / (size_t)nt);
+        uint32_t *cur = bb->cnts + (size_t)t * n;
+        pass(k, c0, c1, bb->cl + (size_t)t * maxcand, cur);
 #pragma omp barrier
         /* row lengths; thread u's counts of a row become its cursor: the sum of the counts of
          * threads 0..u-1 */
@@ -443,81 +463,77 @@ int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *e
         for (size_t p = 0; p < n; ++p) {
             size_t len = 0;
             for (int u = 0; u < nth; ++u) {
-                uint32_t v = cnts[(size_t)u * n + p];
-                cnts[(size_t)u * n + p] = (uint32_t)len;
+                uint32_t v = bb->cnts[(size_t)u * n + p];
+                bb->cnts[(size_t)u * n + p] = (uint32_t)len;
                 len += v;
             }
-            nl->offset[(size_t)g.order[p] + 1] = (int64_t)len;
+            nl->offset[(size_t)g->order[p] + 1] = (int64_t)len;
             L = len > L ? len : L;
         }
-
-        /* exclusive scan of the counts, in fixed blocks */
-#pragma omp for schedule(static)
-        for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
-            int64_t s = 0;
-            for (size_t i = b * n / SCAN_BLOCKS; i < (b + 1) * n / SCAN_BLOCKS; ++i)
-                s += nl->offset[i + 1];
-            bsum[b] = s;
-        }
+        scan_offsets(nl->offset, bb->bsum, n);
 #pragma omp single
         {
-            int64_t s = 0;
-            for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
-                int64_t v = bsum[b];
-                bsum[b] = s;
-                s += v; /* no overflow: n < 2^32 rows of < 2^32 entries */
-            }
-        }
-#pragma omp for schedule(static)
-        for (size_t b = 0; b < SCAN_BLOCKS; ++b) {
-            int64_t s = bsum[b];
-            for (size_t i = b * n / SCAN_BLOCKS; i < (b + 1) * n / SCAN_BLOCKS; ++i) {
-                int64_t v = nl->offset[i + 1];
-                nl->offset[i] = s;
-                s += v;
-            }
-        }
-#pragma omp single
-        {
-            /* offset[n] still holds the last row's count */
-            pairs = nl->offset[n - 1] + nl->offset[n];
-            nl->offset[n] = pairs;
-            if ((uint64_t)pairs > SIZE_MAX / sizeof(uint32_t)) {
-                status = PST_ENOMEM;
-                pst_set_err(err, "neighbour list: %lld pairs overflow the address space",
-                            (long long)pairs);
-            } else {
-                nl->index = pst_alloc((size_t)pairs * sizeof *nl->index);
-                /* merge buffers for the rows of a cloud not in slot order */
-                if (!identity)
-                    tmp = pst_alloc((size_t)nth * (L + 1) * sizeof *tmp);
-                if (!nl->index || (!identity && !tmp)) {
-                    status = PST_ENOMEM;
-                    pst_set_err(err, "neighbour list: cannot allocate %lld pairs (%.3g GB)",
-                                (long long)pairs, (double)pairs * 4e-9);
-                }
-                k.offset = nl->offset;
-                k.index = nl->index;
-            }
+            status = alloc_index(nl, identity, L, nth, &bb->tmp, err);
+            k->offset = nl->offset;
+            k->index = nl->index;
         } /* implicit barrier: status, k and tmp are seen by every thread */
         if (status == PST_OK) {
-            pass(&k, c0, c1, cl + (size_t)t * maxcand, cur);
+            pass(k, c0, c1, bb->cl + (size_t)t * maxcand, cur);
             if (!identity) {
 #pragma omp barrier
 #pragma omp for schedule(dynamic, 4096)
                 for (size_t i = 0; i < n; ++i)
-                    sort_row(nl->index + nl->offset[i], tmp + (size_t)t * (L + 1),
+                    sort_row(nl->index + nl->offset[i], bb->tmp + (size_t)t * (L + 1),
                              (size_t)(nl->offset[i + 1] - nl->offset[i]));
             }
         }
     }
+    return status;
+}
 
-done:
-    pst_free(cl);
-    pst_free(tmp);
-    pst_free(copy);
-    pst_free(cnts);
-    free(bsum);
+int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *err)
+{
+    *out = NULL;
+    PST_TRY(check_input(c, support, err));
+    size_t n = c->n;
+    pst_nlist *nl = NULL;
+    PST_TRY(new_list(&nl, n, support, err));
+    if (n < 2) {
+        *out = nl;
+        return PST_OK;
+    }
+    double hmax = pst_cloud_h_max(c);
+    pst_cells g;
+    int status = pst_cells_build(&g, c, support * hmax / CELL_DIV, err);
+    if (status != PST_OK) {
+        pst_nlist_destroy(nl);
+        return status;
+    }
+    int nth = omp_get_max_threads();
+    build_buffers bb = {.copy = pst_alloc(n * (size_t)(c->dim + (c->h != NULL)) * sizeof(double)),
+                        .cnts = pst_calloc((size_t)nth * n, sizeof(uint32_t)),
+                        .bsum = calloc(SCAN_BLOCKS, sizeof(int64_t))};
+    if (!bb.copy || !bb.cnts || !bb.bsum) {
+        status = PST_ENOMEM;
+        pst_set_err(err, "neighbour list: cannot allocate the cell-ordered copy of %zu "
+                         "particles", n);
+    } else {
+        ctx k = search_ctx(c, &g, bb.copy, support, hmax);
+        size_t maxcand = max_candidates(&k, support);
+        bb.cl = pst_alloc((size_t)nth * maxcand * sizeof *bb.cl);
+        if (!bb.cl) {
+            status = PST_ENOMEM;
+            pst_set_err(err, "neighbour list: cannot allocate %d x %zu candidate cells", nth,
+                        maxcand);
+        } else {
+            status = fill_list(nl, c, &k, &bb, maxcand, err);
+        }
+    }
+    pst_free(bb.cl);
+    pst_free(bb.tmp);
+    pst_free(bb.copy);
+    pst_free(bb.cnts);
+    free(bb.bsum);
     pst_cells_free(&g);
     if (status != PST_OK) {
         pst_nlist_destroy(nl);

@@ -3,18 +3,22 @@
  * overlaps. Each point's row is built by one thread and sorted by particle index, so the
  * result does not depend on the thread count. */
 #include "cells.h"
+#include "check.h"
 
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 
-/* Visit the particles within `radius` of point p: count them (row == NULL) or write them into
- * row. The cell range per axis is monotone in the coordinate (pst_cell_coord clamps), so every
+/* Visit the particles within `radius` of point k of pts: count them (row == NULL) or write
+ * them into row. The cell range per axis is monotone in the coordinate (pst_cell_coord clamps), so every
  * cell that can hold a neighbour is visited. Bound by the distance tests, ~3^dim cells of
  * ~(3h/s0)^dim particles each. */
-static size_t visit(const pst_cells *g, const pst_cloud *c, const double p[3], double radius,
-                    uint32_t *row)
+static size_t visit(const pst_cells *g, const pst_cloud *c, const double *const pts[3], size_t k,
+                    double radius, uint32_t *row)
 {
+    double p[3] = {0, 0, 0};
+    for (int d = 0; d < c->dim; ++d)
+        p[d] = pts[d][k];
     uint32_t lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     for (int d = 0; d < g->dim; ++d) {
         lo[d] = pst_cell_coord(p[d] - radius, g->lo[d], g->inv, g->dims[d]);
@@ -49,10 +53,7 @@ int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t
     *off_out = NULL;
     *idx_out = NULL;
     int64_t *off = pst_calloc(m + 1, sizeof *off);
-    if (!off) {
-        pst_set_err(err, "point neighbours: cannot allocate %zu rows", m);
-        return PST_ENOMEM;
-    }
+    PST_CHECK_ALLOC(off, err, "point neighbours: cannot allocate %zu rows", m);
     if (c->n == 0 || m == 0) {
         *off_out = off;
         *idx_out = pst_alloc(0);
@@ -65,12 +66,8 @@ int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t
         return st;
     }
 #pragma omp parallel for schedule(dynamic, 256)
-    for (size_t k = 0; k < m; ++k) {
-        double p[3] = {0, 0, 0};
-        for (int d = 0; d < c->dim; ++d)
-            p[d] = pts[d][k];
-        off[k + 1] = (int64_t)visit(&g, c, p, radius, NULL);
-    }
+    for (size_t k = 0; k < m; ++k)
+        off[k + 1] = (int64_t)visit(&g, c, pts, k, radius, NULL);
     for (size_t k = 0; k < m; ++k)
         off[k + 1] += off[k];
     uint32_t *idx = pst_alloc((size_t)off[m] * sizeof *idx);
@@ -82,11 +79,8 @@ int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t
     }
 #pragma omp parallel for schedule(dynamic, 256)
     for (size_t k = 0; k < m; ++k) {
-        double p[3] = {0, 0, 0};
-        for (int d = 0; d < c->dim; ++d)
-            p[d] = pts[d][k];
         uint32_t *row = idx + off[k];
-        size_t len = visit(&g, c, p, radius, row);
+        size_t len = visit(&g, c, pts, k, radius, row);
         for (size_t a = 1; a < len; ++a) { /* insertion sort: rows are short */
             uint32_t v = row[a];
             size_t b = a;

@@ -1,0 +1,104 @@
+/* What a task leaves behind: its output fields on the cloud and its error norms against the
+ * exact expressions, over the task's region. */
+#include "run_state.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+/* The particles of a task's region: interior particles, all, or those inside a box. */
+static uint8_t *region_mask(run_state *r, const sc_task *t)
+{
+    size_t n = pst_cloud_size(r->c);
+    uint8_t *mask = malloc(n ? n : 1);
+    if (!mask)
+        return NULL;
+    const uint8_t *kind = pst_cloud_kinds_const(r->c);
+    for (size_t i = 0; i < n; ++i) {
+        if (t->region == SC_REGION_ALL) {
+            mask[i] = 1;
+        } else if (t->region == SC_REGION_INTERIOR) {
+            mask[i] = kind[i] == PST_INTERIOR;
+        } else {
+            mask[i] = 1;
+            for (int d = 0; d < r->s->dim; ++d) {
+                double x = pst_cloud_coord_const(r->c, d)[i];
+                mask[i] &= x >= t->region_lo[d] && x <= t->region_hi[d];
+            }
+        }
+    }
+    return mask;
+}
+
+/* Evaluate the task's exact expressions and its norms of approx against them; the norms go
+ * into the task's report object. `pts` non-NULL: values at m points instead of particles. */
+int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *approx,
+                   double *const pts[3], size_t m)
+{
+    const sc_task *t = &r->s->tasks[k];
+    if (!t->nexact || !t->nnorms)
+        return PST_OK;
+    if (t->nexact != ncomp)
+        return run_fail(r, PST_EINPUT,
+                        "%s: tasks[%d].exact: %d expressions for a result with %d "
+                        "components",
+                        r->s->path, k, t->nexact, ncomp);
+    size_t n = pts ? m : pst_cloud_size(r->c);
+    double *exact[6] = {NULL};
+    uint8_t *mask = pts ? NULL : region_mask(r, t);
+    int st = PST_OK;
+    for (int a = 0; a < ncomp && st == PST_OK; ++a) {
+        char key[64];
+        snprintf(key, sizeof key, ncomp == 1 ? "tasks[%d].exact" : "tasks[%d].exact[%d]", k, a);
+        exact[a] = malloc((n ? n : 1) * sizeof(double));
+        if (!exact[a])
+            st = run_fail(r, PST_ENOMEM, "out of memory for the exact values");
+        else
+            st = pts ? run_eval_at_points(r, key, t->exact[a], pts, m, exact[a])
+                     : run_eval_at_particles(r, key, t->exact[a], exact[a]);
+    }
+    cJSON *norms = cJSON_AddObjectToObject(tj, "norms");
+    for (int q = 0; q < t->nnorms && st == PST_OK; ++q) {
+        double v;
+        char msg[PST_ERRLEN];
+        const double *const *ap = (const double *const *)approx;
+        const double *const *ex = (const double *const *)exact;
+        if (pts) {
+            st = pst_error_norm_points(n, ncomp, ap, ex, t->norms[q], &v, msg);
+        } else {
+            st = pst_error_norm(r->c, ncomp, ap, ex, mask, t->norms[q], &v, msg);
+        }
+        if (st != PST_OK) {
+            st = run_fail(r, st, "%s: task '%s': %s", r->s->path, t->name, msg);
+            break;
+        }
+        cJSON_AddNumberToObject(norms, pst_norm_name(t->norms[q]), v);
+        r->cnt.norms++;
+    }
+    for (int a = 0; a < ncomp; ++a)
+        free(exact[a]);
+    free(mask);
+    return st;
+}
+
+/* Output fields of a task: `name` for one component, name_x.. / name_xx.. for more. */
+int run_add_outputs(run_state *r, const sc_task *t, int ncomp, double *out[6])
+{
+    static const char *const grad[] = {"x", "y", "z"};
+    static const char *const hess2[] = {"xx", "yy", "xy"};
+    static const char *const hess3[] = {"xx", "yy", "zz", "xy", "xz", "yz"};
+    for (int a = 0; a < ncomp; ++a) {
+        char name[PST_MAX_NAME];
+        if (ncomp == 1)
+            snprintf(name, sizeof name, "%s", t->name);
+        else
+            snprintf(name, sizeof name, "%s_%s", t->name,
+                     t->type == SC_TASK_GRADIENT ? grad[a]
+                     : ncomp == 3                ? hess2[a]
+                                                 : hess3[a]);
+        char why[PST_ERRLEN];
+        if (pst_cloud_add_field(r->c, name, &out[a], why) != PST_OK)
+            return run_fail(r, PST_EINPUT, "%s: task '%s': output field %s: %s", r->s->path,
+                            t->name, name, why);
+    }
+    return PST_OK;
+}

@@ -1,0 +1,149 @@
+/* The solve tasks: the right-hand side, the boundary values (boundary groups, else the exact
+ * solution), the operator the boundary asks for, and the solver the plan chose. */
+#include "run_state.h"
+
+#include "progress.h"
+#include "report.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+typedef struct {
+    cli_progress *pg;
+    double rtol;
+} monitor_ctx;
+
+static void solve_monitor(int it, double rel, void *ctx)
+{
+    monitor_ctx *m = ctx;
+    char detail[96];
+    snprintf(detail, sizeof detail, "iteration %d, residual %.2e", it, rel);
+    double frac = rel > 0 && rel < 1 ? log(rel) / log(m->rtol) : 0;
+    progress_update(m->pg, frac > 1 ? 1 : frac, detail);
+}
+
+/* The task's right-hand side into b (divided by a constant mobility's factor) and, when the
+ * task gives one, its exact solution into *ue. */
+static int rhs_and_exact(run_state *r, int k, double *b, double **ue)
+{
+    const sc_task *t = &r->s->tasks[k];
+    size_t n = pst_cloud_size(r->c);
+    char key[64];
+    snprintf(key, sizeof key, "tasks[%d].rhs", k);
+    int st = run_eval_at_particles(r, key, t->rhs, b);
+    for (size_t i = 0; st == PST_OK && i < n; ++i)
+        b[i] /= r->plan.mobility_factor;
+    if (st != PST_OK || !t->exact[0])
+        return st;
+    *ue = malloc((n ? n : 1) * sizeof **ue);
+    if (!*ue)
+        return run_fail(r, PST_ENOMEM, "out of memory for the exact solution");
+    snprintf(key, sizeof key, "tasks[%d].exact", k);
+    return run_eval_at_particles(r, key, t->exact[0], *ue);
+}
+
+/* Boundary particles no group claimed keep their kind and take the exact solution's value. */
+static int unclaimed_values(run_state *r, int k, const int8_t *claim, const double *ue, double *b)
+{
+    const sc_task *t = &r->s->tasks[k];
+    size_t n = pst_cloud_size(r->c);
+    const uint8_t *kind = pst_cloud_kinds_const(r->c);
+    for (size_t i = 0; i < n; ++i) {
+        if (kind[i] == PST_INTERIOR || (claim && claim[i] >= 0))
+            continue;
+        if (kind[i] == PST_NEUMANN)
+            return run_fail(r, PST_EINPUT,
+                            "%s: task '%s': the cloud's Neumann particles need a "
+                            "boundary group with their flux",
+                            r->s->path, t->name);
+        if (!ue)
+            return run_fail(r, PST_EINPUT,
+                            "%s: task '%s': boundary particles outside every "
+                            "boundary group take the exact solution, which is "
+                            "not given (tasks[%d].exact)",
+                            r->s->path, t->name, k);
+        b[i] = ue[i];
+    }
+    return PST_OK;
+}
+
+/* The solve of task k on op (stored weights when the plan says so), its report in tj. A solve
+ * that does not converge is not an error here: its outputs are still written, and the run
+ * reports it at the end (r->solve_failed). */
+static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *b, double *u)
+{
+    const sc_task *t = &r->s->tasks[k];
+    if (r->plan.task_stored[k]) {
+        int st = pst_op_store(op);
+        r->cnt.stored_weights++;
+        if (st != PST_OK)
+            return run_fail(r, st, "%s: task '%s': cannot store the operator's weights", r->s->path,
+                            t->name);
+    }
+    pst_solve_opts so;
+    pst_solve_defaults(&so);
+    so.solver = r->plan.task_solver[k];
+    so.precond = t->precond;
+    so.amg_source = t->amg_source;
+    so.restart = t->restart;
+    so.max_iter = t->max_iter;
+    so.rtol = t->rtol;
+    so.stored = r->plan.task_stored[k];
+    so.history = 1;
+    cli_progress pg;
+    monitor_ctx mc = {&pg, t->rtol};
+    so.monitor = solve_monitor;
+    so.monitor_ctx = &mc;
+    pst_solve_result res;
+    char msg[PST_ERRLEN];
+    progress_begin(&pg, !r->o->quiet, "solve");
+    int ss = pst_solve(op, b, u, &so, &res, msg);
+    progress_end(&pg);
+    r->cnt.solves++;
+    report_solve(tj, &res);
+    cJSON_AddNumberToObject(tj, "seconds", res.seconds);
+    pst_solve_result_free(&res);
+    if (ss == PST_ENUMERIC) {
+        r->solve_failed = 1;
+        snprintf(r->err, r->errlen, "%s: task '%s': %s", r->s->path, t->name, msg);
+        return PST_OK;
+    }
+    return ss == PST_OK ? PST_OK : run_fail(r, ss, "%s: task '%s': %s", r->s->path, t->name, msg);
+}
+
+int run_solve(run_state *r, int k, cJSON *tj)
+{
+    const sc_task *t = &r->s->tasks[k];
+    size_t n = pst_cloud_size(r->c);
+    int grouped = t->ngroups > 0;
+    double *u[6] = {NULL}, *b = calloc(n ? n : 1, sizeof *b), *ue = NULL;
+    int8_t *claim = grouped ? malloc(n ? n : 1) : NULL;
+    run_boundary bnd = {NULL, {NULL, NULL, NULL}};
+    if (!b || (grouped && !claim)) {
+        free(b);
+        free(claim);
+        return run_fail(r, PST_ENOMEM, "out of memory for the right-hand side");
+    }
+    int st = run_add_outputs(r, t, 1, u);
+    if (st == PST_OK)
+        st = rhs_and_exact(r, k, b, &ue);
+    if (st == PST_OK && grouped)
+        st = run_boundary_make(r, k, b, claim, &bnd);
+    if (st == PST_OK)
+        st = unclaimed_values(r, k, claim, ue, b);
+    pst_op *op = r->base;
+    if (st == PST_OK && grouped)
+        st = run_make_operator(r, 1, &bnd, &op);
+    if (st == PST_OK)
+        st = solve_with(r, k, tj, op, b, u[0]);
+    if (op != r->base)
+        pst_op_destroy(op);
+    run_boundary_free(&bnd);
+    if (st == PST_OK)
+        st = run_task_norms(r, k, tj, 1, u, NULL, 0);
+    free(b);
+    free(ue);
+    free(claim);
+    return st;
+}

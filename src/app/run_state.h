@@ -1,0 +1,72 @@
+/* What the parts of the scene runner (run*.c) share: the state of one run and the steps that
+ * more than one part calls. Private to the runner; run.h is its interface. */
+#ifndef PSTENCIL_RUN_STATE_H
+#define PSTENCIL_RUN_STATE_H
+
+#include "run.h"
+
+#include "pstencil.h"
+
+#include <cjson/cJSON.h>
+#include <stdint.h>
+
+typedef struct {
+    const pst_scene *s;
+    const pst_run_opts *o;
+    pst_plan plan;
+    pst_run_counters cnt;
+    pst_cloud *c; /* gains fields; its kinds and normals are never written during a run */
+    pst_nlist *nl;
+    pst_op *base;
+    cJSON *report, *tasks;
+    int solve_failed;
+    char *err;
+    size_t errlen;
+} run_state;
+
+/* The boundary of one solve with boundary groups, in cloud order: the cloud's kinds and
+ * normals with the groups' particles changed. The operator of that solve reads it
+ * (pst_op_opts.kinds, .normals); the cloud keeps its own. */
+typedef struct {
+    uint8_t *kind;
+    double *normal[3];
+} run_boundary;
+
+/* Write the message into r->err and return status. */
+int run_fail(run_state *r, int status, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
+/* Expression `text` (scene key `key`) at every particle, or at m points pts[d][q], into out;
+ * a non-finite value is an error naming the particle or point. */
+int run_eval_at_particles(run_state *r, const char *key, const char *text, double *out);
+int run_eval_at_points(run_state *r, const char *key, const char *text, double *const pts[3],
+                       size_t m, double *out);
+
+/* The cloud, mobility and fields of the scene (run_inputs.c). */
+int run_make_cloud(run_state *r);
+int run_make_mobility(run_state *r);
+int run_make_fields(run_state *r);
+
+/* An operator of the scene's options, with Laplacian rows or not, on the boundary `bnd`
+ * (NULL: the cloud's own); counted and reported. */
+int run_make_operator(run_state *r, int laplacian, const run_boundary *bnd, pst_op **op);
+
+/* Task k's norms of approx (ncomp components) against its exact expressions, into tj's
+ * "norms"; pts non-NULL: at m points instead of the particles. */
+int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *approx,
+                   double *const pts[3], size_t m);
+
+/* The output fields of task t (one per component) added to the cloud, into out. */
+int run_add_outputs(run_state *r, const sc_task *t, int ncomp, double *out[6]);
+
+/* The three kinds of task (run_estimate.c, run_interpolate.c, run_solve.c). */
+int run_estimate(run_state *r, int k, cJSON *tj);
+int run_interpolate(run_state *r, int k, cJSON *tj);
+int run_solve(run_state *r, int k, cJSON *tj);
+
+/* The boundary of solve task k (which has groups) into bnd, and its group values into b
+ * (fluxes divided by a constant mobility's factor); claim[i] becomes the kind its group gave
+ * particle i, -1 for none. Free with run_boundary_free, also after a failure. */
+int run_boundary_make(run_state *r, int k, double *b, int8_t *claim, run_boundary *bnd);
+void run_boundary_free(run_boundary *bnd);
+
+#endif
