@@ -120,7 +120,7 @@ static void check_summary_from_csv(const char *name, const pst_sweep *sw)
     pst_csv_table t;
     char err[1024];
     snprintf(path, sizeof path, "%s/%s.csv", dir, name);
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    CHECK_INT(pst_csv_read_table(&t, path, 0, err), PST_OK);
     cJSON *again = pst_sweep_summary(&t, sw->slope_key, sw->repeat_key);
     CHECK(again != NULL);
     CHECK(cJSON_Compare(written, again, 1));
@@ -169,7 +169,7 @@ static void test_tiny_sweep(void)
     char path[512];
     snprintf(path, sizeof path, "%s/tiny.csv", dir);
     pst_csv_table t;
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    CHECK_INT(pst_csv_read_table(&t, path, 0, err), PST_OK);
     CHECK_INT(t.nrows, 12);
     CHECK_INT(t.ncols, 3 + pst_sweep_ncolumns);
     CHECK(strcmp(t.cell[0], "operator.scheme") == 0 && strcmp(t.cell[1], "cloud.spacing") == 0 &&
@@ -290,7 +290,7 @@ static void test_failures(void)
     char path[512];
     snprintf(path, sizeof path, "%s/fail.csv", dir);
     pst_csv_table t;
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    CHECK_INT(pst_csv_read_table(&t, path, 0, err), PST_OK);
     CHECK_INT(t.nrows, 4);
     const char *want[4] = {"ok", "failed", "failed", "failed"};
     for (size_t r = 1; r <= t.nrows && r <= 4; ++r)
@@ -365,13 +365,13 @@ static void test_csv_quoting(void)
     snprintf(path, sizeof path, "%s/q.csv", dir);
     spit(path, "a,b,c\r\n\"x, y\",\"say \"\"hi\"\"\",\"two\nlines\"\r\n,,\n");
     pst_csv_table t;
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    CHECK_INT(pst_csv_read_table(&t, path, 0, err), PST_OK);
     CHECK_INT(t.nrows, 2);
     CHECK(strcmp(t.cell[3], "x, y") == 0 && strcmp(t.cell[4], "say \"hi\"") == 0 &&
           strcmp(t.cell[5], "two\nlines") == 0 && strcmp(t.cell[6], "") == 0);
     pst_csv_table_free(&t);
     spit(path, "a,b\n1\n");
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_EINPUT);
+    CHECK_INT(pst_csv_read_table(&t, path, 0, err), PST_EINPUT);
     CHECK(strstr(err, ":2:") != NULL);
 }
 

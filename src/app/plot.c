@@ -17,9 +17,10 @@
 const char *const pst_plot_norms[] = {"rel_l2", "qsfdi11", "lv95", "lv78", "max_abs"};
 const int pst_plot_nnorms = (int)(sizeof pst_plot_norms / sizeof pst_plot_norms[0]);
 
-/* every norm column --norm accepts */
-static const char *const norm_columns[] = {"rel_l2", "qsfdi11", "qsfdi11_normalised", "lv78",
-                                           "lv95",   "max_abs", "max_rel"};
+const char *const pst_plot_known_norms[] = {"rel_l2", "qsfdi11", "qsfdi11_normalised",
+                                            "lv78",   "lv95",    "max_abs", "max_rel"};
+const int pst_plot_nknown_norms =
+    (int)(sizeof pst_plot_known_norms / sizeof pst_plot_known_norms[0]);
 
 enum { MAX_SERIES = 64, MAX_FILES = 32, MAX_BARS = 48 };
 
@@ -38,6 +39,16 @@ typedef struct {
 static const char *cell(const ctx *c, size_t r, int col)
 {
     return c->t->cell[r * (size_t)c->nc + (size_t)col];
+}
+
+/* 1 and *v when the cell of row r, column col is a number (the table's typed cells). */
+static int number(const ctx *c, size_t r, int col, double *v)
+{
+    double x = c->t->num[r * (size_t)c->nc + (size_t)col];
+    if (isnan(x))
+        return 0;
+    *v = x;
+    return 1;
 }
 
 
@@ -210,7 +221,7 @@ static const cJSON *find_fit(const ctx *c, size_t r, const char *norm)
         const cJSON *kv;
         cJSON_ArrayForEach(kv, key)
         {
-            int q = pst_csv_column(c->t, kv->string, c->nkeys);
+            int q = pst_csv_table_column(c->t, kv->string, c->nkeys);
             if (q < 0 || !cell_equals(cell(c, r, q), kv)) {
                 match = 0;
                 break;
@@ -253,7 +264,7 @@ static void line_plot(ctx *c, const line_spec *sp, unsigned char *keep)
     const size_t n = c->t->nrows;
     for (size_t r = 1; r <= n; ++r) {
         double x, y;
-        if (keep[r] && !(pst_csv_number(cell(c, r, sp->xcol), &x) && pst_csv_number(cell(c, r, sp->ycol), &y) &&
+        if (keep[r] && !(number(c, r, sp->xcol, &x) && number(c, r, sp->ycol, &y) &&
                          (!sp->logx || x > 0) && (!sp->logy || y > 0)))
             keep[r] = 0;
     }
@@ -383,8 +394,8 @@ static void line_plot(ctx *c, const line_spec *sp, unsigned char *keep)
                 size_t m = 0;
                 for (size_t r = first_p[g]; r <= n; ++r)
                     if (gid_p[r] == g) {
-                        pst_csv_number(cell(c, r, sp->xcol), &xv[m]);
-                        pst_csv_number(cell(c, r, sp->ycol), &yv[m]);
+                        number(c, r, sp->xcol, &xv[m]);
+                        number(c, r, sp->ycol, &yv[m]);
                         ++m;
                     }
                 double sx;
@@ -431,7 +442,7 @@ static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
         double a, b;
         const char *s = cell(c, r, c->scheme);
         int q = strcmp(s, "qsfdi") == 0, l = strcmp(s, "lpmps") == 0;
-        if (keep[r] && (q || l) && pst_csv_number(cell(c, r, c->tpre), &a) && pst_csv_number(cell(c, r, c->ttask), &b)) {
+        if (keep[r] && (q || l) && number(c, r, c->tpre, &a) && number(c, r, c->ttask, &b)) {
             has_q |= q;
             has_l |= l;
         } else {
@@ -468,8 +479,8 @@ static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
         for (size_t r = first[g]; r <= n; ++r)
             if (gid[r] == g) {
                 double a = 0, b = 0;
-                pst_csv_number(cell(c, r, c->tpre), &a);
-                pst_csv_number(cell(c, r, c->ttask), &b);
+                number(c, r, c->tpre, &a);
+                number(c, r, c->ttask, &b);
                 s += a + b;
                 ++m;
             }
@@ -524,7 +535,7 @@ static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
                            strcmp(cell(c, rl, q), cell(c, rq, q)) == 0;
                 if (!same || !(mean[g] > 0))
                     continue;
-                pst_csv_number(cell(c, rq, xcol), &se->x[se->n]);
+                number(c, rq, xcol, &se->x[se->n]);
                 se->y[se->n] = mean[h] / mean[g];
                 se->err[se->n] = NAN;
                 ++se->n;
@@ -554,9 +565,9 @@ static void phases_plot(ctx *c, unsigned char *keep)
     double fine = INFINITY;
     for (size_t r = 1; r <= n; ++r) {
         double v;
-        if (keep[r] && !pst_csv_number(cell(c, r, c->ttask), &v))
+        if (keep[r] && !number(c, r, c->ttask, &v))
             keep[r] = 0;
-        if (keep[r] && c->spacing >= 0 && pst_csv_number(cell(c, r, c->spacing), &v) && v < fine)
+        if (keep[r] && c->spacing >= 0 && number(c, r, c->spacing, &v) && v < fine)
             fine = v;
     }
     if (distinct(c, keep, c->ttask) == 0) {
@@ -567,7 +578,7 @@ static void phases_plot(ctx *c, unsigned char *keep)
     if (c->spacing >= 0)
         for (size_t r = 1; r <= n; ++r) {
             double v;
-            if (keep[r] && !(pst_csv_number(cell(c, r, c->spacing), &v) && v == fine))
+            if (keep[r] && !(number(c, r, c->spacing, &v) && v == fine))
                 keep[r] = 0;
             else if (keep[r] && !fine_cell)
                 fine_cell = cell(c, r, c->spacing);
@@ -622,7 +633,7 @@ static void phases_plot(ctx *c, unsigned char *keep)
         for (size_t g = 0; g < ng; ++g) {
             size_t m = 0;
             for (size_t r = first[g]; r <= n; ++r)
-                if (gid[r] == g && pst_csv_number(cell(c, r, c->phase[k]), &v[m]))
+                if (gid[r] == g && number(c, r, c->phase[k], &v[m]))
                     ++m;
             se->x[g] = (double)g;
             if (m)
@@ -646,7 +657,7 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
 {
     memset(ps, 0, sizeof *ps);
     ctx c = {.t = t, .nc = t->ncols, .ps = ps};
-    c.nkeys = pst_csv_column(t, "dim", t->ncols);
+    c.nkeys = pst_csv_table_column(t, "dim", t->ncols);
     if (c.nkeys < 0 || t->ncols != c.nkeys + pst_sweep_ncolumns) {
         snprintf(err, errlen, "not a sweep CSV (no 'dim' column, or not %d columns after the "
                               "grid keys)", pst_sweep_ncolumns);
@@ -663,21 +674,21 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     c.slope_key = cJSON_IsString(sk) ? sk->valuestring : "cloud.spacing";
     const char *repeat_key = cJSON_IsString(rk) ? rk->valuestring : "cloud.seed";
     c.fits = cJSON_GetObjectItemCaseSensitive(summary, "fits");
-    c.scheme = pst_csv_column(t, "operator.scheme", c.nkeys);
-    c.spacing = pst_csv_column(t, c.slope_key, c.nkeys);
-    c.repeat = pst_csv_column(t, repeat_key, c.nkeys);
-    c.jitter = pst_csv_column(t, "cloud.jitter", c.nkeys);
-    c.hratio = pst_csv_column(t, "cloud.h_ratio", c.nkeys);
-    c.task = pst_csv_column(t, "task", t->ncols);
-    c.type = pst_csv_column(t, "type", t->ncols);
-    c.status = pst_csv_column(t, "status", t->ncols);
-    c.particles = pst_csv_column(t, "particles", t->ncols);
-    c.iter = pst_csv_column(t, "iterations", t->ncols);
-    c.tpre = pst_csv_column(t, "t_precompute", t->ncols);
-    c.ttask = pst_csv_column(t, "t_task", t->ncols);
-    c.ttotal = pst_csv_column(t, "t_total", t->ncols);
+    c.scheme = pst_csv_table_column(t, "operator.scheme", c.nkeys);
+    c.spacing = pst_csv_table_column(t, c.slope_key, c.nkeys);
+    c.repeat = pst_csv_table_column(t, repeat_key, c.nkeys);
+    c.jitter = pst_csv_table_column(t, "cloud.jitter", c.nkeys);
+    c.hratio = pst_csv_table_column(t, "cloud.h_ratio", c.nkeys);
+    c.task = pst_csv_table_column(t, "task", t->ncols);
+    c.type = pst_csv_table_column(t, "type", t->ncols);
+    c.status = pst_csv_table_column(t, "status", t->ncols);
+    c.particles = pst_csv_table_column(t, "particles", t->ncols);
+    c.iter = pst_csv_table_column(t, "iterations", t->ncols);
+    c.tpre = pst_csv_table_column(t, "t_precompute", t->ncols);
+    c.ttask = pst_csv_table_column(t, "t_task", t->ncols);
+    c.ttotal = pst_csv_table_column(t, "t_total", t->ncols);
     for (int k = 0; k < 5; ++k)
-        c.phase[k] = pst_csv_column(t, phase_cols[k], t->ncols);
+        c.phase[k] = pst_csv_table_column(t, phase_cols[k], t->ncols);
 
     const size_t n = t->nrows;
     unsigned char *keep = malloc(n + 1);
@@ -688,9 +699,9 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     /* the norm: --norm, or the first of the default order with a value in an ok row */
     c.normcol = -1;
     if (norm) {
-        for (size_t i = 0; i < sizeof norm_columns / sizeof norm_columns[0]; ++i)
-            if (strcmp(norm, norm_columns[i]) == 0)
-                c.normcol = pst_csv_column(t, norm, t->ncols);
+        for (int i = 0; i < pst_plot_nknown_norms; ++i)
+            if (strcmp(norm, pst_plot_known_norms[i]) == 0)
+                c.normcol = pst_csv_table_column(t, norm, t->ncols);
         if (c.normcol < 0) {
             free(keep);
             snprintf(err, errlen, "unknown norm '%s' (known: rel_l2, qsfdi11, "
@@ -700,10 +711,10 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     } else {
         keep_ok(&c, keep);
         for (int i = 0; i < pst_plot_nnorms && c.normcol < 0; ++i) {
-            int q = pst_csv_column(t, pst_plot_norms[i], t->ncols);
+            int q = pst_csv_table_column(t, pst_plot_norms[i], t->ncols);
             for (size_t r = 1; r <= n && c.normcol < 0; ++r) {
                 double v;
-                if (keep[r] && pst_csv_number(cell(&c, r, q), &v))
+                if (keep[r] && number(&c, r, q, &v))
                     c.normcol = q;
             }
         }
