@@ -1,5 +1,5 @@
 /* Plots of a sweep (docs/plots.md): the series each plot shows, extracted from the sweep CSV
- * and its summary (the fits' slopes). No drawing here: src/cli_plot.c hands the series to
+ * and its summary (the fits' slopes). No drawing here: src/cli/cmd_plot.c hands the series to
  * gnuplot. Every mean is over the rows with status ok, like the summary's. */
 #ifndef PSTENCIL_PLOT_H
 #define PSTENCIL_PLOT_H
