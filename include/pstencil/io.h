@@ -21,7 +21,7 @@ extern "C" {
 enum {
     PST_CSV_MAX_RECORD = 1 << 24, /* bytes of one record (its lines, quoted newlines included) */
     PST_CSV_MAX_CELLS = 1 << 16,  /* cells of one record                                       */
-    PST_CSV_MAX_ROWS = 1 << 24    /* data rows of a pst_csv_table (a cloud: UINT32_MAX)         */
+    PST_CSV_MAX_ROWS = 1 << 21    /* data rows of a pst_csv_table (a cloud: UINT32_MAX)         */
 };
 
 /* Flags of a reader: trim spaces and tabs around each cell (quoted cells: outside the quotes),

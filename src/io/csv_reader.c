@@ -28,12 +28,19 @@ struct pst_csv_reader {
 
 enum { CHUNK = 1 << 16 };
 
-static int grow_raw(pst_csv_reader *r, char *err)
+static int check_length(const pst_csv_reader *r, char *err)
 {
-    if (r->rawcap - r->rawlen > CHUNK)
-        return PST_OK;
     PST_CHECK(r->rawlen > (size_t)PST_CSV_MAX_RECORD, PST_EINPUT, err,
               "%s:%zu:1: a record longer than %d bytes", r->path, r->line, PST_CSV_MAX_RECORD);
+    return PST_OK;
+}
+
+/* Room for another chunk of a line in raw, refused past the cap before it is allocated. */
+static int grow_raw(pst_csv_reader *r, char *err)
+{
+    PST_TRY(check_length(r, err));
+    if (r->rawcap - r->rawlen > CHUNK)
+        return PST_OK;
     size_t cap = r->rawcap ? 2 * r->rawcap : 2 * CHUNK;
     char *g = realloc(r->raw, cap);
     PST_CHECK_ALLOC(g, err, "%s:%zu:1: out of memory for a record", r->path, r->line);
@@ -57,6 +64,7 @@ static int read_line(pst_csv_reader *r, int *got, char *err)
     }
     PST_CHECK(ferror(r->f), PST_EIO, err, "%s:%zu: read error: %s", r->path, r->nlines + 1,
               strerror(errno));
+    PST_TRY(check_length(r, err));
     *got = r->rawlen > start;
     if (*got && ++r->nlines == 1 && strncmp(r->raw, "\xEF\xBB\xBF", 3) == 0) {
         memmove(r->raw, r->raw + 3, r->rawlen - 3); /* a byte-order mark, as spreadsheets write */
@@ -283,13 +291,15 @@ pst_csv_num pst_csv_parse_number(const char *cell, double *v)
 int pst_csv_cell_error(const pst_csv_reader *r, size_t k, int code, char *err,
                        const char *fmt, ...)
 {
-    char msg[PST_ERRLEN];
+    if (!err)
+        return code;
+    int at = snprintf(err, PST_ERRLEN, "%s:%zu:%zu: column %s: ", r->path, r->line, k + 1,
+                      pst_csv_name(r, k));
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    if (at >= 0 && at < PST_ERRLEN)
+        vsnprintf(err + at, (size_t)(PST_ERRLEN - at), fmt, ap);
     va_end(ap);
-    pst_set_err(err, "%s:%zu:%zu: column %s: %s", r->path, r->line, k + 1, pst_csv_name(r, k),
-                msg);
     return code;
 }
 
