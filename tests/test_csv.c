@@ -123,6 +123,13 @@ static void test_tokenizer_errors(void)
     /* blank lines count for the line numbers */
     parse_expect(&t, "a,b\n\n1,2\n\n1\n", PST_CSV_SKIP_BLANK, PST_EINPUT, "t.csv:5:2:");
     CHECK(t.cell == NULL && t.nrows == 0); /* empty on failure */
+    /* a NUL byte is refused, not a silent end of the line */
+    FILE *f = fopen(path_of("nul.csv"), "wb");
+    fwrite("a,b\n1,2\0x\n3,4\n", 1, 14, f);
+    fclose(f);
+    char err[PST_ERRLEN] = "";
+    CHECK_INT(pst_csv_read_table(&t, path_of("nul.csv"), 0, err), PST_EINPUT);
+    CHECK(strstr(err, "nul.csv:2: a NUL byte") != NULL);
 }
 
 static void test_tokenizer_caps(void)

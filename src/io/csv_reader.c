@@ -56,9 +56,14 @@ static int read_line(pst_csv_reader *r, int *got, char *err)
     for (;;) {
         PST_TRY(grow_raw(r, err));
         char *at = r->raw + r->rawlen;
-        if (!fgets(at, (int)(r->rawcap - r->rawlen), r->f))
+        size_t room = r->rawcap - r->rawlen, len;
+        if (!fgets(at, (int)room, r->f))
             break;
-        r->rawlen += strlen(at);
+        len = strlen(at);
+        /* fgets stops at a line end, a full buffer or the end: anything else is a NUL byte */
+        PST_CHECK(len + 1 < room && (len == 0 || at[len - 1] != '\n') && !feof(r->f),
+                  PST_EINPUT, err, "%s:%zu: a NUL byte in the line", r->path, r->nlines + 1);
+        r->rawlen += len;
         if (r->rawlen > start && r->raw[r->rawlen - 1] == '\n')
             break;
     }
