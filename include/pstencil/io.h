@@ -11,7 +11,7 @@
 extern "C" {
 #endif
 
-/* --- CSV tokenizer ------------------------------------------------------------------------- */
+/* --- CSV tokenizer ------------------------------------------------------------------------ */
 
 /* One tokenizer for every CSV file (docs/io.md): RFC 4180 records (cells split by commas,
  * "quoted" cells may hold commas, doubled quotes and newlines), LF or CRLF line ends, a UTF-8
@@ -21,7 +21,7 @@ extern "C" {
 enum {
     PST_CSV_MAX_RECORD = 1 << 24, /* bytes of one record (its lines, quoted newlines included) */
     PST_CSV_MAX_CELLS = 1 << 16,  /* cells of one record                                       */
-    PST_CSV_MAX_ROWS = 1 << 21    /* data rows of a pst_csv_table (a cloud: UINT32_MAX)         */
+    PST_CSV_MAX_ROWS = 1 << 21    /* data rows of a pst_csv_table (clouds stream: see below)    */
 };
 
 /* Flags of a reader: trim spaces and tabs around each cell (quoted cells: outside the quotes),
@@ -38,12 +38,13 @@ typedef struct pst_csv_reader pst_csv_reader;
 int pst_csv_open(pst_csv_reader **out, const char *path, int flags, char *err);
 int pst_csv_open_text(pst_csv_reader **out, const char *text, const char *name, int flags,
                       char *err);
+/* Close the file and free the reader (NULL allowed). */
 void pst_csv_close(pst_csv_reader *r);
 
 /* The next data record: PST_OK with *got 1, or *got 0 at the end of the file. PST_EINPUT for a
  * record whose cell count is not the header's ("expected N columns, found M" at the first
- * missing or extra cell), an unterminated quoted cell, text after a closing quote, a record
- * over a cap; PST_EIO on a read error; PST_ENOMEM. */
+ * missing or extra cell), an unterminated quoted cell, text after a closing quote, a NUL byte,
+ * a record over a cap; PST_EIO on a read error; PST_ENOMEM. */
 int pst_csv_next(pst_csv_reader *r, int *got, char *err);
 
 /* The header: its cell count and cell k. */
@@ -92,15 +93,16 @@ typedef struct {
 int pst_csv_read_table(pst_csv_table *t, const char *path, int flags, char *err);
 int pst_csv_parse_table(pst_csv_table *t, const char *text, const char *name, int flags,
                         char *err);
-/* Append a row of t->ncols cells (copied, numbers parsed once); to a zeroed table the first
+/* Append a row of ncols cells (copied, numbers parsed once); to a zeroed table the first
  * row appended is the header and sets ncols (> 0). PST_EINVAL for ncols <= 0 or above
  * PST_CSV_MAX_CELLS, PST_EINPUT beyond PST_CSV_MAX_ROWS, PST_ENOMEM. */
 int pst_csv_table_add(pst_csv_table *t, int ncols, const char *const *cells, char *err);
+/* Free the cells and zero the table (NULL allowed). */
 void pst_csv_table_free(pst_csv_table *t);
 /* The first column named `name` among the first `below` columns, or -1. */
 int pst_csv_table_column(const pst_csv_table *t, const char *name, int below);
 
-/* --- CSV clouds ------------------------------------------------------------------------------ */
+/* --- CSV clouds --------------------------------------------------------------------------- */
 
 /* Read a cloud from CSV. The header names the columns: x,y[,z],V,h,kind,nx,ny[,nz], then
  * optionally m (scalar mobility) or mx,my[,mz] (diagonal), then any named fields. kind is

@@ -23,11 +23,12 @@ enum { NSTAT = sizeof stat_cols / sizeof stat_cols[0], MAX_POINTS = 512 };
 typedef struct {
     const pst_csv_table *t;
     int nkeys, task, slope, repeat;
-    unsigned char *ok;   /* ok[r]: status "ok"                                   */
+    int stat_col[NSTAT];       /* the columns of stat_cols                      */
+    unsigned char *ok;         /* ok[r]: status "ok"                            */
     int skip[SW_MAX_KEYS * 4]; /* key columns left out of the grouping          */
-    size_t *gid, *first; /* gid[r - 1]: the group of row r; first[g]: its first row */
+    size_t *gid, *first;       /* gid[r - 1]: row r's group; first[g]: its first row */
     size_t ngroups;
-    double *vals;        /* scratch, nrows + 1                                   */
+    double *vals;              /* scratch, nrows + 1                            */
 } view;
 
 static const char *cell(const view *v, size_t r, int col)
@@ -140,7 +141,7 @@ static void add_groups(cJSON *sum, view *v)
         cJSON_AddNumberToObject(gj, "not_ok", (double)(total - count));
         cJSON *mean = cJSON_AddObjectToObject(gj, "mean"), *sd = cJSON_AddObjectToObject(gj, "std");
         for (int q = 0; q < NSTAT; ++q) {
-            const int col = pst_csv_table_column(v->t, stat_cols[q], v->t->ncols);
+            const int col = v->stat_col[q];
             size_t m = 0;
             for (size_t r = 1; r <= v->t->nrows; ++r)
                 if (v->gid[r - 1] == g && v->ok[r] && !isnan(num(v, r, col)))
@@ -292,6 +293,8 @@ cJSON *pst_sweep_summary(const pst_csv_table *t, const char *slope_key, const ch
     v.task = v.nkeys + C_TASK;
     v.slope = pst_csv_table_column(t, slope_key, t->ncols);
     v.repeat = pst_csv_table_column(t, repeat_key, t->ncols);
+    for (int q = 0; q < NSTAT; ++q)
+        v.stat_col[q] = pst_csv_table_column(t, stat_cols[q], t->ncols);
     const size_t n = t->nrows;
     v.ok = malloc(n + 1);
     v.gid = malloc((n + 1) * sizeof *v.gid);
