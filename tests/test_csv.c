@@ -1,6 +1,8 @@
-/* CSV input and output: exact round trips in 2D and 3D with every optional column, the
- * file:line:column messages of each kind of bad input, and the atomic-replace guarantees of
- * the writer. */
+/* CSV input and output: the tokenizer (quoting, empty cells, CRLF, a byte-order mark, the
+ * trimming and blank-line flags, the caps, numbers, the file:line:column of every error) and
+ * the table with its typed cells; then clouds: exact round trips in 2D and 3D with every
+ * optional column, the messages of each kind of bad input, and the atomic-replace guarantees
+ * of the writer. */
 #define _POSIX_C_SOURCE 200809L /* mkdtemp, setrlimit, opendir */
 
 #include "check.h"
@@ -47,6 +49,187 @@ static int leftovers(void)
         closedir(d);
     return k;
 }
+
+/* ---- the tokenizer and the table ------------------------------------------------------ */
+
+/* Parse `text` as a table; expect `status` and, on failure, `needle` in the message. */
+static int parse_expect(pst_csv_table *t, const char *text, int flags, int status,
+                        const char *needle)
+{
+    char err[PST_ERRLEN] = "";
+    int st = pst_csv_parse_table(t, text, "t.csv", flags, err);
+    CHECK_INT(st, status);
+    if (needle && !strstr(err, needle)) {
+        CHECK(!"message");
+        fprintf(stderr, "  message was: %s (expected %s)\n", err, needle);
+    }
+    return st == PST_OK;
+}
+
+static const char *tcell(const pst_csv_table *t, size_t r, int c)
+{
+    return t->cell[r * (size_t)t->ncols + (size_t)c];
+}
+
+static void test_tokenizer_quoting(void)
+{
+    pst_csv_table t;
+    /* quoted commas, doubled quotes, a quoted newline, empty cells, CRLF, no final newline */
+    if (parse_expect(&t, "a,b,c\r\n\"x, y\",\"say \"\"hi\"\"\",\"two\nlines\"\r\n,,\r\n\"\",q,",
+                     0, PST_OK, NULL)) {
+        CHECK_INT(t.nrows, 3);
+        CHECK_INT(t.ncols, 3);
+        CHECK(!strcmp(tcell(&t, 0, 2), "c"));
+        CHECK(!strcmp(tcell(&t, 1, 0), "x, y") && !strcmp(tcell(&t, 1, 1), "say \"hi\"") &&
+              !strcmp(tcell(&t, 1, 2), "two\nlines"));
+        CHECK(!strcmp(tcell(&t, 2, 0), "") && !strcmp(tcell(&t, 2, 2), ""));
+        CHECK(!strcmp(tcell(&t, 3, 0), "") && !strcmp(tcell(&t, 3, 1), "q") &&
+              !strcmp(tcell(&t, 3, 2), ""));
+    }
+    pst_csv_table_free(&t);
+    /* a quote inside an unquoted cell is text; a quoted CRLF is kept */
+    if (parse_expect(&t, "a,b\nx\"y,\"1\r\n2\"\n", 0, PST_OK, NULL))
+        CHECK(!strcmp(tcell(&t, 1, 0), "x\"y") && !strcmp(tcell(&t, 1, 1), "1\r\n2"));
+    pst_csv_table_free(&t);
+    /* without flags, spaces are kept (a quote after one is text) and a blank line is a
+     * record of one empty cell */
+    if (parse_expect(&t, "\xEF\xBB\xBF" "a,b\n 1 , \"2\" \n", 0, PST_OK, NULL)) {
+        CHECK(!strcmp(tcell(&t, 0, 0), "a")); /* the byte-order mark is skipped */
+        CHECK(!strcmp(tcell(&t, 1, 0), " 1 ") && !strcmp(tcell(&t, 1, 1), " \"2\" "));
+    }
+    pst_csv_table_free(&t);
+    parse_expect(&t, "a\n1\n\n2\n", 0, PST_OK, NULL);
+    CHECK(t.nrows == 3 && !strcmp(tcell(&t, 2, 0), ""));
+    pst_csv_table_free(&t);
+    /* with the flags: trimmed cells (outside the quotes), blank lines skipped */
+    if (parse_expect(&t, "a , b\n\n \t\n 1 , \" 2 \" \r\n", PST_CSV_TRIM | PST_CSV_SKIP_BLANK,
+                     PST_OK, NULL)) {
+        CHECK(t.nrows == 1 && !strcmp(tcell(&t, 0, 0), "a") && !strcmp(tcell(&t, 0, 1), "b"));
+        CHECK(!strcmp(tcell(&t, 1, 0), "1") && !strcmp(tcell(&t, 1, 1), " 2 "));
+    }
+    pst_csv_table_free(&t);
+}
+
+static void test_tokenizer_errors(void)
+{
+    pst_csv_table t;
+    parse_expect(&t, "", 0, PST_EINPUT, "t.csv:1:1: empty file: no header line");
+    parse_expect(&t, "\n \n", PST_CSV_SKIP_BLANK, PST_EINPUT, "t.csv:1:1: empty file");
+    parse_expect(&t, "a,b\n1,\"open\n2,3\n", 0, PST_EINPUT, "t.csv:2:2: unterminated quoted");
+    parse_expect(&t, "a,b\n\"1\"x,2\n", 0, PST_EINPUT, "t.csv:2:1: text after a quoted cell");
+    parse_expect(&t, "a,b,c\n1,2,3\n\"x\ny\"\n", 0, PST_EINPUT,
+                 "t.csv:3:2: expected 3 columns, found 1");
+    parse_expect(&t, "a,b\n1,2,3\n", 0, PST_EINPUT, "t.csv:2:3: expected 2 columns, found 3");
+    /* blank lines count for the line numbers */
+    parse_expect(&t, "a,b\n\n1,2\n\n1\n", PST_CSV_SKIP_BLANK, PST_EINPUT, "t.csv:5:2:");
+    CHECK(t.cell == NULL && t.nrows == 0); /* empty on failure */
+    /* a NUL byte is refused, not a silent end of the line */
+    FILE *f = fopen(path_of("nul.csv"), "wb");
+    fwrite("a,b\n1,2\0x\n3,4\n", 1, 14, f);
+    fclose(f);
+    char err[PST_ERRLEN] = "";
+    CHECK_INT(pst_csv_read_table(&t, path_of("nul.csv"), 0, err), PST_EINPUT);
+    CHECK(strstr(err, "nul.csv:2: a NUL byte") != NULL);
+}
+
+static void test_tokenizer_caps(void)
+{
+    pst_csv_table t;
+    /* a record over PST_CSV_MAX_RECORD bytes: refused while it is read */
+    size_t big = (size_t)PST_CSV_MAX_RECORD + 100;
+    char *text = malloc(big + 16);
+    memcpy(text, "a\n", 2);
+    memset(text + 2, '7', big);
+    strcpy(text + 2 + big, "\n");
+    parse_expect(&t, text, 0, PST_EINPUT, "t.csv:2:1: a record longer than");
+    /* more than PST_CSV_MAX_CELLS cells */
+    size_t nc = (size_t)PST_CSV_MAX_CELLS + 1;
+    for (size_t k = 0; k < nc; ++k)
+        memcpy(text + 2 * k, "c,", 2);
+    text[2 * nc - 1] = '\n';
+    text[2 * nc] = '\0';
+    parse_expect(&t, text, 0, PST_EINPUT, "t.csv:1:65537: more than 65536 cells");
+    free(text);
+    /* more than PST_CSV_MAX_ROWS data rows in a table */
+    size_t nr = (size_t)PST_CSV_MAX_ROWS + 1;
+    text = malloc(2 * nr + 8);
+    memcpy(text, "x\n", 2);
+    for (size_t r = 1; r <= nr; ++r)
+        memcpy(text + 2 * r, "1\n", 2);
+    text[2 * nr + 2] = '\0';
+    char line[64];
+    snprintf(line, sizeof line, "t.csv:%zu:1: more than %d data rows", nr + 1, PST_CSV_MAX_ROWS);
+    parse_expect(&t, text, 0, PST_EINPUT, line);
+    free(text);
+    /* a table's rows must have its header's cell count */
+    char err[PST_ERRLEN];
+    const char *cells[3] = {"a", "b", "c"};
+    CHECK_INT(pst_csv_table_add(&t, 2, cells, err), PST_OK);
+    CHECK_INT(pst_csv_table_add(&t, 3, cells, err), PST_EINVAL);
+    CHECK_INT(pst_csv_table_add(&t, 2, cells + 1, err), PST_OK);
+    CHECK(t.nrows == 1 && !strcmp(tcell(&t, 1, 1), "c") && isnan(t.num[2]));
+    pst_csv_table_free(&t);
+}
+
+static void test_numbers(void)
+{
+    double v = -1;
+    CHECK_INT(pst_csv_parse_number("1.5e-3", &v), PST_CSV_NUMBER);
+    CHECK(v == 1.5e-3);
+    CHECK_INT(pst_csv_parse_number(" -2", &v), PST_CSV_NUMBER);
+    CHECK(v == -2);
+    v = 7;
+    CHECK_INT(pst_csv_parse_number("", &v), PST_CSV_EMPTY);
+    CHECK_INT(pst_csv_parse_number("abc", &v), PST_CSV_NOT_A_NUMBER);
+    CHECK_INT(pst_csv_parse_number("2 ", &v), PST_CSV_NOT_A_NUMBER);
+    CHECK_INT(pst_csv_parse_number("1.5x", &v), PST_CSV_NOT_A_NUMBER);
+    CHECK_INT(pst_csv_parse_number("1e999", &v), PST_CSV_NOT_FINITE);
+    CHECK_INT(pst_csv_parse_number("nan", &v), PST_CSV_NOT_FINITE);
+    CHECK_INT(pst_csv_parse_number("-inf", &v), PST_CSV_NOT_FINITE);
+    CHECK(v == 7); /* untouched */
+
+    /* the table's typed cells: parsed once, NAN for anything that is not a finite number */
+    pst_csv_table t;
+    if (parse_expect(&t, "k,x\na,0.25\nb,\nc,inf\nd,x1\n", 0, PST_OK, NULL)) {
+        CHECK(isnan(t.num[0]) && isnan(t.num[1])); /* the header */
+        CHECK(isnan(t.num[2]) && t.num[3] == 0.25);
+        CHECK(isnan(t.num[5]) && isnan(t.num[7]) && isnan(t.num[9]));
+        CHECK_INT(pst_csv_table_column(&t, "x", t.ncols), 1);
+        CHECK_INT(pst_csv_table_column(&t, "x", 1), -1);
+    }
+    pst_csv_table_free(&t);
+
+    /* the streaming reader: records one by one, each with its first line; cell messages */
+    char err[PST_ERRLEN] = "";
+    pst_csv_reader *r;
+    CHECK_INT(pst_csv_open_text(&r, "a,b\n1,\"x\ny\"\n2,\n3,1e999\n4,q\n", "s.csv", 0, err),
+              PST_OK);
+    if (!r)
+        return;
+    CHECK(pst_csv_ncols(r) == 2 && !strcmp(pst_csv_name(r, 1), "b"));
+    int got = 0;
+    CHECK_INT(pst_csv_next(r, &got, err), PST_OK);
+    CHECK(got && pst_csv_line(r) == 2 && !strcmp(pst_csv_cell(r, 1), "x\ny"));
+    CHECK_INT(pst_csv_number(r, 0, &v, err), PST_OK);
+    CHECK(v == 1);
+    CHECK_INT(pst_csv_number(r, 1, &v, err), PST_EINPUT);
+    CHECK(!strcmp(err, "s.csv:2:2: column b: cannot parse 'x\ny' as a number"));
+    CHECK_INT(pst_csv_next(r, &got, err), PST_OK);
+    CHECK(got && pst_csv_line(r) == 4);
+    CHECK_INT(pst_csv_number(r, 1, &v, err), PST_EINPUT);
+    CHECK(!strcmp(err, "s.csv:4:2: column b: missing value"));
+    CHECK_INT(pst_csv_next(r, &got, err), PST_OK);
+    CHECK_INT(pst_csv_number(r, 1, &v, err), PST_EINPUT);
+    CHECK(!strcmp(err, "s.csv:5:2: column b: value '1e999' is not finite"));
+    CHECK_INT(pst_csv_cell_error(r, 0, PST_EINVAL, err, "odd %d", 3), PST_EINVAL);
+    CHECK(!strcmp(err, "s.csv:5:1: column a: odd 3"));
+    CHECK_INT(pst_csv_next(r, &got, err), PST_OK);
+    CHECK_INT(pst_csv_next(r, &got, err), PST_OK);
+    CHECK(got == 0);
+    pst_csv_close(r);
+}
+
+/* ---- clouds ------------------------------------------------------------------------------ */
 
 /* A jittered cell-centred cloud with every kind, per-particle h, mobility and two fields,
  * permuted so that its order differs from the input order. Hard values on purpose: -0,
@@ -328,6 +511,10 @@ int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_test_csv") != 0)
         return 1;
+    test_tokenizer_quoting();
+    test_tokenizer_errors();
+    test_tokenizer_caps();
+    test_numbers();
     check_round_trip(2, 1);
     check_round_trip(3, 3);
     check_round_trip(2, 2);

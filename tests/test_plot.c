@@ -59,7 +59,7 @@ static int build(pst_plot_set *ps, const char *norm, int use_summary)
 {
     pst_csv_table t;
     char err[512];
-    int st = pst_csv_read(path, &t, err, sizeof err);
+    int st = pst_csv_read_table(&t, path, 0, err);
     CHECK(st == PST_OK);
     if (st != PST_OK) {
         fprintf(stderr, "%s\n", err);
@@ -199,9 +199,9 @@ static void test_laplacian_sweep(void)
         CHECK_NEAR(q->err[1], 0, 1e-18);
     }
     pst_plot_set_free(&ps);
-    char err[256];
+    char err[PST_ERRLEN];
     pst_csv_table t;
-    CHECK(pst_csv_read(path, &t, err, sizeof err) == PST_OK);
+    CHECK(pst_csv_read_table(&t, path, 0, err) == PST_OK);
     CHECK(pst_plot_build(&t, NULL, "l2", &ps, err, sizeof err) == PST_EINPUT);
     CHECK(strstr(err, "unknown norm 'l2'") != NULL);
     pst_csv_table_free(&t);
@@ -247,8 +247,8 @@ static void test_solve_sweep(void)
     fprintf(f, "a,b\n1,2\n");
     fclose(f);
     pst_csv_table t;
-    char err[256];
-    CHECK(pst_csv_read(path, &t, err, sizeof err) == PST_OK);
+    char err[PST_ERRLEN];
+    CHECK(pst_csv_read_table(&t, path, 0, err) == PST_OK);
     CHECK(pst_plot_build(&t, NULL, NULL, &ps, err, sizeof err) == PST_EINPUT);
     CHECK(strstr(err, "not a sweep CSV") != NULL);
     pst_csv_table_free(&t);

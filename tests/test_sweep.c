@@ -1,9 +1,10 @@
-/* Sweeps (src/sweep.c, docs/sweeps.md): a tiny 2D sweep runs, its CSV has the header and the
- * rows it should, the summary has its groups and a qsfdi convergence slope of second order,
- * --resume reruns nothing and leaves the same bytes (and reruns exactly what is missing or
- * failed), failing combinations become failed rows, the summary recomputed from the CSV equals
- * the one written, errors in sweep files name the key and its position, and every sweep file
- * of scenes/sweeps parses and plans. */
+/* Sweeps (src/app/sweep_*.c, docs/sweeps.md): a tiny 2D sweep runs, its CSV has the header
+ * and the rows it should, the summary has its groups and a qsfdi convergence slope of second
+ * order, --resume reruns nothing and leaves the same bytes (and reruns exactly what is missing
+ * or failed), failing combinations become failed rows, the summary recomputed from the CSV
+ * equals the one written, the statistics of a hand-made table are the known ones, errors in
+ * sweep files name the key and its position, and every sweep file of scenes/sweeps parses and
+ * plans. */
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #include "check.h"
 #include "support.h"
@@ -91,6 +92,14 @@ static const cJSON *find_fit(const cJSON *sum, const char *scheme, const char *n
     return NULL;
 }
 
+/* Read the sweep CSV DIR/NAME.csv into t. */
+static void read_result(const char *name, pst_csv_table *t)
+{
+    char path[512], err[PST_ERRLEN];
+    snprintf(path, sizeof path, "%s/%s.csv", dir, name);
+    CHECK_INT(pst_csv_read_table(t, path, 0, err), PST_OK);
+}
+
 /* The summary in the file without what the CSV does not hold, against the one from the CSV. */
 static void check_summary_from_csv(const char *name, const pst_sweep *sw)
 {
@@ -118,9 +127,7 @@ static void check_summary_from_csv(const char *name, const pst_sweep *sw)
     }
     cJSON_DeleteItemFromObject(written, "operator_parameters");
     pst_csv_table t;
-    char err[1024];
-    snprintf(path, sizeof path, "%s/%s.csv", dir, name);
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    read_result(name, &t);
     cJSON *again = pst_sweep_summary(&t, sw->slope_key, sw->repeat_key);
     CHECK(again != NULL);
     CHECK(cJSON_Compare(written, again, 1));
@@ -169,7 +176,7 @@ static void test_tiny_sweep(void)
     char path[512];
     snprintf(path, sizeof path, "%s/tiny.csv", dir);
     pst_csv_table t;
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    read_result("tiny", &t);
     CHECK_INT(t.nrows, 12);
     CHECK_INT(t.ncols, 3 + pst_sweep_ncolumns);
     CHECK(strcmp(t.cell[0], "operator.scheme") == 0 && strcmp(t.cell[1], "cloud.spacing") == 0 &&
@@ -287,10 +294,8 @@ static void test_failures(void)
     CHECK_INT(s.runs, 2); /* the jitter 1.5 combinations do not parse: not run */
     CHECK_INT(s.failed, 3);
     CHECK_INT(s.rows, 4);
-    char path[512];
-    snprintf(path, sizeof path, "%s/fail.csv", dir);
     pst_csv_table t;
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
+    read_result("fail", &t);
     CHECK_INT(t.nrows, 4);
     const char *want[4] = {"ok", "failed", "failed", "failed"};
     for (size_t r = 1; r <= t.nrows && r <= 4; ++r)
@@ -358,21 +363,83 @@ static void test_errors(void)
     pst_sweep_free(&sw);
 }
 
-/* Quoted cells (RFC 4180) read back. */
-static void test_csv_quoting(void)
+/* A sweep table's row: the keys, then the sweep columns with rel_l2, t_total and status set;
+ * appended to buf. */
+static void add_row(char *buf, size_t len, const char *scheme, const char *s0, int seed,
+                    const char *rel_l2, const char *t_total, const char *status)
 {
-    char path[512], err[1024];
-    snprintf(path, sizeof path, "%s/q.csv", dir);
-    spit(path, "a,b,c\r\n\"x, y\",\"say \"\"hi\"\"\",\"two\nlines\"\r\n,,\n");
+    size_t u = strlen(buf);
+    u += (size_t)snprintf(buf + u, len - u, "%s,%s,%d", scheme, s0, seed);
+    for (int q = 0; q < pst_sweep_ncolumns && u < len; ++q) {
+        const char *name = pst_sweep_columns[q], *v = "";
+        v = !strcmp(name, "task") ? "lap" : !strcmp(name, "dim") ? "2" : v;
+        v = !strcmp(name, "rel_l2") ? rel_l2 : !strcmp(name, "t_total") ? t_total : v;
+        v = !strcmp(name, "status") ? status : v;
+        u += (size_t)snprintf(buf + u, len - u, ",%s", v);
+    }
+    if (u + 1 < len)
+        strcat(buf, "\n");
+}
+
+static double member(const cJSON *o, const char *a, const char *b)
+{
+    const cJSON *v = cJSON_GetObjectItem(b ? cJSON_GetObjectItem(o, a) : o, b ? b : a);
+    return cJSON_IsNumber(v) ? v->valuedouble : NAN;
+}
+
+/* The statistics of a hand-made table: means, sample standard deviations over the ok rows
+ * with a number (failed rows, empty and non-finite cells left out) and the fitted slope of
+ * mean rel_l2 = 2 s0^2, whose points lie on a line: slope 2, standard error 0. */
+static void test_summary_statistics(void)
+{
+    static char text[1 << 16];
+    snprintf(text, sizeof text, "operator.scheme,cloud.spacing,cloud.seed");
+    for (int q = 0; q < pst_sweep_ncolumns; ++q)
+        snprintf(text + strlen(text), sizeof text - strlen(text), ",%s", pst_sweep_columns[q]);
+    strcat(text, "\n");
+    const size_t n = sizeof text;
+    add_row(text, n, "qsfdi", "0.1", 1, "0.01", "1", "ok");
+    add_row(text, n, "qsfdi", "0.1", 2, "0.03", "2", "ok");
+    add_row(text, n, "qsfdi", "0.1", 3, "5", "4", "failed"); /* not in the statistics */
+    add_row(text, n, "qsfdi", "0.05", 1, "0.004", "", "ok"); /* no t_total */
+    add_row(text, n, "qsfdi", "0.05", 2, "0.006", "inf", "ok");
+    add_row(text, n, "qsfdi", "0.025", 1, "0.00125", "3", "ok");
+    add_row(text, n, "qsfdi", "0.025", 2, "", "6", "ok"); /* no rel_l2 */
+    add_row(text, n, "lpmps", "0.1", 1, "0.5", "1", "not-converged");
     pst_csv_table t;
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_OK);
-    CHECK_INT(t.nrows, 2);
-    CHECK(strcmp(t.cell[3], "x, y") == 0 && strcmp(t.cell[4], "say \"hi\"") == 0 &&
-          strcmp(t.cell[5], "two\nlines") == 0 && strcmp(t.cell[6], "") == 0);
+    char err[PST_ERRLEN];
+    CHECK_INT(pst_csv_parse_table(&t, text, "hand.csv", 0, err), PST_OK);
+    cJSON *sum = pst_sweep_summary(&t, "cloud.spacing", "cloud.seed");
     pst_csv_table_free(&t);
-    spit(path, "a,b\n1\n");
-    CHECK_INT(pst_csv_read(path, &t, err, sizeof err), PST_EINPUT);
-    CHECK(strstr(err, ":2:") != NULL);
+    CHECK(sum != NULL);
+    if (!sum)
+        return;
+    const cJSON *rows = cJSON_GetObjectItem(sum, "rows");
+    CHECK(member(rows, "total", NULL) == 8 && member(rows, "ok", NULL) == 6 &&
+          member(rows, "failed", NULL) == 1 && member(rows, "not-converged", NULL) == 1);
+    const cJSON *groups = cJSON_GetObjectItem(sum, "groups");
+    CHECK_INT(cJSON_GetArraySize(groups), 4); /* qsfdi x 3 spacings, lpmps x 1 */
+    const cJSON *g0 = cJSON_GetArrayItem(groups, 0), *g1 = cJSON_GetArrayItem(groups, 1),
+                *g2 = cJSON_GetArrayItem(groups, 2), *g3 = cJSON_GetArrayItem(groups, 3);
+    CHECK(member(g0, "count", NULL) == 2 && member(g0, "not_ok", NULL) == 1);
+    CHECK_NEAR(member(g0, "mean", "rel_l2"), 0.02, 1e-15);
+    CHECK_NEAR(member(g0, "std", "rel_l2"), sqrt(2e-4), 1e-15);
+    CHECK_NEAR(member(g0, "mean", "t_total"), 1.5, 0);
+    CHECK_NEAR(member(g1, "mean", "rel_l2"), 0.005, 1e-15);
+    CHECK_NEAR(member(g1, "std", "rel_l2"), sqrt(2e-6), 1e-15);
+    CHECK(cJSON_GetObjectItem(cJSON_GetObjectItem(g1, "mean"), "t_total") == NULL);
+    CHECK_NEAR(member(g2, "mean", "rel_l2"), 0.00125, 1e-18);
+    CHECK(cJSON_IsNull(cJSON_GetObjectItem(cJSON_GetObjectItem(g2, "std"), "rel_l2")));
+    CHECK_NEAR(member(g2, "mean", "t_total"), 4.5, 0);
+    CHECK(member(g3, "count", NULL) == 0 && cJSON_GetObjectItem(g3, "mean")->child == NULL);
+    const cJSON *fit = find_fit(sum, "qsfdi", "rel_l2");
+    CHECK(fit != NULL && find_fit(sum, "lpmps", "rel_l2") == NULL);
+    CHECK_NEAR(member(fit, "points", NULL), 3, 0);
+    CHECK_NEAR(member(fit, "slope", NULL), 2, 1e-12);
+    CHECK_NEAR(member(fit, "stderr", NULL), 0, 1e-12);
+    CHECK_NEAR(cJSON_GetArrayItem(cJSON_GetObjectItem(fit, "mean"), 1)->valuedouble, 0.005,
+               1e-15);
+    cJSON_Delete(sum);
 }
 
 /* Every sweep file of scenes/sweeps parses and every combination plans. */
@@ -418,7 +485,7 @@ int main(void)
     test_tiny_sweep();
     test_failures();
     test_errors();
-    test_csv_quoting();
+    test_summary_statistics();
     test_sweep_files();
     test_remove_dir(dir);
     return check_summary("test_sweep");

@@ -1,14 +1,108 @@
-/* pstencil: Reading and writing clouds: CSV and VTU. Part of the public API; include <pstencil.h>. */
+/* pstencil: Reading and writing clouds (CSV and VTU) and the CSV tokenizer they and the sweep
+ * results share. Part of the public API; include <pstencil.h>. */
 #ifndef PSTENCIL_PUBLIC_IO_H
 #define PSTENCIL_PUBLIC_IO_H
 
 #include "pstencil/cloud.h"
 
+#include <stddef.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* --- CSV ----------------------------------------------------------------------------------- */
+/* --- CSV tokenizer ------------------------------------------------------------------------ */
+
+/* One tokenizer for every CSV file (docs/io.md): RFC 4180 records (cells split by commas,
+ * "quoted" cells may hold commas, doubled quotes and newlines), LF or CRLF line ends, a UTF-8
+ * byte-order mark skipped. The first record is the header; every later record must have its
+ * number of cells. Messages name "PATH:LINE:COLUMN", COLUMN the 1-based cell number and LINE
+ * the record's first line. Caps on what a file may ask for, each with its own message: */
+enum {
+    PST_CSV_MAX_RECORD = 1 << 24, /* bytes of one record (its lines, quoted newlines included) */
+    PST_CSV_MAX_CELLS = 1 << 16,  /* cells of one record                                       */
+    PST_CSV_MAX_ROWS = 1 << 21    /* data rows of a pst_csv_table (clouds stream: see below)    */
+};
+
+/* Flags of a reader: trim spaces and tabs around each cell (quoted cells: outside the quotes),
+ * skip lines holding only spaces and tabs (they still count for LINE). */
+enum { PST_CSV_TRIM = 1, PST_CSV_SKIP_BLANK = 2 };
+
+/* A streaming reader: one record at a time, so that a cloud of any size reads in the memory
+ * of one line. */
+typedef struct pst_csv_reader pst_csv_reader;
+
+/* Open `path` (or, for pst_csv_open_text, read `text` under the name `name`) and read the
+ * header. PST_EIO (cannot open, read error), PST_EINPUT (no header: "PATH:1:1: empty file: no
+ * header line", a bad record), PST_ENOMEM; *out is NULL on failure. */
+int pst_csv_open(pst_csv_reader **out, const char *path, int flags, char *err);
+int pst_csv_open_text(pst_csv_reader **out, const char *text, const char *name, int flags,
+                      char *err);
+/* Close the file and free the reader (NULL allowed). */
+void pst_csv_close(pst_csv_reader *r);
+
+/* The next data record: PST_OK with *got 1, or *got 0 at the end of the file. PST_EINPUT for a
+ * record whose cell count is not the header's ("expected N columns, found M" at the first
+ * missing or extra cell), an unterminated quoted cell, text after a closing quote, a NUL byte,
+ * a record over a cap; PST_EIO on a read error; PST_ENOMEM. */
+int pst_csv_next(pst_csv_reader *r, int *got, char *err);
+
+/* The header: its cell count and cell k. */
+size_t pst_csv_ncols(const pst_csv_reader *r);
+const char *pst_csv_name(const pst_csv_reader *r, size_t k);
+/* Cell k (< pst_csv_ncols) of the current record (after pst_csv_open: of the header), valid
+ * until the next call; the record's first line; the path messages use. */
+const char *pst_csv_cell(const pst_csv_reader *r, size_t k);
+size_t pst_csv_line(const pst_csv_reader *r);
+const char *pst_csv_path(const pst_csv_reader *r);
+
+/* What a cell is as a number: the whole cell must be one strtod() number (leading spaces
+ * allowed), finite. */
+typedef enum {
+    PST_CSV_NUMBER,
+    PST_CSV_EMPTY,
+    PST_CSV_NOT_A_NUMBER,
+    PST_CSV_NOT_FINITE
+} pst_csv_num;
+/* *v (untouched unless PST_CSV_NUMBER) and what the cell is. */
+pst_csv_num pst_csv_parse_number(const char *cell, double *v);
+
+/* Cell k of the current record as a finite number, or PST_EINPUT with "PATH:LINE:COLUMN:
+ * column NAME: missing value" (or "cannot parse 'CELL' as a number", "value 'CELL' is not
+ * finite"). */
+int pst_csv_number(const pst_csv_reader *r, size_t k, double *v, char *err);
+
+/* Write "PATH:LINE:COLUMN: column NAME: MESSAGE" for cell k of the current record into err and
+ * return `code`: the message of any check a format makes on a cell. */
+int pst_csv_cell_error(const pst_csv_reader *r, size_t k, int code, char *err,
+                       const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+
+/* A small CSV file whole, as strings and as numbers, for tables such as sweep results. */
+typedef struct {
+    size_t nrows; /* data rows, without the header                                          */
+    int ncols;
+    char **cell;  /* (nrows + 1) * ncols strings: cell[r * ncols + c], row 0 the header      */
+    double *num;  /* the same layout: each data cell as a finite number, NAN when it is not
+                     one (empty, text, nan, inf: pst_csv_parse_number); row 0 all NAN       */
+    size_t cap;   /* rows allocated                                                          */
+} pst_csv_table;
+
+/* Read a whole file (pst_csv_read_table) or text (pst_csv_parse_table) into a table with the
+ * reader's flags and errors, and PST_EINPUT beyond PST_CSV_MAX_ROWS data rows. *t is empty on
+ * failure. */
+int pst_csv_read_table(pst_csv_table *t, const char *path, int flags, char *err);
+int pst_csv_parse_table(pst_csv_table *t, const char *text, const char *name, int flags,
+                        char *err);
+/* Append a row of ncols cells (copied, numbers parsed once); to a zeroed table the first
+ * row appended is the header and sets ncols (> 0). PST_EINVAL for ncols <= 0 or above
+ * PST_CSV_MAX_CELLS, PST_EINPUT beyond PST_CSV_MAX_ROWS, PST_ENOMEM. */
+int pst_csv_table_add(pst_csv_table *t, int ncols, const char *const *cells, char *err);
+/* Free the cells and zero the table (NULL allowed). */
+void pst_csv_table_free(pst_csv_table *t);
+/* The first column named `name` among the first `below` columns, or -1. */
+int pst_csv_table_column(const pst_csv_table *t, const char *name, int below);
+
+/* --- CSV clouds --------------------------------------------------------------------------- */
 
 /* Read a cloud from CSV. The header names the columns: x,y[,z],V,h,kind,nx,ny[,nz], then
  * optionally m (scalar mobility) or mx,my[,mz] (diagonal), then any named fields. kind is

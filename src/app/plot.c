@@ -2,6 +2,7 @@
  * are grouped by their grid-key cells like the summary's groups (src/sweep.c), so a point's
  * mean and standard deviation are the summary's `mean` and `std` of its group. */
 #include "plot.h"
+#include "plot_ctx.h"
 
 #include "pstencil.h"
 #include "text_file.h"
@@ -17,38 +18,35 @@
 const char *const pst_plot_norms[] = {"rel_l2", "qsfdi11", "lv95", "lv78", "max_abs"};
 const int pst_plot_nnorms = (int)(sizeof pst_plot_norms / sizeof pst_plot_norms[0]);
 
-/* every norm column --norm accepts */
-static const char *const norm_columns[] = {"rel_l2", "qsfdi11", "qsfdi11_normalised", "lv78",
-                                           "lv95",   "max_abs", "max_rel"};
+const char *const pst_plot_known_norms[] = {"rel_l2", "qsfdi11", "qsfdi11_normalised",
+                                            "lv78",   "lv95",    "max_abs", "max_rel"};
+const int pst_plot_nknown_norms =
+    (int)(sizeof pst_plot_known_norms / sizeof pst_plot_known_norms[0]);
 
-enum { MAX_SERIES = 64, MAX_FILES = 32, MAX_BARS = 48 };
-
-typedef struct {
-    const pst_csv_table *t;
-    int nkeys, nc;
-    int scheme, spacing, repeat, jitter, hratio;        /* key columns, -1 when absent */
-    int task, type, status, particles, iter, tpre, ttask, ttotal, normcol;
-    int phase[5];
-    const char *slope_key;
-    const cJSON *fits;
-    pst_plot_set *ps;
-    int oom;
-} ctx;
-
-static const char *cell(const ctx *c, size_t r, int col)
+const char *plot_cell(const plot_ctx *c, size_t r, int col)
 {
     return c->t->cell[r * (size_t)c->nc + (size_t)col];
 }
 
+/* 1 and *v when the cell of row r, column col is a number (the table's typed cells). */
+int plot_number(const plot_ctx *c, size_t r, int col, double *v)
+{
+    double x = c->t->num[r * (size_t)c->nc + (size_t)col];
+    if (isnan(x))
+        return 0;
+    *v = x;
+    return 1;
+}
+
 
 /* the part of a dotted key after its last dot: cloud.h_ratio -> h_ratio */
-static const char *short_key(const char *k)
+const char *plot_short_key(const char *k)
 {
     const char *d = strrchr(k, '.');
     return d ? d + 1 : k;
 }
 
-__attribute__((format(printf, 2, 3))) static void skip(ctx *c, const char *fmt, ...)
+void plot_skip(plot_ctx *c, const char *fmt, ...)
 {
     char buf[512];
     va_list ap;
@@ -68,7 +66,7 @@ __attribute__((format(printf, 2, 3))) static void skip(ctx *c, const char *fmt, 
     s[c->ps->nskipped++] = d;
 }
 
-static pst_plot *new_plot(ctx *c)
+pst_plot *plot_new_plot(plot_ctx *c)
 {
     pst_plot *p = realloc(c->ps->plots, (size_t)(c->ps->nplots + 1) * sizeof *p);
     if (!p) {
@@ -81,7 +79,7 @@ static pst_plot *new_plot(ctx *c)
     return p;
 }
 
-static pst_plot_series *new_series(ctx *c, pst_plot *p, const char *label, size_t n)
+pst_plot_series *plot_new_series(plot_ctx *c, pst_plot *p, const char *label, size_t n)
 {
     pst_plot_series *s = realloc(p->series, (size_t)(p->nseries + 1) * sizeof *s);
     if (!s) {
@@ -104,7 +102,7 @@ static pst_plot_series *new_series(ctx *c, pst_plot *p, const char *label, size_
 
 /* Group the kept rows (keep[r], r = 1..nrows) by the cells of the columns with use[col]:
  * gid[r] (SIZE_MAX for rows not kept) and each group's first row, in order of appearance. */
-static size_t group_by(const ctx *c, const unsigned char *keep, const unsigned char *use,
+size_t plot_group_by(const plot_ctx *c, const unsigned char *keep, const unsigned char *use,
                        size_t *gid, size_t *first)
 {
     size_t ng = 0;
@@ -116,7 +114,7 @@ static size_t group_by(const ctx *c, const unsigned char *keep, const unsigned c
         for (; g < ng; ++g) {
             int same = 1;
             for (int q = 0; same && q < c->nc; ++q)
-                same = !use[q] || strcmp(cell(c, first[g], q), cell(c, r, q)) == 0;
+                same = !use[q] || strcmp(plot_cell(c, first[g], q), plot_cell(c, r, q)) == 0;
             if (same)
                 break;
         }
@@ -128,38 +126,22 @@ static size_t group_by(const ctx *c, const unsigned char *keep, const unsigned c
 }
 
 /* Distinct cells of column col among the kept rows (up to 2: 0, 1 or 2 meaning "several"). */
-static int distinct(const ctx *c, const unsigned char *keep, int col)
+int plot_distinct(const plot_ctx *c, const unsigned char *keep, int col)
 {
     const char *v = NULL;
     for (size_t r = 1; r <= c->t->nrows; ++r) {
         if (!keep[r])
             continue;
         if (!v)
-            v = cell(c, r, col);
-        else if (strcmp(v, cell(c, r, col)) != 0)
+            v = plot_cell(c, r, col);
+        else if (strcmp(v, plot_cell(c, r, col)) != 0)
             return 2;
     }
     return v ? 1 : 0;
 }
 
-/* 1 when the kept rows with equal cells in column `by` have equal cells in column `col`. */
-static int determined(const ctx *c, const unsigned char *keep, int col, int by)
-{
-    for (size_t r = 1; r <= c->t->nrows; ++r) {
-        if (!keep[r])
-            continue;
-        for (size_t s = 1; s < r; ++s)
-            if (keep[s] && strcmp(cell(c, s, by), cell(c, r, by)) == 0) {
-                if (strcmp(cell(c, s, col), cell(c, r, col)) != 0)
-                    return 0;
-                break; /* rows before s agree with s already */
-            }
-    }
-    return 1;
-}
-
 /* Append to buf (size len) "sep" then text, when buf is not empty, else text. */
-static void append(char *buf, size_t len, const char *sep, const char *text)
+void plot_append(char *buf, size_t len, const char *sep, const char *text)
 {
     size_t u = strlen(buf);
     if (u + 1 >= len)
@@ -167,69 +149,7 @@ static void append(char *buf, size_t len, const char *sep, const char *text)
     snprintf(buf + u, len - u, "%s%s", u ? sep : "", text);
 }
 
-/* A file-name-safe copy of a cell: [A-Za-z0-9.-] kept, others '_'. */
-static void safe_name(char *out, size_t len, const char *s)
-{
-    size_t i = 0;
-    for (; *s && i + 1 < len; ++s)
-        out[i++] = ((*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') ||
-                    (*s >= '0' && *s <= '9') || *s == '.' || *s == '-')
-                       ? *s
-                       : '_';
-    out[i] = '\0';
-}
-
-/* A cell typed as the summary's keys are (a number, bool, list or object when it parses as
- * one, else a string), compared with a fit's key value. */
-static int cell_equals(const char *c, const cJSON *v)
-{
-    cJSON *p = cJSON_Parse(c);
-    int eq;
-    if (p && (cJSON_IsNumber(p) || cJSON_IsBool(p) || cJSON_IsArray(p) || cJSON_IsObject(p)))
-        eq = cJSON_Compare(p, v, 1);
-    else
-        eq = cJSON_IsString(v) && strcmp(v->valuestring, c) == 0;
-    cJSON_Delete(p);
-    return eq;
-}
-
-/* The summary fit of the group whose first row is r (task, norm, keys): slope and stderr. */
-static const cJSON *find_fit(const ctx *c, size_t r, const char *norm)
-{
-    const cJSON *f;
-    cJSON_ArrayForEach(f, c->fits)
-    {
-        const cJSON *task = cJSON_GetObjectItemCaseSensitive(f, "task");
-        const cJSON *fn = cJSON_GetObjectItemCaseSensitive(f, "norm");
-        const cJSON *key = cJSON_GetObjectItemCaseSensitive(f, "key");
-        if (!cJSON_IsString(task) || !cJSON_IsString(fn) || !cJSON_IsObject(key) ||
-            strcmp(task->valuestring, cell(c, r, c->task)) != 0 ||
-            strcmp(fn->valuestring, norm) != 0)
-            continue;
-        int match = 1;
-        const cJSON *kv;
-        cJSON_ArrayForEach(kv, key)
-        {
-            int q = pst_csv_column(c->t, kv->string, c->nkeys);
-            if (q < 0 || !cell_equals(cell(c, r, q), kv)) {
-                match = 0;
-                break;
-            }
-        }
-        if (match)
-            return f;
-    }
-    return NULL;
-}
-
-typedef struct {
-    const char *name, *title, *xlabel, *ylabel;
-    int logx, logy;
-    int xcol, ycol;
-    int slopes; /* legend slopes from the summary fits (ycol is c->normcol) */
-} line_spec;
-
-static void sort_points(pst_plot_series *s)
+void plot_sort_points(pst_plot_series *s)
 {
     for (size_t i = 1; i < s->n; ++i)
         for (size_t j = i; j > 0 && s->x[j - 1] > s->x[j]; --j) {
@@ -245,193 +165,75 @@ static void sort_points(pst_plot_series *s)
         }
 }
 
-/* Lines of mean y against mean x, one per series (the grid keys but the resolution and the
- * repeat key, and the task when several): the points are the groups of all keys but the
- * repeat key. Keys that vary within a scheme split the plot into files. */
-static void line_plot(ctx *c, const line_spec *sp, unsigned char *keep)
-{
-    const size_t n = c->t->nrows;
-    for (size_t r = 1; r <= n; ++r) {
-        double x, y;
-        if (keep[r] && !(pst_csv_number(cell(c, r, sp->xcol), &x) && pst_csv_number(cell(c, r, sp->ycol), &y) &&
-                         (!sp->logx || x > 0) && (!sp->logy || y > 0)))
-            keep[r] = 0;
-    }
-    if (distinct(c, keep, sp->ycol) == 0) {
-        skip(c, "%s.png: no ok rows with a positive %s%s", sp->name, c->t->cell[sp->ycol],
-             sp->logx ? " and x" : "");
-        return;
-    }
-    /* series keys: all but the resolution and the repeat key; primary: the scheme */
-    int ser[SW_MAX_KEYS * 4], nser = 0;
-    for (int q = 0; q < c->nkeys && nser < SW_MAX_KEYS * 4; ++q)
-        if (q != c->spacing && q != c->repeat)
-            ser[nser++] = q;
-    int primary = c->scheme;
-    for (int i = 0; primary < 0 && i < nser; ++i)
-        if (distinct(c, keep, ser[i]) > 1)
-            primary = ser[i];
-    unsigned char *split = calloc((size_t)c->nc, 1), *label = calloc((size_t)c->nc, 1);
-    unsigned char *use = calloc((size_t)c->nc, 1);
-    size_t *gid_f = malloc((n + 1) * sizeof *gid_f), *first_f = malloc((n + 1) * sizeof *first_f);
-    size_t *gid_s = malloc((n + 1) * sizeof *gid_s), *first_s = malloc((n + 1) * sizeof *first_s);
-    size_t *gid_p = malloc((n + 1) * sizeof *gid_p), *first_p = malloc((n + 1) * sizeof *first_p);
-    double *xv = malloc((n + 1) * sizeof *xv), *yv = malloc((n + 1) * sizeof *yv);
-    if (!split || !label || !use || !gid_f || !first_f || !gid_s || !first_s || !gid_p ||
-        !first_p || !xv || !yv) {
-        c->oom = 1;
-        goto done;
-    }
-    int nsplit = 0;
-    for (int i = 0; i < nser; ++i) {
-        int q = ser[i];
-        if (q == primary || distinct(c, keep, q) < 2)
-            continue;
-        if (primary >= 0 && determined(c, keep, q, primary))
-            label[q] = 1;
-        else {
-            split[q] = 1;
-            ++nsplit;
-        }
-    }
-    const int bytask = distinct(c, keep, c->task) > 1;
-    size_t nf = group_by(c, keep, split, gid_f, first_f);
-    for (int i = 0; i < nser; ++i)
-        use[ser[i]] = 1;
-    use[c->task] = 1;
-    size_t ns = group_by(c, keep, use, gid_s, first_s);
-    if (c->spacing >= 0)
-        use[c->spacing] = 1;
-    size_t np = group_by(c, keep, use, gid_p, first_p);
-    if (nf > MAX_FILES) {
-        skip(c, "%s.png: %zu combinations of the keys that vary within a scheme (more than %d)",
-             sp->name, nf, MAX_FILES);
-        goto done;
-    }
-    for (size_t f = 0; f < nf && !c->oom; ++f) {
-        size_t nsf = 0;
-        for (size_t s = 0; s < ns; ++s)
-            nsf += gid_f[first_s[s]] == f;
-        if (nsf > MAX_SERIES) {
-            skip(c, "%s.png: %zu series (more than %d)", sp->name, nsf, MAX_SERIES);
-            continue;
-        }
-        pst_plot *p = new_plot(c);
-        if (!p)
-            break;
-        char name[160], cond[200];
-        snprintf(name, sizeof name, "%s", sp->name);
-        cond[0] = '\0';
-        for (int q = 0; q < c->nkeys; ++q)
-            if (split[q]) {
-                char v[64], part[160];
-                safe_name(v, sizeof v, cell(c, first_f[f], q));
-                snprintf(part, sizeof part, "_%s-%s", short_key(c->t->cell[q]), v);
-                append(name, sizeof name, "", part);
-                snprintf(part, sizeof part, "%s = %s", c->t->cell[q], cell(c, first_f[f], q));
-                append(cond, sizeof cond, ", ", part);
-            }
-        snprintf(p->name, sizeof p->name, "%s", name);
-        if (cond[0])
-            snprintf(p->title, sizeof p->title, "%s (%s)", sp->title, cond);
-        else
-            snprintf(p->title, sizeof p->title, "%s", sp->title);
-        snprintf(p->xlabel, sizeof p->xlabel, "%s", sp->xlabel);
-        snprintf(p->ylabel, sizeof p->ylabel, "%s", sp->ylabel);
-        p->kind = PST_PLOT_LINES;
-        p->logx = sp->logx;
-        p->logy = sp->logy;
-        for (size_t s = 0; s < ns && !c->oom; ++s) {
-            if (gid_f[first_s[s]] != f)
-                continue;
-            const size_t r0 = first_s[s];
-            char lab[256] = "";
-            if (primary >= 0)
-                append(lab, sizeof lab, ", ", cell(c, r0, primary));
-            for (int q = 0; q < c->nkeys; ++q)
-                if (label[q]) {
-                    char part[128];
-                    snprintf(part, sizeof part, "%s %s", short_key(c->t->cell[q]),
-                             cell(c, r0, q));
-                    append(lab, sizeof lab, ", ", part);
-                }
-            if (bytask || !lab[0])
-                append(lab, sizeof lab, ", ", cell(c, r0, c->task));
-            if (sp->slopes) {
-                const cJSON *fit = find_fit(c, r0, c->t->cell[sp->ycol]);
-                const cJSON *sl = cJSON_GetObjectItemCaseSensitive(fit, "slope");
-                const cJSON *se = cJSON_GetObjectItemCaseSensitive(fit, "stderr");
-                char part[96];
-                if (cJSON_IsNumber(sl) && cJSON_IsNumber(se))
-                    snprintf(part, sizeof part, " (slope %.2f \xc2\xb1 %.2f)", sl->valuedouble,
-                             se->valuedouble);
-                else if (cJSON_IsNumber(sl))
-                    snprintf(part, sizeof part, " (slope %.2f)", sl->valuedouble);
-                else
-                    part[0] = '\0';
-                append(lab, sizeof lab, "", part);
-            }
-            size_t npts = 0;
-            for (size_t g = 0; g < np; ++g)
-                npts += gid_s[first_p[g]] == s;
-            pst_plot_series *se = new_series(c, p, lab, npts);
-            if (!se)
-                break;
-            for (size_t g = 0; g < np; ++g) {
-                if (gid_s[first_p[g]] != s)
-                    continue;
-                size_t m = 0;
-                for (size_t r = first_p[g]; r <= n; ++r)
-                    if (gid_p[r] == g) {
-                        pst_csv_number(cell(c, r, sp->xcol), &xv[m]);
-                        pst_csv_number(cell(c, r, sp->ycol), &yv[m]);
-                        ++m;
-                    }
-                double sx;
-                pst_mean_std(xv, m, &se->x[se->n], &sx);
-                pst_mean_std(yv, m, &se->y[se->n], &se->err[se->n]);
-                ++se->n;
-            }
-            sort_points(se);
-        }
-    }
-done:
-    free(split);
-    free(label);
-    free(use);
-    free(gid_f);
-    free(first_f);
-    free(gid_s);
-    free(first_s);
-    free(gid_p);
-    free(first_p);
-    free(xv);
-    free(yv);
-}
-
 /* rows with status ok */
-static void keep_ok(const ctx *c, unsigned char *keep)
+static void keep_ok(const plot_ctx *c, unsigned char *keep)
 {
     keep[0] = 0;
     for (size_t r = 1; r <= c->t->nrows; ++r)
-        keep[r] = strcmp(cell(c, r, c->status), "ok") == 0;
+        keep[r] = strcmp(plot_cell(c, r, c->status), "ok") == 0;
+}
+
+/* The mean (t_precompute + t_task) of each group. */
+static void time_means(const plot_ctx *c, const size_t *gid, const size_t *first, size_t ng,
+                       double *mean)
+{
+    for (size_t g = 0; g < ng; ++g) {
+        double s = 0;
+        size_t m = 0;
+        for (size_t r = first[g]; r <= c->t->nrows; ++r)
+            if (gid[r] == g) {
+                double a = 0, b = 0;
+                plot_number(c, r, c->tpre, &a);
+                plot_number(c, r, c->ttask, &b);
+                s += a + b;
+                ++m;
+            }
+        mean[g] = s / (double)m;
+    }
+}
+
+/* The point of qsfdi group g: x its key value, y the mean time of the lpmps group with the
+ * same cells but the scheme (and the repeat key) over g's. None when there is no such group
+ * or g's mean is not positive. */
+static void ratio_point(const plot_ctx *c, const size_t *first, const double *mean, size_t ng,
+                        size_t g, int xcol, pst_plot_series *se)
+{
+    const size_t rq = first[g];
+    for (size_t h = 0; h < ng; ++h) {
+        const size_t rl = first[h];
+        if (strcmp(plot_cell(c, rl, c->scheme), "lpmps") != 0 ||
+            strcmp(plot_cell(c, rl, c->task), plot_cell(c, rq, c->task)) != 0)
+            continue;
+        int same = 1;
+        for (int q = 0; same && q < c->nkeys; ++q)
+            same = q == c->scheme || q == c->repeat ||
+                   strcmp(plot_cell(c, rl, q), plot_cell(c, rq, q)) == 0;
+        if (!same || !(mean[g] > 0))
+            continue;
+        plot_number(c, rq, xcol, &se->x[se->n]);
+        se->y[se->n] = mean[h] / mean[g];
+        se->err[se->n] = NAN;
+        ++se->n;
+        return;
+    }
 }
 
 /* The LP-MPS / QSFDI ratio of mean (t_precompute + t_task) against key column xcol. */
-static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
+static void ratio_plot(plot_ctx *c, unsigned char *keep, int xcol, const char *xname,
                        const char *name, const char *xlabel)
 {
     const size_t n = c->t->nrows;
     if (c->scheme < 0) {
-        skip(c, "%s.png: operator.scheme is not a grid key", name);
+        plot_skip(c, "%s.png: operator.scheme is not a grid key", name);
         return;
     }
     int has_q = 0, has_l = 0;
     for (size_t r = 1; r <= n; ++r) {
         double a, b;
-        const char *s = cell(c, r, c->scheme);
+        const char *s = plot_cell(c, r, c->scheme);
         int q = strcmp(s, "qsfdi") == 0, l = strcmp(s, "lpmps") == 0;
-        if (keep[r] && (q || l) && pst_csv_number(cell(c, r, c->tpre), &a) && pst_csv_number(cell(c, r, c->ttask), &b)) {
+        if (keep[r] && (q || l) && plot_number(c, r, c->tpre, &a) &&
+            plot_number(c, r, c->ttask, &b)) {
             has_q |= q;
             has_l |= l;
         } else {
@@ -439,15 +241,15 @@ static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
         }
     }
     if (!has_q || !has_l) {
-        skip(c, "%s.png: needs ok rows of both qsfdi and lpmps", name);
+        plot_skip(c, "%s.png: needs ok rows of both qsfdi and lpmps", name);
         return;
     }
     if (xcol < 0) {
-        skip(c, "%s.png: %s is not a grid key", name, xname);
+        plot_skip(c, "%s.png: %s is not a grid key", name, xname);
         return;
     }
-    if (distinct(c, keep, xcol) < 2) {
-        skip(c, "%s.png: %s takes one value", name, xname);
+    if (plot_distinct(c, keep, xcol) < 2) {
+        plot_skip(c, "%s.png: %s takes one value", name, xname);
         return;
     }
     unsigned char *use = calloc((size_t)c->nc, 1);
@@ -461,29 +263,17 @@ static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
     for (int q = 0; q < c->nkeys; ++q)
         use[q] = q != c->repeat;
     use[c->task] = 1;
-    size_t ng = group_by(c, keep, use, gid, first);
-    for (size_t g = 0; g < ng; ++g) {
-        double s = 0;
-        size_t m = 0;
-        for (size_t r = first[g]; r <= n; ++r)
-            if (gid[r] == g) {
-                double a = 0, b = 0;
-                pst_csv_number(cell(c, r, c->tpre), &a);
-                pst_csv_number(cell(c, r, c->ttask), &b);
-                s += a + b;
-                ++m;
-            }
-        mean[g] = s / (double)m;
-    }
+    size_t ng = plot_group_by(c, keep, use, gid, first);
+    time_means(c, gid, first, ng, mean);
     /* series: the qsfdi groups by all keys but the scheme, x and the repeat key */
     use[c->scheme] = 0;
     use[xcol] = 0;
     unsigned char *qkeep = keep; /* reuse: only the qsfdi rows now */
     for (size_t r = 1; r <= n; ++r)
-        qkeep[r] = keep[r] && strcmp(cell(c, r, c->scheme), "qsfdi") == 0;
-    size_t ns = group_by(c, qkeep, use, sid, sfirst);
-    int bytask = distinct(c, qkeep, c->task) > 1;
-    pst_plot *p = new_plot(c);
+        qkeep[r] = keep[r] && strcmp(plot_cell(c, r, c->scheme), "qsfdi") == 0;
+    size_t ns = plot_group_by(c, qkeep, use, sid, sfirst);
+    int bytask = plot_distinct(c, qkeep, c->task) > 1;
+    pst_plot *p = plot_new_plot(c);
     if (!p)
         goto done;
     snprintf(p->name, sizeof p->name, "%s", name);
@@ -495,43 +285,24 @@ static void ratio_plot(ctx *c, unsigned char *keep, int xcol, const char *xname,
         const size_t r0 = sfirst[s];
         char lab[256] = "";
         for (int q = 0; q < c->nkeys; ++q)
-            if (use[q] && (distinct(c, qkeep, q) > 1 || q == c->spacing)) {
+            if (use[q] && (plot_distinct(c, qkeep, q) > 1 || q == c->spacing)) {
                 char part[128];
-                snprintf(part, sizeof part, "%s %s", short_key(c->t->cell[q]), cell(c, r0, q));
-                append(lab, sizeof lab, ", ", part);
+                snprintf(part, sizeof part, "%s %s", plot_short_key(c->t->cell[q]),
+                         plot_cell(c, r0, q));
+                plot_append(lab, sizeof lab, ", ", part);
             }
         if (bytask || !lab[0])
-            append(lab, sizeof lab, ", ", cell(c, r0, c->task));
+            plot_append(lab, sizeof lab, ", ", plot_cell(c, r0, c->task));
         size_t npts = 0;
         for (size_t g = 0; g < ng; ++g)
             npts += sid[first[g]] == s;
-        pst_plot_series *se = new_series(c, p, lab, npts);
+        pst_plot_series *se = plot_new_series(c, p, lab, npts);
         if (!se)
             break;
-        for (size_t g = 0; g < ng; ++g) {
-            if (sid[first[g]] != s)
-                continue;
-            /* the lpmps group with the same cells but the scheme */
-            const size_t rq = first[g];
-            for (size_t h = 0; h < ng; ++h) {
-                const size_t rl = first[h];
-                if (strcmp(cell(c, rl, c->scheme), "lpmps") != 0 ||
-                    strcmp(cell(c, rl, c->task), cell(c, rq, c->task)) != 0)
-                    continue;
-                int same = 1;
-                for (int q = 0; same && q < c->nkeys; ++q)
-                    same = q == c->scheme || q == c->repeat ||
-                           strcmp(cell(c, rl, q), cell(c, rq, q)) == 0;
-                if (!same || !(mean[g] > 0))
-                    continue;
-                pst_csv_number(cell(c, rq, xcol), &se->x[se->n]);
-                se->y[se->n] = mean[h] / mean[g];
-                se->err[se->n] = NAN;
-                ++se->n;
-                break;
-            }
-        }
-        sort_points(se);
+        for (size_t g = 0; g < ng; ++g)
+            if (sid[first[g]] == s)
+                ratio_point(c, first, mean, ng, g, xcol, se);
+        plot_sort_points(se);
     }
 done:
     free(use);
@@ -548,29 +319,29 @@ static const char *const phase_labels[5] = {"geometry", "moments", "inversions",
                                             "task (apply or solve)"};
 
 /* Stacked bars of the mean phase times per scheme (per series) at the finest resolution. */
-static void phases_plot(ctx *c, unsigned char *keep)
+static void phases_plot(plot_ctx *c, unsigned char *keep)
 {
     const size_t n = c->t->nrows;
     double fine = INFINITY;
     for (size_t r = 1; r <= n; ++r) {
         double v;
-        if (keep[r] && !pst_csv_number(cell(c, r, c->ttask), &v))
+        if (keep[r] && !plot_number(c, r, c->ttask, &v))
             keep[r] = 0;
-        if (keep[r] && c->spacing >= 0 && pst_csv_number(cell(c, r, c->spacing), &v) && v < fine)
+        if (keep[r] && c->spacing >= 0 && plot_number(c, r, c->spacing, &v) && v < fine)
             fine = v;
     }
-    if (distinct(c, keep, c->ttask) == 0) {
-        skip(c, "phases.png: no ok rows with a t_task");
+    if (plot_distinct(c, keep, c->ttask) == 0) {
+        plot_skip(c, "phases.png: no ok rows with a t_task");
         return;
     }
     const char *fine_cell = NULL;
     if (c->spacing >= 0)
         for (size_t r = 1; r <= n; ++r) {
             double v;
-            if (keep[r] && !(pst_csv_number(cell(c, r, c->spacing), &v) && v == fine))
+            if (keep[r] && !(plot_number(c, r, c->spacing, &v) && v == fine))
                 keep[r] = 0;
             else if (keep[r] && !fine_cell)
-                fine_cell = cell(c, r, c->spacing);
+                fine_cell = plot_cell(c, r, c->spacing);
         }
     unsigned char *use = calloc((size_t)c->nc, 1);
     size_t *gid = malloc((n + 1) * sizeof *gid), *first = malloc((n + 1) * sizeof *first);
@@ -582,13 +353,13 @@ static void phases_plot(ctx *c, unsigned char *keep)
     for (int q = 0; q < c->nkeys; ++q)
         use[q] = q != c->repeat && q != c->spacing;
     use[c->task] = 1;
-    size_t ng = group_by(c, keep, use, gid, first);
+    size_t ng = plot_group_by(c, keep, use, gid, first);
     if (ng > MAX_BARS) {
-        skip(c, "phases.png: %zu bars (more than %d)", ng, MAX_BARS);
+        plot_skip(c, "phases.png: %zu bars (more than %d)", ng, MAX_BARS);
         goto done;
     }
-    int bytask = distinct(c, keep, c->task) > 1;
-    pst_plot *p = new_plot(c);
+    int bytask = plot_distinct(c, keep, c->task) > 1;
+    pst_plot *p = plot_new_plot(c);
     if (!p)
         goto done;
     snprintf(p->name, sizeof p->name, "phases");
@@ -608,21 +379,21 @@ static void phases_plot(ctx *c, unsigned char *keep)
     for (size_t g = 0; g < ng; ++g) {
         char lab[256] = "";
         for (int q = 0; q < c->nkeys; ++q)
-            if (use[q] && distinct(c, keep, q) > 1)
-                append(lab, sizeof lab, " ", cell(c, first[g], q));
+            if (use[q] && plot_distinct(c, keep, q) > 1)
+                plot_append(lab, sizeof lab, " ", plot_cell(c, first[g], q));
         if (bytask || !lab[0])
-            append(lab, sizeof lab, " ", cell(c, first[g], c->task));
+            plot_append(lab, sizeof lab, " ", plot_cell(c, first[g], c->task));
         if (!(p->cat[g] = pst_strdup(lab)))
             c->oom = 1;
     }
     for (int k = 0; k < 5 && !c->oom; ++k) {
-        pst_plot_series *se = new_series(c, p, phase_labels[k], ng);
+        pst_plot_series *se = plot_new_series(c, p, phase_labels[k], ng);
         if (!se)
             break;
         for (size_t g = 0; g < ng; ++g) {
             size_t m = 0;
             for (size_t r = first[g]; r <= n; ++r)
-                if (gid[r] == g && pst_csv_number(cell(c, r, c->phase[k]), &v[m]))
+                if (gid[r] == g && plot_number(c, r, c->phase[k], &v[m]))
                     ++m;
             se->x[g] = (double)g;
             if (m)
@@ -645,8 +416,8 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
                    pst_plot_set *ps, char *err, size_t errlen)
 {
     memset(ps, 0, sizeof *ps);
-    ctx c = {.t = t, .nc = t->ncols, .ps = ps};
-    c.nkeys = pst_csv_column(t, "dim", t->ncols);
+    plot_ctx c = {.t = t, .nc = t->ncols, .ps = ps};
+    c.nkeys = pst_csv_table_column(t, "dim", t->ncols);
     if (c.nkeys < 0 || t->ncols != c.nkeys + pst_sweep_ncolumns) {
         snprintf(err, errlen, "not a sweep CSV (no 'dim' column, or not %d columns after the "
                               "grid keys)", pst_sweep_ncolumns);
@@ -663,21 +434,21 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     c.slope_key = cJSON_IsString(sk) ? sk->valuestring : "cloud.spacing";
     const char *repeat_key = cJSON_IsString(rk) ? rk->valuestring : "cloud.seed";
     c.fits = cJSON_GetObjectItemCaseSensitive(summary, "fits");
-    c.scheme = pst_csv_column(t, "operator.scheme", c.nkeys);
-    c.spacing = pst_csv_column(t, c.slope_key, c.nkeys);
-    c.repeat = pst_csv_column(t, repeat_key, c.nkeys);
-    c.jitter = pst_csv_column(t, "cloud.jitter", c.nkeys);
-    c.hratio = pst_csv_column(t, "cloud.h_ratio", c.nkeys);
-    c.task = pst_csv_column(t, "task", t->ncols);
-    c.type = pst_csv_column(t, "type", t->ncols);
-    c.status = pst_csv_column(t, "status", t->ncols);
-    c.particles = pst_csv_column(t, "particles", t->ncols);
-    c.iter = pst_csv_column(t, "iterations", t->ncols);
-    c.tpre = pst_csv_column(t, "t_precompute", t->ncols);
-    c.ttask = pst_csv_column(t, "t_task", t->ncols);
-    c.ttotal = pst_csv_column(t, "t_total", t->ncols);
+    c.scheme = pst_csv_table_column(t, "operator.scheme", c.nkeys);
+    c.spacing = pst_csv_table_column(t, c.slope_key, c.nkeys);
+    c.repeat = pst_csv_table_column(t, repeat_key, c.nkeys);
+    c.jitter = pst_csv_table_column(t, "cloud.jitter", c.nkeys);
+    c.hratio = pst_csv_table_column(t, "cloud.h_ratio", c.nkeys);
+    c.task = pst_csv_table_column(t, "task", t->ncols);
+    c.type = pst_csv_table_column(t, "type", t->ncols);
+    c.status = pst_csv_table_column(t, "status", t->ncols);
+    c.particles = pst_csv_table_column(t, "particles", t->ncols);
+    c.iter = pst_csv_table_column(t, "iterations", t->ncols);
+    c.tpre = pst_csv_table_column(t, "t_precompute", t->ncols);
+    c.ttask = pst_csv_table_column(t, "t_task", t->ncols);
+    c.ttotal = pst_csv_table_column(t, "t_total", t->ncols);
     for (int k = 0; k < 5; ++k)
-        c.phase[k] = pst_csv_column(t, phase_cols[k], t->ncols);
+        c.phase[k] = pst_csv_table_column(t, phase_cols[k], t->ncols);
 
     const size_t n = t->nrows;
     unsigned char *keep = malloc(n + 1);
@@ -688,9 +459,9 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     /* the norm: --norm, or the first of the default order with a value in an ok row */
     c.normcol = -1;
     if (norm) {
-        for (size_t i = 0; i < sizeof norm_columns / sizeof norm_columns[0]; ++i)
-            if (strcmp(norm, norm_columns[i]) == 0)
-                c.normcol = pst_csv_column(t, norm, t->ncols);
+        for (int i = 0; i < pst_plot_nknown_norms; ++i)
+            if (strcmp(norm, pst_plot_known_norms[i]) == 0)
+                c.normcol = pst_csv_table_column(t, norm, t->ncols);
         if (c.normcol < 0) {
             free(keep);
             snprintf(err, errlen, "unknown norm '%s' (known: rel_l2, qsfdi11, "
@@ -700,10 +471,10 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     } else {
         keep_ok(&c, keep);
         for (int i = 0; i < pst_plot_nnorms && c.normcol < 0; ++i) {
-            int q = pst_csv_column(t, pst_plot_norms[i], t->ncols);
+            int q = pst_csv_table_column(t, pst_plot_norms[i], t->ncols);
             for (size_t r = 1; r <= n && c.normcol < 0; ++r) {
                 double v;
-                if (keep[r] && pst_csv_number(cell(&c, r, q), &v))
+                if (keep[r] && plot_number(&c, r, q, &v))
                     c.normcol = q;
             }
         }
@@ -719,19 +490,19 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
                                                   : c.slope_key);
         line_spec sp = {"error_vs_s0", "mean error against spacing", xlabel, ylabel, 1, 1,
                         c.spacing, c.normcol, 1};
-        line_plot(&c, &sp, keep);
+        plot_lines(&c, &sp, keep);
     } else if (c.normcol < 0) {
-        skip(&c, "error_vs_s0.png: no error norm measured");
+        plot_skip(&c, "error_vs_s0.png: no error norm measured");
     } else {
-        skip(&c, "error_vs_s0.png: %s is not a grid key", c.slope_key);
+        plot_skip(&c, "error_vs_s0.png: %s is not a grid key", c.slope_key);
     }
     if (c.normcol >= 0) {
         keep_ok(&c, keep);
         line_spec sp = {"error_vs_time", "mean error against mean wall-clock time of the run",
                         "t_total (s)", ylabel, 1, 1, c.ttotal, c.normcol, 0};
-        line_plot(&c, &sp, keep);
+        plot_lines(&c, &sp, keep);
     } else {
-        skip(&c, "error_vs_time.png: no error norm measured");
+        plot_skip(&c, "error_vs_time.png: no error norm measured");
     }
     keep_ok(&c, keep);
     ratio_plot(&c, keep, c.jitter, "cloud.jitter", "time_ratio_vs_jitter", "jitter K");
@@ -742,15 +513,15 @@ int pst_plot_build(const pst_csv_table *t, const cJSON *summary, const char *nor
     keep_ok(&c, keep);
     int solves = 0;
     for (size_t r = 1; r <= n; ++r) {
-        keep[r] = keep[r] && strcmp(cell(&c, r, c.type), "solve") == 0;
+        keep[r] = keep[r] && strcmp(plot_cell(&c, r, c.type), "solve") == 0;
         solves |= keep[r];
     }
     if (solves) {
         line_spec sp = {"iterations_vs_n", "mean solver iterations against particles",
                         "particles", "iterations", 1, 0, c.particles, c.iter, 0};
-        line_plot(&c, &sp, keep);
+        plot_lines(&c, &sp, keep);
     } else {
-        skip(&c, "iterations_vs_n.png: no ok rows of a solve task");
+        plot_skip(&c, "iterations_vs_n.png: no ok rows of a solve task");
     }
     free(keep);
     if (c.oom) {

@@ -1,5 +1,5 @@
 /* Plots of a sweep (docs/plots.md): the series each plot shows, extracted from the sweep CSV
- * and its summary (the fits' slopes). No drawing here: src/cli_plot.c hands the series to
+ * and its summary (the fits' slopes). No drawing here: src/cli/cmd_plot.c hands the series to
  * gnuplot. Every mean is over the rows with status ok, like the summary's. */
 #ifndef PSTENCIL_PLOT_H
 #define PSTENCIL_PLOT_H
@@ -45,6 +45,9 @@ typedef struct {
 /* The error norms a plot may use, and the default order (the first with a value wins). */
 extern const char *const pst_plot_norms[];
 extern const int pst_plot_nnorms;
+/* Every norm column --norm accepts. */
+extern const char *const pst_plot_known_norms[];
+extern const int pst_plot_nknown_norms;
 
 /* Build the plots the sweep table supports:
  *   error_vs_s0          mean error (std bars) vs the slope key, per series, with the

@@ -1,6 +1,7 @@
 #include "report.h"
 
 #include "pstencil.h"
+#include "text_file.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -205,16 +206,6 @@ static int select_fields(const pst_cloud *c, char *const *names, int nnames, pst
     return PST_OK;
 }
 
-static void write_json(FILE *f, const void *job)
-{
-    char *text = cJSON_Print(job);
-    if (text) {
-        fputs(text, f);
-        fputc('\n', f);
-    }
-    free(text);
-}
-
 int report_write_outputs(const pst_scene *s, const pst_cloud *c, const pst_op *base,
                          cJSON *report, pst_run_counters *cnt, char *err, size_t errlen)
 {
@@ -242,7 +233,7 @@ int report_write_outputs(const pst_scene *s, const pst_cloud *c, const pst_op *b
     }
     pst_cloud_destroy(sel);
     if (st == PST_OK && s->out.report) {
-        st = pst_write_atomic(s->out.report, write_json, report, msg);
+        st = pst_write_atomic(s->out.report, pst_write_json, report, msg);
         if (st != PST_OK)
             snprintf(err, errlen, "outputs.report: %s", msg);
         else

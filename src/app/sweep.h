@@ -1,8 +1,12 @@
 /* Sweeps (docs/sweeps.md): a scene run over the Cartesian product of lists of key values, one
  * CSV row per (run, task) written all or nothing after every run, resumable, and a summary
- * JSON (means, standard deviations, convergence slopes) computed from the CSV alone. */
+ * JSON (means, standard deviations, convergence slopes) computed from the CSV alone. The
+ * front end's interface: the sweep file (sweep_file.c), its grid (sweep_grid.c), the runs
+ * (sweep_run.c), the CSV (sweep_csv.c) and the summary (sweep_summary.c). */
 #ifndef PSTENCIL_SWEEP_H
 #define PSTENCIL_SWEEP_H
+
+#include "pstencil.h"
 
 #include <stddef.h>
 
@@ -71,30 +75,17 @@ int pst_sweep_run(const pst_sweep *sw, const pst_sweep_opts *o, pst_sweep_stats 
 extern const char *const pst_sweep_columns[];
 extern const int pst_sweep_ncolumns;
 
-/* A CSV file as strings: cell[r * ncols + c], row 0 the header. */
-typedef struct {
-    size_t nrows;            /* data rows, without the header */
-    int ncols;
-    char **cell;
-} pst_csv_table;
-
-/* Read an RFC 4180 CSV (quoted cells, doubled quotes, CRLF or LF). Every row must have the
- * header's number of cells. PST_EIO / PST_EINPUT / PST_ENOMEM with "PATH:LINE: ..." in err. */
-int pst_csv_read(const char *path, pst_csv_table *t, char *err, size_t errlen);
-void pst_csv_table_free(pst_csv_table *t);
-/* The header column named `name` among the first `below` columns, or -1. */
-int pst_csv_column(const pst_csv_table *t, const char *name, int below);
-/* 1 and *v when the cell is a whole finite number, 0 for anything else (empty included). */
-int pst_csv_number(const char *cell, double *v);
 /* Mean and sample standard deviation (n - 1; NAN for one value) of v[0..n), n >= 1, two-pass
  * for accuracy: the sweep summary's and the plots' error bars. */
 void pst_mean_std(const double *v, size_t n, double *mean, double *sd);
 
-/* The summary of a sweep CSV: groups (grid keys except repeat_key, per task: counts, means and
- * standard deviations of the norms and times, mean iterations) and convergence fits (grid
- * keys except slope_key and repeat_key, per task and norm: least-squares slope of log(mean
- * norm) against log(slope_key), its standard error, the points). A function of the table
- * alone; NULL when out of memory or when the header is not a sweep's. cJSON_Delete it. */
+/* The summary of a sweep CSV (a table from pst_csv_read_table): groups (grid keys except
+ * repeat_key, per task: counts, means and standard deviations of the norms and times, mean
+ * iterations) and convergence fits (grid keys except slope_key and repeat_key, per task and
+ * norm: least-squares slope of log(mean norm) against log(slope_key), its standard error, the
+ * points). The statistics read the table's numbers (t->num), the groups its key cells. A
+ * function of the table alone; NULL when out of memory or when the header is not a sweep's.
+ * cJSON_Delete it. */
 struct cJSON *pst_sweep_summary(const pst_csv_table *t, const char *slope_key,
                                 const char *repeat_key);
 

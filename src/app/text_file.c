@@ -2,6 +2,7 @@
 
 #include "pstencil.h"
 
+#include <cjson/cJSON.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -53,4 +54,14 @@ char *pst_strdup(const char *s)
     if (d)
         memcpy(d, s, n);
     return d;
+}
+
+void pst_write_json(FILE *f, const void *json)
+{
+    char *text = cJSON_Print(json);
+    if (text) {
+        fputs(text, f);
+        fputc('\n', f);
+    }
+    free(text);
 }

@@ -7,7 +7,6 @@
 #include "gnuplot.h"
 #include "plot.h"
 #include "text_file.h"
-#include "sweep.h"
 
 #include <cjson/cJSON.h>
 #include <errno.h>
@@ -205,128 +204,209 @@ static void script_stacked(FILE *g, const pst_plot *p)
     fprintf(g, "\n");
 }
 
-int cli_plot(const cli_ctx *ctx, int argc, char **argv)
+typedef struct {
+    const char *csv, *summary, *out, *norm, *size;
+    int width, height;
+    char stem[4096]; /* the CSV's path without ".csv" */
+} plot_args;
+
+static int usage(const char *fmt, const char *arg)
 {
-    const char *csv = NULL, *summary_path = NULL, *out = NULL, *norm = NULL, *size = "800x500";
+    fprintf(stderr, "pstencil plot: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\nTry 'pstencil plot --help'.\n");
+    return CLI_USAGE;
+}
+
+/* The command line into a: CLI_OK, CLI_USAGE, or -1 after --help. */
+static int parse_args(int argc, char **argv, plot_args *a)
+{
+    *a = (plot_args){.size = "800x500"};
     for (int i = 0; i < argc; ++i) {
         const char *v;
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
             plot_help();
-            return CLI_OK;
+            return -1;
         } else if (cli_option(argc, argv, &i, "--summary", &v)) {
-            summary_path = v;
+            a->summary = v;
         } else if (cli_option(argc, argv, &i, "--out", &v)) {
-            out = v;
+            a->out = v;
         } else if (cli_option(argc, argv, &i, "--norm", &v)) {
-            norm = v;
+            a->norm = v;
         } else if (cli_option(argc, argv, &i, "--size", &v)) {
-            size = v;
-        } else if (argv[i][0] == '-' || csv) {
-            fprintf(stderr, "pstencil plot: unexpected argument '%s'\n"
-                            "Try 'pstencil plot --help'.\n", argv[i]);
-            return CLI_USAGE;
+            a->size = v;
+        } else if (argv[i][0] == '-' || a->csv) {
+            return usage("unexpected argument '%s'", argv[i]);
         } else {
-            csv = argv[i];
+            a->csv = argv[i];
             continue;
         }
-        if (!v || !*v) {
-            fprintf(stderr, "pstencil plot: %s needs a value\nTry 'pstencil plot --help'.\n",
-                    argv[i]);
-            return CLI_USAGE;
-        }
+        if (!v || !*v)
+            return usage("%s needs a value", argv[i]);
     }
-    if (!csv) {
-        fprintf(stderr, "pstencil plot: no sweep CSV\nTry 'pstencil plot --help'.\n");
-        return CLI_USAGE;
-    }
-    static const char *const norms[] = {"rel_l2", "qsfdi11", "qsfdi11_normalised", "lv78",
-                                        "lv95",   "max_abs", "max_rel"};
-    int known = !norm;
-    for (size_t i = 0; i < sizeof norms / sizeof norms[0] && !known; ++i)
-        known = strcmp(norm, norms[i]) == 0;
+    if (!a->csv)
+        return usage("no sweep CSV%s", "");
+    int known = !a->norm;
+    for (int i = 0; i < pst_plot_nknown_norms && !known; ++i)
+        known = strcmp(a->norm, pst_plot_known_norms[i]) == 0;
     if (!known) {
         fprintf(stderr, "pstencil plot: unknown norm '%s' (known: rel_l2, qsfdi11, "
-                        "qsfdi11_normalised, lv78, lv95, max_abs, max_rel)\n", norm);
+                        "qsfdi11_normalised, lv78, lv95, max_abs, max_rel)\n", a->norm);
         return CLI_USAGE;
     }
-    int width, height;
     char tail;
-    if (sscanf(size, "%dx%d%c", &width, &height, &tail) != 2 || width < 100 || height < 100 ||
-        width > 10000 || height > 10000) {
+    if (sscanf(a->size, "%dx%d%c", &a->width, &a->height, &tail) != 2 || a->width < 100 ||
+        a->height < 100 || a->width > 10000 || a->height > 10000) {
         fprintf(stderr, "pstencil plot: --size needs WxH, 100 to 10000 pixels each (got '%s')\n",
-                size);
+                a->size);
         return CLI_USAGE;
     }
-    /* <stem>: the CSV's path without ".csv" */
-    char stem[4096];
-    snprintf(stem, sizeof stem, "%s", csv);
-    size_t sl = strlen(stem);
-    if (sl > 4 && strcmp(stem + sl - 4, ".csv") == 0)
-        stem[sl - 4] = '\0';
+    snprintf(a->stem, sizeof a->stem, "%s", a->csv);
+    size_t sl = strlen(a->stem);
+    if (sl > 4 && strcmp(a->stem + sl - 4, ".csv") == 0)
+        a->stem[sl - 4] = '\0';
+    return CLI_OK;
+}
 
-    char err[PST_ERRLEN + 12000];
-    pst_csv_table t;
-    int st = pst_csv_read(csv, &t, err, sizeof err);
-    if (st != PST_OK)
-        return cli_fail(st, "plot", err);
-    cJSON *summary = NULL;
+/* The summary: --summary, else <stem>.summary.json when readable, else computed from t. */
+static int load_summary(const plot_args *a, const pst_csv_table *t, cJSON **out, char *err,
+                        size_t errlen)
+{
     char defsum[4200];
-    snprintf(defsum, sizeof defsum, "%s.summary.json", stem);
-    const char *from = summary_path;
+    snprintf(defsum, sizeof defsum, "%s.summary.json", a->stem);
+    const char *from = a->summary;
     if (!from && access(defsum, R_OK) == 0)
         from = defsum;
-    if (from) {
-        int rst = PST_OK;
-        char *text = pst_read_text(from, NULL, err, sizeof err, &rst);
-        summary = text ? cJSON_Parse(text) : NULL;
-        free(text);
-        if (!summary || !cJSON_IsObject(summary)) {
-            cJSON_Delete(summary);
-            pst_csv_table_free(&t);
-            if (text)
-                snprintf(err, sizeof err, "%s: not a JSON object", from);
-            return cli_fail(PST_EINPUT, "plot", err);
-        }
-    } else {
-        summary = pst_sweep_summary(&t, "cloud.spacing", "cloud.seed");
-        if (!summary) {
-            pst_csv_table_free(&t);
-            snprintf(err, sizeof err, "%s: not a sweep CSV", csv);
-            return cli_fail(PST_EINPUT, "plot", err);
-        }
+    if (!from) {
+        *out = pst_sweep_summary(t, "cloud.spacing", "cloud.seed");
+        if (!*out)
+            snprintf(err, errlen, "%s: not a sweep CSV", a->csv);
+        return *out ? PST_OK : PST_EINPUT;
     }
-    pst_plot_set ps;
-    st = pst_plot_build(&t, summary, norm, &ps, err, sizeof err);
+    int rst = PST_OK;
+    char *text = pst_read_text(from, NULL, err, errlen, &rst);
+    *out = text ? cJSON_Parse(text) : NULL;
+    free(text);
+    if (*out && cJSON_IsObject(*out))
+        return PST_OK;
+    cJSON_Delete(*out);
+    *out = NULL;
+    if (text)
+        snprintf(err, errlen, "%s: not a JSON object", from);
+    return PST_EINPUT;
+}
+
+/* The plot set of the CSV and its summary. */
+static int build_plots(const plot_args *a, pst_plot_set *ps, char *err, size_t errlen)
+{
+    pst_csv_table t;
+    int st = pst_csv_read_table(&t, a->csv, 0, err);
+    if (st != PST_OK)
+        return st;
+    cJSON *summary = NULL;
+    st = load_summary(a, &t, &summary, err, errlen);
+    if (st == PST_OK) {
+        char msg[PST_ERRLEN + 512];
+        st = pst_plot_build(&t, summary, a->norm, ps, msg, sizeof msg);
+        if (st != PST_OK)
+            snprintf(err, errlen, "%s: %s", a->csv, msg);
+    }
     cJSON_Delete(summary);
     pst_csv_table_free(&t);
-    if (st != PST_OK) {
-        char msg[sizeof err + 4200];
-        snprintf(msg, sizeof msg, "%s: %s", csv, err);
-        return cli_fail(st, "plot", msg);
-    }
-    if (!on_path("gnuplot")) {
-        pst_plot_set_free(&ps);
-        fprintf(stderr, "pstencil: plot: gnuplot not found: install gnuplot-nox "
-                        "(scripts/install-deps.sh)\n");
-        return CLI_BAD_INPUT;
-    }
-    char dir[4200];
-    if (out)
-        snprintf(dir, sizeof dir, "%s", out);
-    else
-        snprintf(dir, sizeof dir, "%s_plots", stem);
-    struct stat sb;
-    if (mkdir(dir, 0777) != 0 && !(errno == EEXIST && stat(dir, &sb) == 0 && S_ISDIR(sb.st_mode))) {
-        snprintf(err, sizeof err, "%s: cannot create the folder: %s", dir, strerror(errno));
-        pst_plot_set_free(&ps);
-        return cli_fail(PST_EIO, "plot", err);
-    }
+    return st;
+}
 
-    /* the plots with points, each into a temporary name */
+/* The output folder, created when missing. */
+static int make_dir(const char *dir, char *err, size_t errlen)
+{
+    struct stat sb;
+    if (mkdir(dir, 0777) == 0 || (errno == EEXIST && stat(dir, &sb) == 0 && S_ISDIR(sb.st_mode)))
+        return PST_OK;
+    snprintf(err, errlen, "%s: cannot create the folder: %s", dir, strerror(errno));
+    return PST_EIO;
+}
+
+/* The gnuplot script of every plot with points, each into its temporary name tmp[i]. */
+static void write_script(FILE *g, const pst_plot_set *ps, const plot_args *a, const char *dir,
+                         char (*tmp)[4400])
+{
+    fprintf(g, "set encoding utf8\n"
+               "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
+               "  set terminal pngcairo enhanced size %d,%d font ',10'\n"
+               "} else {\n"
+               "  set terminal png enhanced size %d,%d\n"
+               "}\n",
+            a->width, a->height, a->width, a->height);
+    for (int i = 0; i < ps->nplots; ++i) {
+        const pst_plot *p = &ps->plots[i];
+        if (!nonempty_series(p))
+            continue;
+        snprintf(tmp[i], sizeof tmp[i], "%s/.%s.%ld.png.tmp", dir, p->name, (long)getpid());
+        /* enhanced text for the tic labels (10^{-3}), none in strings from the data */
+        fprintf(g, "reset\nset output ");
+        pst_gnuplot_quoted(g, tmp[i]);
+        fprintf(g, "\nset title ");
+        pst_gnuplot_quoted(g, p->title);
+        fprintf(g, " noenhanced\nset xlabel ");
+        pst_gnuplot_quoted(g, p->xlabel);
+        fprintf(g, " noenhanced\nset ylabel ");
+        pst_gnuplot_quoted(g, p->ylabel);
+        fprintf(g, " noenhanced\n");
+        if (p->kind == PST_PLOT_STACKED)
+            script_stacked(g, p);
+        else
+            script_lines(g, p);
+        fprintf(g, "unset output\n");
+    }
+    fprintf(g, "exit\n");
+}
+
+/* After gnuplot: every PNG renamed to its final name, or (gnuplot failed) none, its log on
+ * stderr. */
+static int publish(const pst_plot_set *ps, const char *dir, int status, const char *log,
+                   char (*tmp)[4400])
+{
+    int ok = status == 0, rc = CLI_OK;
+    for (int i = 0; ok && i < ps->nplots; ++i)
+        ok = !tmp[i][0] || pst_file_is_png(tmp[i]);
+    if (!ok) {
+        fprintf(stderr, "pstencil: plot: gnuplot failed (no PNG written)\n");
+        int rst;
+        char *text = pst_read_text(log, NULL, NULL, 0, &rst);
+        if (text)
+            fputs(text, stderr);
+        free(text);
+        rc = CLI_BAD_INPUT;
+    }
+    for (int i = 0; i < ps->nplots && rc == CLI_OK; ++i) {
+        if (!tmp[i][0])
+            continue;
+        char final[4400], err[9000];
+        snprintf(final, sizeof final, "%s/%s.png", dir, ps->plots[i].name);
+        if (rename(tmp[i], final) != 0) {
+            snprintf(err, sizeof err, "cannot rename %s to %s: %s", tmp[i], final,
+                     strerror(errno));
+            rc = cli_fail(PST_EIO, "plot", err);
+            break;
+        }
+        tmp[i][0] = '\0';
+        printf("wrote %s\n", final);
+    }
+    for (int i = 0; i < ps->nplots; ++i)
+        if (tmp[i][0])
+            remove(tmp[i]);
+    remove(log);
+    return rc;
+}
+
+/* The plots with points through one gnuplot, all PNGs or none; *started once gnuplot runs
+ * (or nothing needs it). */
+static int draw(const pst_plot_set *ps, const plot_args *a, const char *dir, int *started)
+{
     int ndraw = 0;
-    for (int i = 0; i < ps.nplots; ++i)
-        ndraw += nonempty_series(&ps.plots[i]) > 0;
-    char (*tmp)[4400] = calloc((size_t)ps.nplots + 1, sizeof *tmp);
+    for (int i = 0; i < ps->nplots; ++i)
+        ndraw += nonempty_series(&ps->plots[i]) > 0;
+    char (*tmp)[4400] = calloc((size_t)ps->nplots + 1, sizeof *tmp);
     char log[4400], qlog[9000], cmd[9100];
     snprintf(log, sizeof log, "%s/.gnuplot.%ld.log", dir, (long)getpid());
     shell_quote(qlog, sizeof qlog, log);
@@ -334,83 +414,56 @@ int cli_plot(const cli_ctx *ctx, int argc, char **argv)
     FILE *g = tmp && ndraw ? popen(cmd, "w") : NULL;
     if (!tmp || (ndraw && !g)) {
         free(tmp);
-        pst_plot_set_free(&ps);
         return cli_fail(tmp ? PST_EIO : PST_ENOMEM, "plot", tmp ? "cannot start gnuplot" : "");
     }
     int rc = CLI_OK;
+    *started = 1;
     if (g) {
-        fprintf(g, "set encoding utf8\n"
-                   "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) {\n"
-                   "  set terminal pngcairo enhanced size %d,%d font ',10'\n"
-                   "} else {\n"
-                   "  set terminal png enhanced size %d,%d\n"
-                   "}\n",
-                width, height, width, height);
-        for (int i = 0; i < ps.nplots; ++i) {
-            const pst_plot *p = &ps.plots[i];
-            if (!nonempty_series(p))
-                continue;
-            snprintf(tmp[i], sizeof tmp[i], "%s/.%s.%ld.png.tmp", dir, p->name, (long)getpid());
-            /* enhanced text for the tic labels (10^{-3}), none in strings from the data */
-            fprintf(g, "reset\nset output ");
-            pst_gnuplot_quoted(g, tmp[i]);
-            fprintf(g, "\nset title ");
-            pst_gnuplot_quoted(g, p->title);
-            fprintf(g, " noenhanced\nset xlabel ");
-            pst_gnuplot_quoted(g, p->xlabel);
-            fprintf(g, " noenhanced\nset ylabel ");
-            pst_gnuplot_quoted(g, p->ylabel);
-            fprintf(g, " noenhanced\n");
-            if (p->kind == PST_PLOT_STACKED)
-                script_stacked(g, p);
-            else
-                script_lines(g, p);
-            fprintf(g, "unset output\n");
-        }
-        fprintf(g, "exit\n");
-        int status = pclose(g);
-        int ok = status == 0;
-        for (int i = 0; ok && i < ps.nplots; ++i)
-            ok = !tmp[i][0] || pst_file_is_png(tmp[i]);
-        if (!ok) {
-            fprintf(stderr, "pstencil: plot: gnuplot failed (no PNG written)\n");
-            int rst;
-            char *text = pst_read_text(log, NULL, NULL, 0, &rst);
-            if (text) {
-                fputs(text, stderr);
-                free(text);
-            }
-            rc = CLI_BAD_INPUT;
-        }
-        for (int i = 0; i < ps.nplots && rc == CLI_OK; ++i) {
-            if (!tmp[i][0])
-                continue;
-            char final[4400];
-            snprintf(final, sizeof final, "%s/%s.png", dir, ps.plots[i].name);
-            if (rename(tmp[i], final) != 0) {
-                snprintf(err, sizeof err, "cannot rename %s to %s: %s", tmp[i], final,
-                         strerror(errno));
-                rc = cli_fail(PST_EIO, "plot", err);
-                break;
-            }
-            tmp[i][0] = '\0';
-            printf("wrote %s\n", final);
-        }
-        for (int i = 0; i < ps.nplots; ++i)
-            if (tmp[i][0])
-                remove(tmp[i]);
-        remove(log);
-    }
-    if (!ctx->quiet) {
-        for (int i = 0; i < ps.nplots; ++i)
-            if (!nonempty_series(&ps.plots[i]))
-                printf("skipped %s.png: no points\n", ps.plots[i].name);
-        for (int i = 0; i < ps.nskipped; ++i)
-            printf("skipped %s\n", ps.skipped[i]);
-        if (rc == CLI_OK)
-            printf("error norm: %s\n", ps.norm[0] ? ps.norm : "(none)");
+        write_script(g, ps, a, dir, tmp);
+        rc = publish(ps, dir, pclose(g), log, tmp);
     }
     free(tmp);
+    return rc;
+}
+
+static void list_skipped(const pst_plot_set *ps, int rc)
+{
+    for (int i = 0; i < ps->nplots; ++i)
+        if (!nonempty_series(&ps->plots[i]))
+            printf("skipped %s.png: no points\n", ps->plots[i].name);
+    for (int i = 0; i < ps->nskipped; ++i)
+        printf("skipped %s\n", ps->skipped[i]);
+    if (rc == CLI_OK)
+        printf("error norm: %s\n", ps->norm[0] ? ps->norm : "(none)");
+}
+
+int cli_plot(const cli_ctx *ctx, int argc, char **argv)
+{
+    plot_args a;
+    int rc = parse_args(argc, argv, &a);
+    if (rc != CLI_OK)
+        return rc < 0 ? CLI_OK : rc;
+    char err[PST_ERRLEN + 12000];
+    pst_plot_set ps;
+    int st = build_plots(&a, &ps, err, sizeof err);
+    if (st != PST_OK)
+        return cli_fail(st, "plot", err);
+    if (!on_path("gnuplot")) {
+        pst_plot_set_free(&ps);
+        fprintf(stderr, "pstencil: plot: gnuplot not found: install gnuplot-nox "
+                        "(scripts/install-deps.sh)\n");
+        return CLI_BAD_INPUT;
+    }
+    char dir[4200];
+    if (a.out)
+        snprintf(dir, sizeof dir, "%s", a.out);
+    else
+        snprintf(dir, sizeof dir, "%s_plots", a.stem);
+    int started = 0;
+    st = make_dir(dir, err, sizeof err);
+    rc = st == PST_OK ? draw(&ps, &a, dir, &started) : cli_fail(st, "plot", err);
+    if (!ctx->quiet && started)
+        list_skipped(&ps, rc);
     pst_plot_set_free(&ps);
     return rc;
 }

@@ -1,13 +1,10 @@
-/* Reading and writing clouds as CSV (format: docs/clouds.md). The reader checks every value
- * where it stands, so each message can name file, line and column; the writer goes through a
+/* Reading and writing clouds as CSV (format: docs/clouds.md). The reader takes the records of
+ * the CSV tokenizer (csv_reader.c) and checks every value where it stands, so each message can
+ * name file, line and column; the writer goes through a
  * temporary file and rename() so that a destination is either the old file or the whole new
  * one. */
-#define _POSIX_C_SOURCE 200809L /* getline */
+#include "check.h"
 
-#include "internal.h"
-
-#include <errno.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -20,10 +17,9 @@ static const char *const mob_names[] = {"mx", "my", "mz"};
 
 /* The column layout of a file: coordinates, V, h, kind, normals, mobility, fields. */
 typedef struct {
-    int dim, mob;         /* mobility components: 0, 1 or dim          */
+    int dim, mob;         /* mobility components: 0, 1 or dim                  */
     size_t ncols, nfields;
-    char **name;          /* ncols names, pointing into the header copy */
-    char *header;         /* owned copy of the header line              */
+    const char **name;    /* ncols names, the reader's header (valid while open) */
 } layout;
 
 static size_t col_V(const layout *l) { return (size_t)l->dim; }
@@ -33,73 +29,9 @@ static size_t col_normal(const layout *l) { return (size_t)l->dim + 3; }
 static size_t col_mob(const layout *l) { return 2 * (size_t)l->dim + 3; }
 static size_t col_field(const layout *l) { return 2 * (size_t)l->dim + 3 + (size_t)l->mob; }
 
-static int is_blank(const char *s)
+/* The required columns, first and in order. */
+static int check_required(const layout *l, const pst_csv_reader *r, size_t *k, char *err)
 {
-    for (; *s; ++s)
-        if (*s != ' ' && *s != '\t')
-            return 0;
-    return 1;
-}
-
-/* Trim spaces and tabs in place. */
-static char *trim(char *s)
-{
-    while (*s == ' ' || *s == '\t')
-        ++s;
-    size_t len = strlen(s);
-    while (len > 0 && (s[len - 1] == ' ' || s[len - 1] == '\t'))
-        s[--len] = '\0';
-    return s;
-}
-
-/* Strip the line terminator ("\n", "\r\n" or a trailing "\r"). */
-static void chomp(char *s, ssize_t len)
-{
-    while (len > 0 && (s[len - 1] == '\n' || s[len - 1] == '\r'))
-        s[--len] = '\0';
-}
-
-static size_t count_cells(const char *s)
-{
-    size_t k = 1;
-    for (; *s; ++s)
-        k += *s == ',';
-    return k;
-}
-
-/* Cut the next cell off *cursor (NUL-terminating it) and return it trimmed. */
-static char *next_cell(char **cursor)
-{
-    char *cell = *cursor, *comma = strchr(cell, ',');
-    if (comma) {
-        *comma = '\0';
-        *cursor = comma + 1;
-    } else {
-        *cursor = cell + strlen(cell);
-    }
-    return trim(cell);
-}
-
-/* Parse the header line into `l`. The required columns must come first and in order, then an
- * optional mobility group, then fields. */
-static int parse_header(layout *l, const char *line, const char *path, size_t lineno,
-                        char *err)
-{
-    l->header = malloc(strlen(line) + 1);
-    l->ncols = count_cells(line);
-    l->name = malloc(l->ncols * sizeof *l->name);
-    if (!l->header || !l->name) {
-        pst_set_err(err, "%s:%zu:1: out of memory reading the header", path, lineno);
-        return PST_ENOMEM;
-    }
-    strcpy(l->header, line);
-    char *cursor = l->header;
-    l->dim = 2;
-    for (size_t k = 0; k < l->ncols; ++k) {
-        l->name[k] = next_cell(&cursor);
-        if (strcmp(l->name[k], "z") == 0)
-            l->dim = 3;
-    }
     const char *req[9];
     size_t nreq = 0;
     for (int d = 0; d < l->dim; ++d)
@@ -109,68 +41,84 @@ static int parse_header(layout *l, const char *line, const char *path, size_t li
     req[nreq++] = "kind";
     for (int d = 0; d < l->dim; ++d)
         req[nreq++] = normal_names[d];
-    size_t k = 0;
-    for (; k < nreq; ++k) {
-        if (k >= l->ncols) {
-            pst_set_err(err, "%s:%zu:%zu: missing column '%s' (the header starts %s)", path,
-                        lineno, k + 1, req[k],
-                        l->dim == 2 ? "x,y,V,h,kind,nx,ny" : "x,y,z,V,h,kind,nx,ny,nz");
-            return PST_EINPUT;
-        }
-        if (strcmp(l->name[k], req[k]) != 0) {
-            pst_set_err(err, "%s:%zu:%zu: expected column '%s' here, found '%s'", path, lineno,
-                        k + 1, req[k], l->name[k]);
-            return PST_EINPUT;
-        }
-    }
-    l->mob = 0;
-    if (k < l->ncols && strcmp(l->name[k], "m") == 0) {
-        l->mob = 1;
-        ++k;
-    } else if (k < l->ncols && strcmp(l->name[k], "mx") == 0) {
-        for (int d = 0; d < l->dim; ++d, ++k)
-            if (k >= l->ncols || strcmp(l->name[k], mob_names[d]) != 0) {
-                pst_set_err(err, "%s:%zu:%zu: expected column '%s' of the diagonal mobility, "
-                                 "found '%s'",
-                            path, lineno, k + 1, mob_names[d], k < l->ncols ? l->name[k] : "");
-                return PST_EINPUT;
-            }
-        l->mob = l->dim;
-    }
-    l->nfields = l->ncols - k;
-    for (; k < l->ncols; ++k) {
-        for (size_t j = 0; j < k; ++j)
-            if (strcmp(l->name[j], l->name[k]) == 0) {
-                pst_set_err(err, "%s:%zu:%zu: duplicate column name '%s' (also column %zu)",
-                            path, lineno, k + 1, l->name[k], j + 1);
-                return PST_EINPUT;
-            }
-        if (pst_is_reserved_column(l->name[k])) {
-            pst_set_err(err, "%s:%zu:%zu: misplaced column '%s'", path, lineno, k + 1,
-                        l->name[k]);
-            return PST_EINPUT;
-        }
-        if (!pst_is_identifier(l->name[k])) {
-            pst_set_err(err, "%s:%zu:%zu: unknown column '%s' (a field name must be a C "
-                             "identifier shorter than %d characters)",
-                        path, lineno, k + 1, l->name[k], PST_MAX_NAME);
-            return PST_EINPUT;
-        }
+    const char *path = pst_csv_path(r);
+    const size_t line = pst_csv_line(r);
+    for (*k = 0; *k < nreq; ++*k) {
+        PST_CHECK(*k >= l->ncols, PST_EINPUT, err,
+                  "%s:%zu:%zu: missing column '%s' (the header starts %s)", path, line, *k + 1,
+                  req[*k], l->dim == 2 ? "x,y,V,h,kind,nx,ny" : "x,y,z,V,h,kind,nx,ny,nz");
+        PST_CHECK(strcmp(l->name[*k], req[*k]) != 0, PST_EINPUT, err,
+                  "%s:%zu:%zu: expected column '%s' here, found '%s'", path, line, *k + 1,
+                  req[*k], l->name[*k]);
     }
     return PST_OK;
 }
 
-/* Parse one cell of a data line; kind becomes 0, 1 or 2. */
-static int parse_cell(const layout *l, size_t k, const char *cell, double *value,
-                      const char *path, size_t lineno, char *err)
+/* The optional mobility group at column *k: m, or mx,my[,mz]. */
+static int check_mobility(layout *l, const pst_csv_reader *r, size_t *k, char *err)
 {
-#define CELL_ERR(...)                                                                          \
-    do {                                                                                       \
-        char msg_[PST_ERRLEN];                                                                 \
-        snprintf(msg_, sizeof msg_, __VA_ARGS__);                                              \
-        pst_set_err(err, "%s:%zu:%zu: column %s: %s", path, lineno, k + 1, l->name[k], msg_);  \
-        return PST_EINPUT;                                                                     \
-    } while (0)
+    l->mob = 0;
+    if (*k < l->ncols && strcmp(l->name[*k], "m") == 0) {
+        l->mob = 1;
+        ++*k;
+    } else if (*k < l->ncols && strcmp(l->name[*k], "mx") == 0) {
+        for (int d = 0; d < l->dim; ++d, ++*k)
+            PST_CHECK(*k >= l->ncols || strcmp(l->name[*k], mob_names[d]) != 0, PST_EINPUT,
+                      err, "%s:%zu:%zu: expected column '%s' of the diagonal mobility, found "
+                           "'%s'",
+                      pst_csv_path(r), pst_csv_line(r), *k + 1, mob_names[d],
+                      *k < l->ncols ? l->name[*k] : "");
+        l->mob = l->dim;
+    }
+    return PST_OK;
+}
+
+/* Field columns from k on: unique identifiers that are not reserved names. */
+static int check_fields(const layout *l, const pst_csv_reader *r, size_t k, char *err)
+{
+    const char *path = pst_csv_path(r);
+    const size_t line = pst_csv_line(r);
+    for (; k < l->ncols; ++k) {
+        for (size_t j = 0; j < k; ++j)
+            PST_CHECK(strcmp(l->name[j], l->name[k]) == 0, PST_EINPUT, err,
+                      "%s:%zu:%zu: duplicate column name '%s' (also column %zu)", path, line,
+                      k + 1, l->name[k], j + 1);
+        PST_CHECK(pst_is_reserved_column(l->name[k]), PST_EINPUT, err,
+                  "%s:%zu:%zu: misplaced column '%s'", path, line, k + 1, l->name[k]);
+        PST_CHECK(!pst_is_identifier(l->name[k]), PST_EINPUT, err,
+                  "%s:%zu:%zu: unknown column '%s' (a field name must be a C identifier "
+                  "shorter than %d characters)",
+                  path, line, k + 1, l->name[k], PST_MAX_NAME);
+    }
+    return PST_OK;
+}
+
+/* The layout of the reader's header: the required columns, an optional mobility group, then
+ * fields. */
+static int parse_header(layout *l, const pst_csv_reader *r, char *err)
+{
+    l->ncols = pst_csv_ncols(r);
+    l->name = malloc(l->ncols * sizeof *l->name);
+    PST_CHECK_ALLOC(l->name, err, "%s:%zu:1: out of memory reading the header",
+                    pst_csv_path(r), pst_csv_line(r));
+    l->dim = 2;
+    for (size_t k = 0; k < l->ncols; ++k) {
+        l->name[k] = pst_csv_name(r, k);
+        if (strcmp(l->name[k], "z") == 0)
+            l->dim = 3;
+    }
+    size_t k;
+    PST_TRY(check_required(l, r, &k, err));
+    PST_TRY(check_mobility(l, r, &k, err));
+    l->nfields = l->ncols - k;
+    return check_fields(l, r, k, err);
+}
+
+/* Cell k of the current record; kind becomes 0, 1 or 2. */
+static int parse_cell(const layout *l, const pst_csv_reader *r, size_t k, double *value,
+                      char *err)
+{
+    const char *cell = pst_csv_cell(r, k);
     if (k == col_kind(l)) {
         for (int t = 0; t <= PST_NEUMANN; ++t) {
             char digit[2] = {(char)('0' + t), '\0'};
@@ -179,25 +127,20 @@ static int parse_cell(const layout *l, size_t k, const char *cell, double *value
                 return PST_OK;
             }
         }
-        CELL_ERR("unknown kind '%.64s' (interior, dirichlet, neumann or 0, 1, 2)", cell);
+        return pst_csv_cell_error(r, k, PST_EINPUT, err, "unknown kind '%.64s' (interior, "
+                                  "dirichlet, neumann or 0, 1, 2)", cell);
     }
-    if (!*cell)
-        CELL_ERR("missing value");
-    char *end;
-    double v = strtod(cell, &end); /* ERANGE on subnormals is fine: they round-trip */
-    if (*end)
-        CELL_ERR("cannot parse '%.64s' as a number", cell);
-    if (!isfinite(v))
-        CELL_ERR("value '%.64s' is not finite", cell);
+    double v;
+    PST_TRY(pst_csv_number(r, k, &v, err));
     if (k == col_V(l) && !(v > 0))
-        CELL_ERR("volume V = %.17g must be > 0", v);
+        return pst_csv_cell_error(r, k, PST_EINPUT, err, "volume V = %.17g must be > 0", v);
     if (k == col_h(l) && !(v > 0))
-        CELL_ERR("smoothing length h = %.17g must be > 0", v);
+        return pst_csv_cell_error(r, k, PST_EINPUT, err,
+                                  "smoothing length h = %.17g must be > 0", v);
     if (k >= col_mob(l) && k < col_field(l) && !(v > 0))
-        CELL_ERR("mobility %.17g must be > 0", v);
+        return pst_csv_cell_error(r, k, PST_EINPUT, err, "mobility %.17g must be > 0", v);
     *value = v;
     return PST_OK;
-#undef CELL_ERR
 }
 
 /* Rows read so far: ncols values per row plus the file line of each row. */
@@ -292,74 +235,46 @@ static int check_duplicates(const pst_cloud *c, const rows *r, const char *path,
     return PST_OK;
 }
 
+/* The data records of an open reader into rows, each value checked where it stands. */
+static int read_rows(const layout *l, pst_csv_reader *csv, rows *r, char *err)
+{
+    for (int got = 1;;) {
+        PST_TRY(pst_csv_next(csv, &got, err));
+        if (!got)
+            return PST_OK;
+        PST_CHECK(rows_push(r, l->ncols) != PST_OK, PST_ENOMEM, err,
+                  "%s:%zu:1: out of memory or more than %lu particles", pst_csv_path(csv),
+                  pst_csv_line(csv), (unsigned long)UINT32_MAX);
+        double *v = r->val + r->n * l->ncols;
+        for (size_t k = 0; k < l->ncols; ++k)
+            PST_TRY(parse_cell(l, csv, k, &v[k], err));
+        r->line[r->n++] = pst_csv_line(csv);
+    }
+}
+
 int pst_cloud_read_csv(pst_cloud **out, const char *path, char *err)
 {
     *out = NULL;
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        pst_set_err(err, "%s: cannot open: %s", path, strerror(errno));
-        return PST_EIO;
-    }
+    pst_csv_reader *csv;
+    PST_TRY(pst_csv_open(&csv, path, PST_CSV_TRIM | PST_CSV_SKIP_BLANK, err));
     layout l = {0};
     rows r = {0};
-    char *line = NULL;
-    size_t linecap = 0, lineno = 0;
-    int st = PST_OK, have_header = 0;
-    ssize_t len;
-    while (st == PST_OK && (len = getline(&line, &linecap, f)) >= 0) {
-        ++lineno;
-        chomp(line, len);
-        char *text = line;
-        if (lineno == 1 && strncmp(text, "\xEF\xBB\xBF", 3) == 0)
-            text += 3; /* a UTF-8 byte-order mark, as some spreadsheets write */
-        if (is_blank(text))
-            continue;
-        if (!have_header) {
-            st = parse_header(&l, text, path, lineno, err);
-            have_header = 1;
-            continue;
-        }
-        size_t found = count_cells(text);
-        if (found != l.ncols) {
-            pst_set_err(err, "%s:%zu:%zu: expected %zu columns, found %zu", path, lineno,
-                        (found < l.ncols ? found : l.ncols) + 1, l.ncols, found);
-            st = PST_EINPUT;
-            break;
-        }
-        if (rows_push(&r, l.ncols) != PST_OK) {
-            pst_set_err(err, "%s:%zu:1: out of memory or more than %lu particles", path, lineno,
-                        (unsigned long)UINT32_MAX);
-            st = PST_ENOMEM;
-            break;
-        }
-        char *cursor = text;
-        double *v = r.val + r.n * l.ncols;
-        for (size_t k = 0; st == PST_OK && k < l.ncols; ++k)
-            st = parse_cell(&l, k, next_cell(&cursor), &v[k], path, lineno, err);
-        r.line[r.n++] = lineno;
-    }
-    if (st == PST_OK && ferror(f)) {
-        pst_set_err(err, "%s:%zu: read error: %s", path, lineno + 1, strerror(errno));
-        st = PST_EIO;
-    }
-    if (st == PST_OK && !have_header) {
-        pst_set_err(err, "%s:1:1: empty file: no header line", path);
-        st = PST_EINPUT;
-    }
     pst_cloud *c = NULL;
-    if (st == PST_OK && (st = build_cloud(&c, &l, &r)) != PST_OK)
-        pst_set_err(err, "%s: %zu particles: %s", path, r.n,
-                    st == PST_EINVAL ? "more than the 32-bit index limit" : "out of memory");
-    if (st == PST_OK && (st = check_duplicates(c, &r, path, err)) != PST_OK) {
+    int st;
+    PST_TRY_GOTO(st, parse_header(&l, csv, err), done);
+    PST_TRY_GOTO(st, read_rows(&l, csv, &r, err), done);
+    st = build_cloud(&c, &l, &r);
+    PST_CHECK_GOTO(st != PST_OK, st, st, done, err, "%s: %zu particles: %s", path, r.n,
+                   st == PST_EINVAL ? "more than the 32-bit index limit" : "out of memory");
+    if ((st = check_duplicates(c, &r, path, err)) != PST_OK) {
         pst_cloud_destroy(c);
         c = NULL;
     }
-    free(line);
-    free(l.header);
+done:
+    pst_csv_close(csv);
     free(l.name);
     free(r.val);
     free(r.line);
-    fclose(f);
     *out = c;
     return st;
 }

@@ -1,0 +1,108 @@
+/* The grid of a sweep: combination k's key values (grid after grid, the last key fastest),
+ * its label and its scene, and the --plan check of every combination. */
+#include "sweep_grid.h"
+
+#include "pstencil.h"
+#include "plan.h"
+#include "text_file.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void pst_sweep_combo(const pst_sweep *sw, size_t k, const char *vals[SW_MAX_KEYS])
+{
+    int g = 0;
+    for (; g < sw->ngrids; ++g) {
+        size_t p = 1;
+        for (int q = 0; q < sw->nkeys; ++q)
+            p *= (size_t)sw->nvalues[g][q];
+        if (k < p)
+            break;
+        k -= p;
+    }
+    if (g == sw->ngrids)
+        g = sw->ngrids - 1;
+    for (int q = sw->nkeys - 1; q >= 0; --q) { /* the last key fastest */
+        size_t n = (size_t)sw->nvalues[g][q];
+        vals[q] = sw->values[g][q][k % n];
+        k /= n;
+    }
+}
+
+void sweep_combo_label(const pst_sweep *sw, size_t k, char *buf, size_t len)
+{
+    const char *vals[SW_MAX_KEYS];
+    pst_sweep_combo(sw, k, vals);
+    size_t n = 0;
+    buf[0] = '\0';
+    for (int q = 0; q < sw->nkeys && n < len; ++q)
+        n += (size_t)snprintf(buf + n, len - n, "%s%s=%s", q ? " " : "", sw->keys[q], vals[q]);
+}
+
+/* Overrides of one run: outputs off, the fixed ones, then the grid's. */
+static int run_overrides(const pst_sweep *sw, size_t k, char **ov, int *nov)
+{
+    const char *vals[SW_MAX_KEYS];
+    pst_sweep_combo(sw, k, vals);
+    int n = 0;
+    ov[n++] = pst_strdup("outputs={}");
+    for (int q = 0; q < sw->noverrides; ++q)
+        ov[n++] = pst_strdup(sw->overrides[q]);
+    for (int q = 0; q < sw->nkeys; ++q) {
+        size_t len = strlen(sw->keys[q]) + strlen(vals[q]) + 2;
+        ov[n] = malloc(len);
+        if (ov[n])
+            snprintf(ov[n], len, "%s=%s", sw->keys[q], vals[q]);
+        ++n;
+    }
+    *nov = n;
+    for (int q = 0; q < n; ++q)
+        if (!ov[q])
+            return PST_ENOMEM;
+    return PST_OK;
+}
+
+int sweep_combo_scene(const pst_sweep *sw, size_t k, pst_scene *s, char *msg, size_t msglen)
+{
+    char *ov[SW_MAX_OVERRIDES + SW_MAX_KEYS + 1];
+    int nov = 0;
+    int st = run_overrides(sw, k, ov, &nov);
+    if (st == PST_OK)
+        st = pst_scene_parse(s, sw->scene_text, sw->scene_path, (const char *const *)ov, nov,
+                             msg, msglen);
+    else
+        snprintf(msg, msglen, "out of memory");
+    for (int q = 0; q < nov; ++q)
+        free(ov[q]);
+    return st;
+}
+
+int pst_sweep_check(const pst_sweep *sw, size_t *nfailed, char *err, size_t errlen)
+{
+    int first = PST_OK;
+    size_t bad = 0;
+    err[0] = '\0';
+    for (size_t k = 0; k < sw->ncombos; ++k) {
+        pst_scene s;
+        char msg[PST_ERRLEN * 2];
+        int st = sweep_combo_scene(sw, k, &s, msg, sizeof msg);
+        if (st == PST_OK) {
+            pst_plan p;
+            st = pst_plan_make(&p, &s, pst_plan_particles(&s), msg, sizeof msg);
+            pst_scene_free(&s);
+        }
+        if (st != PST_OK) {
+            if (first == PST_OK) {
+                char label[512];
+                sweep_combo_label(sw, k, label, sizeof label);
+                snprintf(err, errlen, "combination %zu (%s): %s", k, label, msg);
+                first = st;
+            }
+            ++bad;
+        }
+    }
+    if (nfailed)
+        *nfailed = bad;
+    return first;
+}

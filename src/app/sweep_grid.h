@@ -1,0 +1,16 @@
+/* A sweep's combinations as scenes (src/app/sweep_grid.c). Private to the sweep files. */
+#ifndef PSTENCIL_SWEEP_GRID_H
+#define PSTENCIL_SWEEP_GRID_H
+
+#include "scene.h"
+#include "sweep.h"
+
+/* "key=value key=value" of combination k, for messages. */
+void sweep_combo_label(const pst_sweep *sw, size_t k, char *buf, size_t len);
+
+/* The scene of combination k: the sweep's scene text with outputs off, the fixed overrides,
+ * then the combination's values. PST_ENOMEM when the overrides cannot be built; otherwise
+ * pst_scene_parse's status, with its message in msg. */
+int sweep_combo_scene(const pst_sweep *sw, size_t k, pst_scene *s, char *msg, size_t msglen);
+
+#endif
