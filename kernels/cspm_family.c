@@ -130,17 +130,8 @@ PST_KHOT double pair_weight(const cs_ctx *k, int D, size_t i, size_t j, double h
 PST_KHOT void row_t(const cs_ctx *k, int D, size_t i, const double *u, double *y, double *w)
 {
     const double *Ki = k->K + (size_t)cs_ncoef(D) * i;
-    double hi = pst_h(&k->c, i), ui = u ? u[i] : 0, s = 0;
-    for (int64_t e = k->c.off[i]; e < k->c.off[i + 1]; ++e) {
-        size_t j = k->c.idx[e];
-        double wij = pair_weight(k, D, i, j, hi, Ki);
-        if (w)
-            w[e - k->c.off[i]] = wij;
-        else
-            s += wij * (u[j] - ui);
-    }
-    if (!w)
-        y[i] = s;
+    double hi = pst_h(&k->c, i);
+    PST_ROW_LOOP(k->c.off, k->c.idx, i, u, y, w, j, pair_weight(k, D, i, j, hi, Ki));
 }
 
 static void row_2(const cs_ctx *k, size_t i, const double *u, double *y, double *w)

@@ -161,17 +161,8 @@ PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, si
                   const double *u, double *y, double *w, int D, int G, int T, int H)
 {
     int neumann = k->c.kind[i] == PST_NEUMANN;
-    double ui = u ? u[i] : 0, s = 0;
-    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-        size_t j = idx[e];
-        double wij = neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, H, i, j);
-        if (w)
-            w[e - off[i]] = wij;
-        else
-            s += wij * (u[j] - ui);
-    }
-    if (!w)
-        y[i] = s;
+    PST_ROW_LOOP(off, idx, i, u, y, w, j,
+                 neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, H, i, j));
 }
 
 typedef void (*row_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t,

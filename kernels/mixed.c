@@ -176,23 +176,39 @@ PST_KHOT void sweep_gradient(const mx_ctx *k, int D, int S, size_t n, const doub
     }
 }
 
+/* The rows of sweep 2 that take no divergence: a Neumann row, the flux n . g of the particle's
+ * g = M D u, and a no-fit particle's Brookshaw row. Returns 1 with the row's value in *y for
+ * those, 0 otherwise. */
+PST_KHOT int flux_or_nofit_row(const mx_ctx *k, int D, size_t i, const double *u,
+                               const double g[3], double *y)
+{
+    const int64_t *off = k->c.off;
+    const uint32_t *idx = k->c.idx;
+    *y = 0;
+    if (k->c.kind[i] == PST_NEUMANN) {
+        for (int a = 0; a < D; ++a)
+            *y += k->c.normal[a][i] * g[a];
+        return 1;
+    }
+    if (k->d->mode[i] == MX_NOFIT) {
+        for (int64_t e = off[i]; e < off[i + 1]; ++e)
+            *y += brookshaw_weight(k, D, i, idx[e]) * (u[idx[e]] - u[i]);
+        return 1;
+    }
+    return 0;
+}
+
 /* Sweep 2, row i of L from G (not Dirichlet). */
 PST_KHOT double divergence_row(const mx_ctx *k, int D, int S, size_t i, const double *u,
                              double *const G[3])
 {
     const int64_t *off = k->c.off;
     const uint32_t *idx = k->c.idx;
-    double y = 0;
-    if (k->c.kind[i] == PST_NEUMANN) {
-        for (int a = 0; a < D; ++a)
-            y += k->c.normal[a][i] * G[a][i];
+    double y, gi[3] = {0, 0, 0};
+    for (int a = 0; a < D; ++a)
+        gi[a] = G[a][i];
+    if (flux_or_nofit_row(k, D, i, u, gi, &y))
         return y;
-    }
-    if (k->d->mode[i] == MX_NOFIT) {
-        for (int64_t e = off[i]; e < off[i + 1]; ++e)
-            y += brookshaw_weight(k, D, i, idx[e]) * (u[idx[e]] - u[i]);
-        return y;
-    }
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
         double phi[3];
@@ -213,16 +229,8 @@ PST_KHOT double divergence_row_direct(const mx_ctx *k, int D, int S, size_t i, c
     grad_row(k, D, S, i, u, gi);
     for (int a = 0; a < D; ++a)
         gi[a] *= pst_mob(&k->c, a, i);
-    if (k->c.kind[i] == PST_NEUMANN) {
-        for (int a = 0; a < D; ++a)
-            y += k->c.normal[a][i] * gi[a];
+    if (flux_or_nofit_row(k, D, i, u, gi, &y))
         return y;
-    }
-    if (k->d->mode[i] == MX_NOFIT) {
-        for (int64_t e = off[i]; e < off[i + 1]; ++e)
-            y += brookshaw_weight(k, D, i, idx[e]) * (u[idx[e]] - u[i]);
-        return y;
-    }
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
         double phi[3], gj[3];

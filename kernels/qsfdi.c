@@ -689,6 +689,15 @@ static int qs_precompute(pst_op *op, char *err)
 
 /* ---- apply and emission ------------------------------------------------------------------ */
 
+/* The weight a_IJ of row i (centre xi, 1/h_I ih, coefficients kap) for neighbour j. */
+PST_KHOT double qs_row_weight(const qs_ctx *k, int D, const double xi[3], double ih,
+                              const double *kap, size_t j)
+{
+    double r[3] = {0, 0, 0}, o2, o4;
+    qs_pair(k, D, xi, ih, j, r, &o2, &o4);
+    return qs_weight(D, r, o2, o4, kap);
+}
+
 /* Row i into y (apply) or its weights into w (emission), for constant D. */
 PST_KHOT void qs_row_t(const qs_ctx *k, const qs_data *d, const int64_t *off, const uint32_t *idx,
                      size_t i, const double *u, double *y, double *w, int D)
@@ -698,19 +707,7 @@ PST_KHOT void qs_row_t(const qs_ctx *k, const qs_data *d, const int64_t *off, co
     memcpy(kap, d->kap + (size_t)nk * i, (size_t)nk * sizeof *kap);
     for (int a = 0; a < D; ++a)
         xi[a] = k->c.x[a][i];
-    double ui = u ? u[i] : 0, s = 0;
-    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-        size_t j = idx[e];
-        double r[3] = {0, 0, 0}, o2, o4;
-        qs_pair(k, D, xi, ih, j, r, &o2, &o4);
-        double wij = qs_weight(D, r, o2, o4, kap);
-        if (w)
-            w[e - off[i]] = wij;
-        else
-            s += wij * (u[j] - ui);
-    }
-    if (!w)
-        y[i] = s;
+    PST_ROW_LOOP(off, idx, i, u, y, w, j, qs_row_weight(k, D, xi, ih, kap, j));
 }
 
 /* Matrix-free apply: each pair's weight recomputed from positions and kappa_I. Compute-bound:

@@ -346,19 +346,10 @@ PST_KHOT void row_t(const wls_ctx *k, size_t i, const double *u, double *y, doub
                    int B, pst_kernel K)
 {
     const int nb = D + D * (D + 1) / 2 + B;
-    double xc[3], ih = 1.0 / pst_h(&k->c, i), ui = u ? u[i] : 0, s = 0;
+    double xc[3], ih = 1.0 / pst_h(&k->c, i);
     const double *lam = k->d->lam + (size_t)nb * i;
     centre_of(k, D, i, xc);
-    for (int64_t e = k->c.off[i]; e < k->c.off[i + 1]; ++e) {
-        size_t j = k->c.idx[e];
-        double a = row_weight(k, D, B, K, xc, ih, lam, j);
-        if (w)
-            w[e - k->c.off[i]] = a;
-        else
-            s += a * (u[j] - ui);
-    }
-    if (!w)
-        y[i] = s;
+    PST_ROW_LOOP(k->c.off, k->c.idx, i, u, y, w, j, row_weight(k, D, B, K, xc, ih, lam, j));
 }
 
 /* The degree-2 sums of graded lexicographic order (xx xy yy / xx xy xz yy yz zz) in the
