@@ -6,7 +6,7 @@
  *   omega2 = w / d^2, omega4 = w / d^4, m = (r, r2s, r2c) (5 in 2D, 9 in 3D);
  *   MOMENTS:   21 (2D) / 56 (3D) sums in one pass over the neighbours: the omega2 moments of
  *              degree 2-4 (S2 = <m, m>_2) and the omega4 moments of degree 3-4, as vectorised
- *              loops over the gathered neighbours (the sum loops are lsmps.c's engine's);
+ *              loops over the gathered neighbours (the sum loops are the WLS engine's, wls.c);
  *   INVERSION: the three SPD matrices M2c, M2s (Schur complement of M2c), M1q (spec §1.10-1.11)
  *              and the small products that link them (state below);
  *   WEIGHTS:   kappa (8 / 15 numbers): a_IJ = omega4 kappa4 . (r2s, r2c) + omega2 kappa2 . m.
@@ -274,15 +274,12 @@ static inline double qs_inverse(int n, const double *a, double *inv)
     return pst_mat_inverse(n, a, inv);
 }
 
-/* The inversions of spec §1.10-1.11 from the moments: returns the row status (ok,
- * ill-conditioned or rank-deficient; the state is complete only when not rank-deficient).
- * Roughly 300 (2D) / 1500 (3D) flops, no inter-particle dependencies. */
-PST_KHOT uint8_t qs_invert(const qs_ctx *k, int D, const double *nu, const double *mu,
-                         qs_state *st)
+/* The moment matrices of a row from its moments: S2 = <m, m>_2 (nm x nm), and the omega4
+ * blocks Gq = <q, q>_4 (nq x nq) and Gqr = <q, r>_4 (nq x D), q the quadratic monomials. */
+PST_KHOT void qs_moment_blocks(int D, const double *nu, const double *mu, double *S2,
+                               double *Gq, double *Gqr)
 {
-    const int ns = D, nc = QS_NC(D), nq = QS_NQ(D), nm = QS_NM(D), nd2 = QS_ND2(D);
-    double S2[81], Gq[36], Gqr[18];
-    memset(st, 0, sizeof *st); /* a singular inverse leaves its block untouched */
+    const int nq = QS_NQ(D), nm = QS_NM(D), nd2 = QS_ND2(D);
     for (int a = 0; a < nm; ++a)
         for (int b = 0; b < nm; ++b)
             S2[a * nm + b] = nu[qs_prod(D, a, b)];
@@ -292,6 +289,18 @@ PST_KHOT uint8_t qs_invert(const qs_ctx *k, int D, const double *nu, const doubl
         for (int b = 0; b < D; ++b)
             Gqr[a * D + b] = mu[qs_prod(D, D + a, b) - nd2];
     }
+}
+
+/* The inversions of spec §1.10-1.11 from the moments: returns the row status (ok,
+ * ill-conditioned or rank-deficient; the state is complete only when not rank-deficient).
+ * Roughly 300 (2D) / 1500 (3D) flops, no inter-particle dependencies. */
+PST_KHOT uint8_t qs_invert(const qs_ctx *k, int D, const double *nu, const double *mu,
+                         qs_state *st)
+{
+    const int ns = D, nc = QS_NC(D), nq = QS_NQ(D), nm = QS_NM(D);
+    double S2[81], Gq[36], Gqr[18];
+    memset(st, 0, sizeof *st); /* a singular inverse leaves its block untouched */
+    qs_moment_blocks(D, nu, mu, S2, Gq, Gqr);
     /* M2c = <r2c, r2c>_4, A = <r2c, r>_4, B = <r2c, r2s>_4 */
     double M2c[9], A[9], B[9];
     for (int c = 0; c < nc; ++c) {
