@@ -47,5 +47,6 @@ const pst_scheme pst_scheme_lsmps = {
     .name = "lsmps",
     .description = "quadric LSMPS, type B (variant 0, 6x6 / 10x10) or A (variant 1) "
                    "(QSFDI sec. 2.5)",
+    .variants = 2,
     .precompute = lsmps_precompute,
     PST_WLS_ENTRY_POINTS};

@@ -10,7 +10,10 @@
  *     the gradient and Hessian where the scheme has them;
  *   - Neumann rows reproduce n . grad u of a linear field (schemes of degree >= 1);
  *   - degenerate rows (an isolated particle, a collinear / coplanar neighbourhood) are counted,
- *     finite, and the isolated row is empty.
+ *     finite, and the isolated row is empty;
+ *   - options: a neighbour list narrower than the kernel's support, a variant the scheme does
+ *     not have and (for a scheme without div(M grad u)) a mobility are refused with a message;
+ *     the derivatives a scheme has not are PST_EINVAL.
  * The schemes' own tests (paper tables, convergence orders, oracles) live in their files. */
 #include "check.h"
 #include "support.h"
@@ -238,9 +241,33 @@ static void test_paths_threads(const char *name, int dim)
     pst_cloud_destroy(c);
 }
 
-/* A line (2D) or a plane (3D) of particles, one isolated particle far away: every row finite,
- * the isolated row too-few-neighbours and empty, the flat rows of a scheme that fits moments
- * (degree >= 1) not ok. */
+/* Every value of apply, the stored apply, the gradient and the Hessian (where the scheme has
+ * them) finite, and the stored apply equal to the matrix-free one to PATH_TOL. */
+static int degenerate_outputs_finite(pst_op *op, int dim, size_t n, const double *u,
+                                     const double *y)
+{
+    double *ys = malloc(n * sizeof *ys), *d[9];
+    for (int k = 0; k < 9; ++k)
+        d[k] = malloc(n * sizeof *d[k]);
+    int ok = pst_op_store(op) == PST_OK && pst_op_apply_stored(op, u, ys) == PST_OK;
+    int ng = pst_op_gradient(op, u, d) == PST_OK ? dim : 0;
+    int nh = pst_op_hessian(op, u, d + 3) == PST_OK ? dim * (dim + 1) / 2 : 0;
+    for (size_t i = 0; i < n; ++i) {
+        ok = ok && isfinite(y[i]) && fabs(ys[i] - y[i]) <= PATH_TOL * (fabs(y[i]) + 1);
+        for (int k = 0; k < ng; ++k)
+            ok = ok && isfinite(d[k][i]);
+        for (int k = 0; k < nh; ++k)
+            ok = ok && isfinite(d[3 + k][i]);
+    }
+    for (int k = 0; k < 9; ++k)
+        free(d[k]);
+    free(ys);
+    return ok;
+}
+
+/* A line (2D) or a plane (3D) of particles, one isolated particle far away: every output
+ * finite (degenerate_outputs_finite), the isolated row too-few-neighbours and empty, the flat
+ * rows of a scheme that fits moments (degree >= 1) not ok. */
 static void test_degenerate(const char *name, int dim)
 {
     size_t n = (dim == 2 ? 11 : 25) + 1;
@@ -256,10 +283,7 @@ static void test_degenerate(const char *name, int dim)
     for (size_t i = 0; i < n; ++i)
         u[i] = (double)(i * i);
     CHECK_INT(pst_op_apply(op, u, y), PST_OK);
-    int finite = 1;
-    for (size_t i = 0; i < n; ++i)
-        finite &= isfinite(y[i]);
-    CHECK(finite);
+    CHECK(degenerate_outputs_finite(op, dim, n, u, y));
     CHECK_INT(pst_op_status(op)[m], PST_ROW_TOO_FEW);
     CHECK(y[m] == 0.0);
     size_t counts[PST_ROW_NSTATUS], flat_ok = 0;
@@ -276,10 +300,58 @@ static void test_degenerate(const char *name, int dim)
     pst_cloud_destroy(c);
 }
 
+/* An operator of `name` from o (scheme and defaults set here), and its status. */
+static int create(pst_op **op, const pst_cloud *c, const pst_nlist *nl, const char *name,
+                  int variant, char *err)
+{
+    pst_op_opts o;
+    pst_op_defaults(&o);
+    o.scheme = name;
+    o.variant = variant;
+    *op = NULL;
+    return pst_op_create(op, c, nl, &o, err);
+}
+
+static void test_options(const char *name, int dim)
+{
+    pst_cloud *c = test_lattice(dim, 0.0, 1.0, dim == 2 ? 0.1 : 0.25, 1.2, 0.2, 3, 0);
+    double R = support_of(name);
+    char err[PST_ERRLEN];
+    pst_op *op;
+    pst_nlist *narrow = test_nlist(c, R - 0.5), *nl = test_nlist(c, R);
+    CHECK_INT(create(&op, c, narrow, name, 0, err), PST_EINVAL);
+    CHECK(op == NULL && strstr(err, "support") != NULL);
+    CHECK_INT(create(&op, c, nl, name, pst_scheme_variants(name), err), PST_EINVAL);
+    CHECK(op == NULL && strstr(err, "variant") != NULL);
+    for (int v = 0; v < pst_scheme_variants(name); ++v) {
+        CHECK_INT(create(&op, c, nl, name, v, err), PST_OK);
+        double *d[6] = {NULL}, *u = test_field(c, linear);
+        if (!pst_scheme_supports(name, PST_SUPPORTS_GRADIENT))
+            CHECK_INT(pst_op_gradient(op, u, d), PST_EINVAL);
+        if (!pst_scheme_supports(name, PST_SUPPORTS_HESSIAN))
+            CHECK_INT(pst_op_hessian(op, u, d), PST_EINVAL);
+        if (!pst_scheme_supports(name, PST_SUPPORTS_INTERPOLATE))
+            CHECK_INT(pst_op_interpolate(op, (const double *const *)d, 0, u, NULL, NULL, NULL,
+                                         err),
+                      PST_EINVAL);
+        free(u);
+        pst_op_destroy(op);
+    }
+    if (!pst_scheme_supports(name, PST_SUPPORTS_MOBILITY)) {
+        CHECK_INT(pst_cloud_set_mobility(c, 1, NULL), PST_OK);
+        CHECK_INT(create(&op, c, nl, name, 0, err), PST_EINVAL);
+        CHECK(op == NULL && strstr(err, "mobility") != NULL);
+    }
+    pst_nlist_destroy(narrow);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
 int main(void)
 {
     CHECK(pst_scheme_count() > 0);
     CHECK_INT(pst_scheme_degree("no such scheme", 0), -1);
+    CHECK_INT(pst_scheme_variants("no such scheme"), 0);
     for (int s = 0; s < pst_scheme_count(); ++s) {
         const char *name = pst_scheme_name(s);
         CHECK(pst_scheme_degree(name, 1) >= pst_scheme_degree(name, 0));
@@ -287,6 +359,7 @@ int main(void)
             test_exactness(name, dim);
             test_paths_threads(name, dim);
             test_degenerate(name, dim);
+            test_options(name, dim);
         }
     }
     return check_summary("test_contract");

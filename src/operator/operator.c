@@ -117,6 +117,12 @@ int pst_scheme_degree(const char *name, int lattice)
     return !s ? -1 : lattice ? s->degree_lattice : s->degree;
 }
 
+int pst_scheme_variants(const char *name)
+{
+    const pst_scheme *s = find_scheme(name);
+    return !s ? 0 : s->variants > 1 ? s->variants : 1;
+}
+
 /* The boundary override of opts (kinds, normals): known kinds, finite Neumann normals. */
 static int check_boundary(const pst_op_opts *o, const pst_cloud *c, char *err)
 {

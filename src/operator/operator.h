@@ -21,6 +21,8 @@ typedef struct pst_scheme {
      * jittered lattice, the rows cut by its edges included), and of degree <= `degree_lattice`
      * on the rows of a regular lattice with full support (pst_scheme_degree). */
     int degree, degree_lattice;
+    /* opts.variant takes the values 0 .. variants - 1 (pst_scheme_variants); 0 is read as 1 */
+    int variants;
     /* 1 when the rows average the mobility pairwise, (M_I + M_J), and honour
      * opts.mobility_mean (the LV family); 0: PST_MEAN_HARMONIC is refused */
     int pair_mobility;
