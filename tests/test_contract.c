@@ -132,7 +132,7 @@ static void test_exactness(const char *name, int dim)
     pst_nlist_destroy(nl);
     pst_cloud_destroy(c);
 
-    double s1 = dim == 2 ? 0.05 : 1.0 / 14, h1 = dim == 2 ? 1.2 : 0.8;
+    double s1 = dim == 2 ? 0.05 : 1.0 / 12, h1 = dim == 2 ? 1.2 : 0.8;
     c = test_lattice(dim, 0.0, 1.0, s1, h1, 0.0, 7, 0);
     nl = test_nlist(c, R);
     op = test_op(c, nl, name, PST_GRAD_G1, 0);
