@@ -16,7 +16,7 @@
  * c0 = -2 and the rest 0.
  * Fallback chain (docs/schemes/cspm.md): icspm -> cspm -> csph2g -> Brookshaw; a singular M1
  * gives the Brookshaw row directly. Never NaN. */
-#include "operator.h"
+#include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
 
@@ -76,58 +76,37 @@ typedef struct {
 
 /* Everything the pair functions read, gathered once per call. */
 typedef struct {
-    int dim, which;
-    pst_kernel kernel;
-    const double *x[3], *h, *normal[3], *V, *K;
-    double h_uniform;
-    const uint8_t *kind;
-    const int64_t *off;
-    const uint32_t *idx;
-    double pair_eps; /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
+    pst_kctx c;
+    int which;            /* cs_data's */
+    const double *V, *K;  /* cs_data's volumes (not the cloud's c.V) and coefficients */
 } cs_ctx;
 
 static cs_ctx make_ctx(const pst_op *op)
 {
-    const pst_cloud *c = op->cloud;
     const cs_data *d = op->data;
-    cs_ctx k = {.dim = c->dim, .which = d->which, .kernel = op->kernel, .h = c->h,
-                .h_uniform = c->h_uniform, .kind = op->kind, .V = d->V, .K = d->K,
-                .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
-                .pair_eps = op->opts.min_pair_distance};
-    for (int a = 0; a < 3; ++a) {
-        k.x[a] = c->x[a];
-        k.normal[a] = op->normal[a];
-    }
-    return k;
+    return (cs_ctx){.c = pst_kctx_of(op), .which = d->which, .V = d->V, .K = d->K};
 }
 
-static inline double h_of(const cs_ctx *k, size_t i) { return k->h ? k->h[i] : k->h_uniform; }
-
-/* Hot functions take the dimension D (and the scheme) as constants at their call sites. */
-#define CS_HOT static inline __attribute__((always_inline))
+/* Hot functions (PST_KHOT) take the dimension D (and the scheme) as constants at their call
+ * sites. */
 
 /* Pair (i, j) with i's h: r = x_j - x_i, d, W'(d) and W''(d). Returns 0 for a degenerate pair
  * (d <= min_pair_distance h) or one beyond the support (then W' = W'' = 0 and it contributes nothing). */
-CS_HOT int pair_kernel(const cs_ctx *k, int D, size_t i, size_t j, double hi, double r[3],
+PST_KHOT int pair_kernel(const cs_ctx *k, int D, size_t i, size_t j, double hi, double r[3],
                        double *d2, double *d, double *w1, double *w2)
 {
-    double s = 0;
-    for (int a = 0; a < D; ++a) {
-        r[a] = k->x[a][j] - k->x[a][i];
-        s += r[a] * r[a];
-    }
-    *d2 = s;
-    *d = sqrt(s);
-    if (!(*d > k->pair_eps * hi) || !(*d < pst_sph_support[k->kernel] * hi))
+    *d2 = pst_pair_offset(&k->c, D, i, j, r);
+    *d = sqrt(*d2);
+    if (!pst_pair_live(&k->c, *d, hi) || !(*d < pst_sph_support[k->c.kernel] * hi))
         return 0;
-    *w1 = pst_sph_dw(k->kernel, D, *d, hi);
-    *w2 = pst_sph_d2w(k->kernel, D, *d, hi);
+    *w1 = pst_sph_dw(k->c.kernel, D, *d, hi);
+    *w2 = pst_sph_d2w(k->c.kernel, D, *d, hi);
     return 1;
 }
 
 /* a_Ij of the file comment. Shared by apply, emit_row and nothing else, so that the two apply
  * paths agree bit for bit. */
-CS_HOT double pair_weight(const cs_ctx *k, int D, size_t i, size_t j, double hi,
+PST_KHOT double pair_weight(const cs_ctx *k, int D, size_t i, size_t j, double hi,
                           const double *Ki)
 {
     double r[3], d2, d, w1, w2;
@@ -148,20 +127,11 @@ CS_HOT double pair_weight(const cs_ctx *k, int D, size_t i, size_t j, double hi,
 }
 
 /* Row i into y (apply) or its weights into w (emission). */
-CS_HOT void row_t(const cs_ctx *k, int D, size_t i, const double *u, double *y, double *w)
+PST_KHOT void row_t(const cs_ctx *k, int D, size_t i, const double *u, double *y, double *w)
 {
     const double *Ki = k->K + (size_t)cs_ncoef(D) * i;
-    double hi = h_of(k, i), ui = u ? u[i] : 0, s = 0;
-    for (int64_t e = k->off[i]; e < k->off[i + 1]; ++e) {
-        size_t j = k->idx[e];
-        double wij = pair_weight(k, D, i, j, hi, Ki);
-        if (w)
-            w[e - k->off[i]] = wij;
-        else
-            s += wij * (u[j] - ui);
-    }
-    if (!w)
-        y[i] = s;
+    double hi = pst_h(&k->c, i);
+    PST_ROW_LOOP(k->c.off, k->c.idx, i, u, y, w, j, pair_weight(k, D, i, j, hi, Ki));
 }
 
 static void row_2(const cs_ctx *k, size_t i, const double *u, double *y, double *w)
@@ -178,12 +148,12 @@ static void row_3(const cs_ctx *k, size_t i, const double *u, double *y, double 
 /* Raw moments of row i: sum B m_k over degrees 1..3 (1..2 without ICSPM), sum A m_k and
  * sum C m_k over degrees 3..4, and, with data du (u_j - u_i), S1 = sum B r du and
  * S2_p = sum (A r_pa r_pb + B delta_p) du. Returns the number of contributing neighbours. */
-CS_HOT int moments_t(const cs_ctx *k, int D, int which, size_t i, double *mB, double *mA,
+PST_KHOT int moments_t(const cs_ctx *k, int D, int which, size_t i, double *mB, double *mA,
                      double *mC, const double *u, double *S1, double *S2)
 {
     const int nm = cs_nm(D), d3 = cs_deg(D, 3), d5 = cs_deg(D, 5);
     const int nB = which == CS_ICSPM ? cs_deg(D, 4) : d3, needA = which != CS_CSPH;
-    double hi = h_of(k, i);
+    double hi = pst_h(&k->c, i);
     int count = 0;
     for (int m = 0; m < nm; ++m)
         mB[m] = mA[m] = mC[m] = 0;
@@ -193,8 +163,8 @@ CS_HOT int moments_t(const cs_ctx *k, int D, int which, size_t i, double *mB, do
         for (int p = 0; p < cs_n2(D); ++p)
             S2[p] = 0;
     }
-    for (int64_t e = k->off[i]; e < k->off[i + 1]; ++e) {
-        size_t j = k->idx[e];
+    for (int64_t e = k->c.off[i]; e < k->c.off[i + 1]; ++e) {
+        size_t j = k->c.idx[e];
         double r[3], d2, d, w1, w2;
         if (!pair_kernel(k, D, i, j, hi, r, &d2, &d, &w1, &w2))
             continue;
@@ -463,11 +433,11 @@ static void coefficients(const cs_ctx *k, int D, size_t i, const cs_inv *v, doub
     double *lam = Ki, *sig = Ki + n2, *mu = Ki + 2 * n2;
     for (int c = 0; c < nc; ++c)
         Ki[c] = 0;
-    if (k->kind[i] == PST_NEUMANN) {
+    if (k->c.kind[i] == PST_NEUMANN) {
         /* n . (gradient weights): psi = M1^-1 n; ICSPM (47) adds the Hessian's share */
         double nv[3], psi[3];
         for (int a = 0; a < D; ++a)
-            nv[a] = k->normal[a][i];
+            nv[a] = k->c.normal[a][i];
         for (int a = 0; a < D; ++a) {
             psi[a] = 0;
             for (int c = 0; c < D; ++c)
@@ -537,18 +507,18 @@ static void cs_free(void *p)
  * kernel evaluation (a sqrt and ~25 flops per pair). */
 static void volumes(const cs_ctx *k, double *V, size_t n)
 {
-    const int D = k->dim;
+    const int D = k->c.dim;
 #pragma omp parallel for schedule(dynamic, 512)
     for (size_t j = 0; j < n; ++j) {
-        double hj = h_of(k, j), s = pst_sph_w(k->kernel, D, 0.0, hj);
-        for (int64_t e = k->off[j]; e < k->off[j + 1]; ++e) {
-            size_t m = k->idx[e];
+        double hj = pst_h(&k->c, j), s = pst_sph_w(k->c.kernel, D, 0.0, hj);
+        for (int64_t e = k->c.off[j]; e < k->c.off[j + 1]; ++e) {
+            size_t m = k->c.idx[e];
             double d2 = 0;
             for (int a = 0; a < D; ++a) {
-                double t = k->x[a][m] - k->x[a][j];
+                double t = k->c.x[a][m] - k->c.x[a][j];
                 d2 += t * t;
             }
-            s += pst_sph_w(k->kernel, D, sqrt(d2), hj);
+            s += pst_sph_w(k->c.kernel, D, sqrt(d2), hj);
         }
         V[j] = 1.0 / s; /* s >= W(0) > 0 */
     }
@@ -557,12 +527,12 @@ static void volumes(const cs_ctx *k, double *V, size_t n)
 /* The moments pass of one block, bound by the per-pair kernel and 14-69 FMAs (2D-3D). */
 static void moments_block(const cs_ctx *k, size_t b0, size_t b1, double *mom_blk, int *count)
 {
-    const int D = k->dim, nm = cs_nm(D);
+    const int D = k->c.dim, nm = cs_nm(D);
     /* the moments of row i depend on row i's neighbours only: no write is shared */
 #pragma omp parallel for schedule(dynamic, 64)
     for (size_t i = b0; i < b1; ++i) {
         double *m = mom_blk + (size_t)3 * nm * (i - b0);
-        if (k->kind[i] == PST_DIRICHLET) {
+        if (k->c.kind[i] == PST_DIRICHLET) {
             count[i - b0] = 0;
             continue;
         }
@@ -620,9 +590,9 @@ static int precompute(pst_op *op, int which, char *err)
 #pragma omp parallel for schedule(static)
         for (size_t i = b0; i < b1; ++i) {
             const double *m = mom_blk + (size_t)3 * nm * (i - b0);
-            if (k.kind[i] == PST_DIRICHLET)
+            if (k.c.kind[i] == PST_DIRICHLET)
                 continue;
-            invert(op, D, which, k.kind[i] == PST_NEUMANN, count[i - b0], m, m + nm,
+            invert(op, D, which, k.c.kind[i] == PST_NEUMANN, count[i - b0], m, m + nm,
                    m + 2 * nm, &inv_blk[i - b0]);
         }
         op->phase[PST_PHASE_INVERSION] += omp_get_wtime() - t;
@@ -630,7 +600,7 @@ static int precompute(pst_op *op, int which, char *err)
 #pragma omp parallel for schedule(static)
         for (size_t i = b0; i < b1; ++i) {
             double *Ki = d->K + (size_t)nc * i;
-            if (k.kind[i] == PST_DIRICHLET) {
+            if (k.c.kind[i] == PST_DIRICHLET) {
                 memset(Ki, 0, (size_t)nc * sizeof *Ki);
                 continue;
             }
@@ -659,8 +629,8 @@ static void cs_apply(const pst_op *op, const double *u, double *y)
     cs_ctx k = make_ctx(op);
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < op->n; ++i)
-        if (k.kind[i] != PST_DIRICHLET) {
-            if (k.dim == 2)
+        if (k.c.kind[i] != PST_DIRICHLET) {
+            if (k.c.dim == 2)
                 row_2(&k, i, u, y, NULL);
             else
                 row_3(&k, i, u, y, NULL);
@@ -670,7 +640,7 @@ static void cs_apply(const pst_op *op, const double *u, double *y)
 static void cs_emit_row(const pst_op *op, size_t i, double *w)
 {
     cs_ctx k = make_ctx(op);
-    if (k.dim == 2)
+    if (k.c.dim == 2)
         row_2(&k, i, NULL, NULL, w);
     else
         row_3(&k, i, NULL, NULL, w);
@@ -683,11 +653,11 @@ static void cs_emit_row(const pst_op *op, size_t i, double *w)
 static void refit(const pst_op *op, const cs_ctx *k, size_t i, const double *u, double *g,
                   double *hs)
 {
-    const int D = k->dim, nm = cs_nm(D), n2 = cs_n2(D);
+    const int D = k->c.dim, nm = cs_nm(D), n2 = cs_n2(D);
     double m[3 * CS_NM_MAX], S1[3], S2[6];
     int count = moments_table[D - 2][k->which](k, i, m, u, S1, S2);
     cs_inv v;
-    invert(op, D, k->which, k->kind[i] == PST_NEUMANN, count, m, m + nm, m + 2 * nm, &v);
+    invert(op, D, k->which, k->c.kind[i] == PST_NEUMANN, count, m, m + nm, m + 2 * nm, &v);
     double H[6] = {0, 0, 0, 0, 0, 0}, t[6], gs[3];
     if (v.level == CS_ICSPM || v.level == CS_CSPM) {
         /* H = 2 X^-1 (S2 - N21 M1^-1 S1) */
@@ -731,7 +701,7 @@ static void cs_gradient(const pst_op *op, const double *u, double *const grad[3]
     for (size_t i = 0; i < op->n; ++i) {
         double g[3];
         refit(op, &k, i, u, g, NULL);
-        for (int a = 0; a < k.dim; ++a)
+        for (int a = 0; a < k.c.dim; ++a)
             grad[a][i] = g[a];
     }
 }
@@ -741,13 +711,13 @@ static void cs_hessian(const pst_op *op, const double *u, double *const hess[6])
 {
     static const int out2[3] = {0, 2, 1}, out3[6] = {0, 3, 4, 1, 5, 2};
     cs_ctx k = make_ctx(op);
-    int n2 = cs_n2(k.dim);
+    int n2 = cs_n2(k.c.dim);
 #pragma omp parallel for schedule(dynamic, 256)
     for (size_t i = 0; i < op->n; ++i) {
         double g[3], hs[6];
         refit(op, &k, i, u, g, hs);
         for (int p = 0; p < n2; ++p)
-            hess[k.dim == 2 ? out2[p] : out3[p]][i] = hs[p];
+            hess[k.c.dim == 2 ? out2[p] : out3[p]][i] = hs[p];
     }
 }
 
@@ -761,11 +731,11 @@ static void cs_degrade(pst_op *op, size_t i)
     cs_ctx k = make_ctx(op);
     cs_data *d = op->data;
     const int D = op->dim, nc = cs_ncoef(D);
-    double hi = h_of(&k, i), sum = 0;
-    for (int64_t e = k.off[i]; e < k.off[i + 1]; ++e) {
+    double hi = pst_h(&k.c, i), sum = 0;
+    for (int64_t e = k.c.off[i]; e < k.c.off[i + 1]; ++e) {
         double r[3], d2, dd, w1, w2;
-        if (pair_kernel(&k, D, i, k.idx[e], hi, r, &d2, &dd, &w1, &w2))
-            sum -= k.V[k.idx[e]] * w1 * dd;
+        if (pair_kernel(&k, D, i, k.c.idx[e], hi, r, &d2, &dd, &w1, &w2))
+            sum -= k.V[k.c.idx[e]] * w1 * dd;
     }
     double *Ki = d->K + (size_t)nc * i;
     for (int q = 0; q < nc - 1; ++q)
@@ -773,11 +743,13 @@ static void cs_degrade(pst_op *op, size_t i)
     Ki[nc - 1] = sum > 0 ? -2.0 * D / sum : 0.0;
 }
 
-#define CS_SCHEME(ID, NAME, DESC, FALLBACK, PRE, MIN, HESS)                                   \
+#define CS_SCHEME(ID, NAME, DESC, FALLBACK, DEG, PRE, MIN, HESS)                              \
     const pst_scheme ID = {.name = NAME,                                                      \
                            .description = DESC,                                               \
                            .fallback = FALLBACK,                                              \
                            .default_kernel = PST_KERNEL_QUINTIC,                              \
+                           .degree = DEG,                                                     \
+                           .degree_lattice = 2,                                               \
                            .min_neighbours = MIN,                                             \
                            .precompute = PRE,                                                 \
                            .apply = cs_apply,                                                 \
@@ -790,16 +762,15 @@ static void cs_degrade(pst_op *op, size_t i)
 CS_SCHEME(pst_scheme_cspm, "cspm", "CSPM, Chen et al. 1999 (QSFDI eqs. 38-41)",
           "too few neighbours or singular -> csph2g row -> Brookshaw row -> zero row; flat "
           "neighbours off the particle -> normalised Brookshaw row",
-          pre_cspm,
-          cs_min_cspm, NULL);
+          1, pre_cspm, cs_min_cspm, NULL);
 CS_SCHEME(pst_scheme_icspm, "icspm", "improved CSPM, quadratic-exact (QSFDI eqs. 7, 47-48)",
           "too few neighbours or singular -> cspm row -> csph2g row -> Brookshaw row -> zero "
           "row; flat neighbours off the particle -> normalised Brookshaw row",
-          pre_icspm, cs_min_icspm, cs_hessian);
+          2, pre_icspm, cs_min_icspm, cs_hessian);
 CS_SCHEME(pst_scheme_csph2g, "csph2g", "CSPH2Gamma, Schwaiger's variant (QSFDI eq. 45)",
           "too few neighbours or singular -> Brookshaw row -> zero row; flat neighbours off "
           "the particle -> normalised Brookshaw row",
-          pre_csph, cs_min_csph, NULL);
+          1, pre_csph, cs_min_csph, NULL);
 
 /* The volumes of a CSPM-family operator (NULL for other schemes). Internal: for the tests. */
 const double *pst_cspm_volumes(const pst_op *op);

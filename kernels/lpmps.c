@@ -11,8 +11,9 @@
  *     a_Ij = w_j (tau . r_j + sigma . r2_j),
  * which is lambda = (tau; sigma) of quadric LSMPS type A: with one weight the two schemes are
  * algebraically identical and differ only in rounding and cost. The moment pass, the apply, the
- * fallback chain, Neumann rows, gradient, Hessian and interpolation are those of lsmps.c's
- * engine; this file supplies the block factorisation and its solve. */
+ * fallback chain, Neumann rows, gradient, Hessian and interpolation are those of the WLS
+ * engine (kernels/wls.c); this file supplies the block factorisation and its solve. */
+#include "check.h"
 #include "small_matrix.h"
 #include "wls.h"
 
@@ -113,10 +114,8 @@ static void lpmps_solve(int dim, int nb, const double *M, const double *fac, dou
 
 static int lpmps_precompute(pst_op *op, char *err)
 {
-    if (op->opts.variant != 0) {
-        pst_set_err(err, "lpmps has no variants (got variant %d)", op->opts.variant);
-        return PST_EINVAL;
-    }
+    PST_CHECK(op->opts.variant != 0, PST_EINVAL, err, "lpmps has no variants (got variant %d)",
+              op->opts.variant);
     return pst_wls_precompute(op, 0, lpmps_factor, lpmps_solve, err);
 }
 
@@ -124,15 +123,5 @@ const pst_scheme pst_scheme_lpmps = {
     .name = "lpmps",
     .description = "LP-MPS, block-eliminated quadratic WLS, weight w in both blocks "
                    "(QSFDI sec. 2.6, a reconstruction)",
-    .fallback = "quadric fit: too few neighbours or singular -> linear-exact reduced fit -> "
-                "radial row -> zero row; flat neighbours off the particle -> radial row",
-    .default_kernel = PST_KERNEL_QUINTIC,
-    .min_neighbours = pst_wls_min_neighbours,
     .precompute = lpmps_precompute,
-    .apply = pst_wls_apply,
-    .emit_row = pst_wls_emit_row,
-    .gradient = pst_wls_gradient,
-    .hessian = pst_wls_hessian,
-    .interpolate = pst_wls_interpolate,
-    .degrade = pst_wls_degrade,
-    .free_data = pst_wls_free};
+    PST_WLS_ENTRY_POINTS};

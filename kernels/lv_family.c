@@ -19,7 +19,7 @@
  * component for tensors (pair_mobility below; 0 when m_I + m_J <= 0).
  * Fallback chain (docs/schemes/): too few neighbours or a singular C / Gamma -> the Brookshaw
  * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN. */
-#include "operator.h"
+#include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
 
@@ -40,51 +40,29 @@ typedef struct {
     double *s;     /* the normalising factor s_I                          */
 } lv_data;
 
-/* Everything the pair functions read, gathered once per call. */
+/* Everything the pair functions read, gathered once per call (pair_eps in units of h~). */
 typedef struct {
-    int dim, variant, ncomp;
+    pst_kctx c;
+    int variant;  /* opts.gradient */
     int harmonic; /* opts.mobility_mean == PST_MEAN_HARMONIC */
-    pst_kernel kernel;
-    const double *x[3], *V, *h, *mob[3];
-    double h_uniform;
-    const uint8_t *kind;
-    const double *nnormal[3];
     const lv_data *d;
-    double pair_eps; /* opts.min_pair_distance: closer pairs (in units of h~) are degenerate */
 } lv_ctx;
 
 static lv_ctx make_ctx(const pst_op *op)
 {
-    const pst_cloud *c = op->cloud;
-    lv_ctx k = {.dim = c->dim, .variant = op->opts.gradient, .ncomp = c->mob_ncomp,
-                .harmonic = op->opts.mobility_mean == PST_MEAN_HARMONIC, .kernel = op->kernel,
-                .V = c->V, .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind, .d = op->data,
-                .pair_eps = op->opts.min_pair_distance};
-    for (int a = 0; a < 3; ++a) {
-        k.x[a] = c->x[a];
-        k.mob[a] = c->mob[a];
-        k.nnormal[a] = op->normal[a];
-    }
-    return k;
+    return (lv_ctx){.c = pst_kctx_of(op), .variant = op->opts.gradient,
+                    .harmonic = op->opts.mobility_mean == PST_MEAN_HARMONIC, .d = op->data};
 }
 
-static inline double h_of(const lv_ctx *k, size_t i) { return k->h ? k->h[i] : k->h_uniform; }
-static inline double mob_of(const lv_ctx *k, int comp, size_t i)
-{
-    return k->ncomp ? k->mob[k->ncomp == 1 ? 0 : comp][i] : 1.0;
-}
-
-/* The hot pair functions take the dimension D, the gradient variant G, the tensor flag T and
- * the harmonic-mean flag H as arguments; the applies call them with constants (one
+/* The hot pair functions (PST_KHOT) take the dimension D, the gradient variant G, the tensor
+ * flag T and the harmonic-mean flag H as arguments; the applies call them with constants (one
  * instantiation per combination), so the loops carry no per-pair branches on them. Other
  * callers pass runtime values. */
-#define LV_HOT static inline __attribute__((always_inline))
-
 /* The pair mobility of one component: the paper's arithmetic sum a + b (29), or with H twice
  * the harmonic mean, 4 a b / (a + b) (spec §3.6, an extension). The harmonic form is written
  * 4 a (b / s) so that it cannot overflow for finite a, b > 0 (b / s <= 1), and is 0 when
  * s = a + b is not positive (or NaN): no NaN from it. Equal to a + b when a == b. */
-LV_HOT double pair_mobility(double a, double b, int H)
+PST_KHOT double pair_mobility(double a, double b, int H)
 {
     if (!H)
         return a + b;
@@ -95,26 +73,22 @@ LV_HOT double pair_mobility(double a, double b, int H)
 /* The pair geometry of (i, j): x = r_j - r_i, d^2, h~ = (h_i + h_j)/2 (26), the kernel value W
  * (only when needW) and a = -dW/dr / d >= 0, so that the G1 gradient (15) is a x. Degenerate
  * pairs get a = W = 0. */
-LV_HOT double pair_geometry(const lv_ctx *k, int D, int needW, size_t i, size_t j, double x[3],
+PST_KHOT double pair_geometry(const lv_ctx *k, int D, int needW, size_t i, size_t j, double x[3],
                             double *d2out, double *W)
 {
-    double d2 = 0;
-    for (int a = 0; a < D; ++a) {
-        x[a] = k->x[a][j] - k->x[a][i];
-        d2 += x[a] * x[a];
-    }
-    double ht = 0.5 * (h_of(k, i) + h_of(k, j));
+    double d2 = pst_pair_offset(&k->c, D, i, j, x);
+    double ht = 0.5 * (pst_h(&k->c, i) + pst_h(&k->c, j));
     double d = sqrt(d2);
-    int ok = d > k->pair_eps * ht;
+    int ok = pst_pair_live(&k->c, d, ht);
     *d2out = d2;
-    *W = ok && needW ? pst_sph_w(k->kernel, D, d, ht) : 0.0;
-    return ok ? -pst_sph_dw(k->kernel, D, d, ht) / d : 0.0;
+    *W = ok && needW ? pst_sph_w(k->c.kernel, D, d, ht) : 0.0;
+    return ok ? -pst_sph_dw(k->c.kernel, D, d, ht) / d : 0.0;
 }
 
 /* The kernel gradient g_IJ of variant G (15)-(18) at pair (i, j), and F_IJ = x . g / d^2
  * (returned; 0 for a degenerate pair). For the radial variants g = f x and F = f exactly. Needs
  * nu (G2-G4) and grad nu (G2) of i. */
-LV_HOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j, double x[3],
+PST_KHOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j, double x[3],
                             double g[3], double *d2)
 {
     double W, a = pair_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, j, x, d2, &W);
@@ -123,7 +97,7 @@ LV_HOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j, d
         double inu = 1.0 / k->d->nu[i];
         f = a * inu;
         if (G == PST_GRAD_G4)
-            f *= 1.0 - W * k->V[j] * inu;
+            f *= 1.0 - W * k->c.V[j] * inu;
     }
     for (int c = 0; c < D; ++c)
         g[c] = f * x[c];
@@ -140,19 +114,19 @@ LV_HOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j, d
 
 /* w_IJ of a scheme row (see the file comment). Shared by apply and emit_row so that the two
  * apply paths use the same weights bit for bit. */
-LV_HOT double row_weight(const lv_ctx *k, int D, int G, int T, int H, size_t i, size_t j)
+PST_KHOT double row_weight(const lv_ctx *k, int D, int G, int T, int H, size_t i, size_t j)
 {
     double x[3], g[3], d2;
     double F = pair_gradient(k, D, G, i, j, x, g, &d2);
     if (F == 0.0)
         return 0.0;
     const lv_data *d = k->d;
-    double Vs = d->s[i] * k->V[j];
+    double Vs = d->s[i] * k->c.V[j];
     if (!T) {
         double t = F;
         for (int c = 0; c < D; ++c)
             t -= d->eta[(size_t)D * i + c] * g[c];
-        return Vs * pair_mobility(mob_of(k, 0, i), mob_of(k, 0, j), H) * t;
+        return Vs * pair_mobility(pst_mob(&k->c, 0, i), pst_mob(&k->c, 0, j), H) * t;
     }
     const double *C = d->C + (size_t)D * D * i, *zeta = d->zeta + (size_t)D * i;
     double w = 0;
@@ -160,13 +134,13 @@ LV_HOT double row_weight(const lv_ctx *k, int D, int G, int T, int H, size_t i, 
         double Cg = 0;
         for (int b = 0; b < D; ++b)
             Cg += C[a * D + b] * g[b];
-        w += pair_mobility(k->mob[a][i], k->mob[a][j], H) * (x[a] * g[a] / d2 - zeta[a] * Cg);
+        w += pair_mobility(k->c.mob[a][i], k->c.mob[a][j], H) * (x[a] * g[a] / d2 - zeta[a] * Cg);
     }
     return Vs * w;
 }
 
 /* w_IJ of a Neumann row (100): V_J (M_I n_I) . C_I g_IJ, the outward flux. */
-LV_HOT double neumann_weight(const lv_ctx *k, int D, int G, size_t i, size_t j)
+PST_KHOT double neumann_weight(const lv_ctx *k, int D, int G, size_t i, size_t j)
 {
     double x[3], g[3], d2;
     if (pair_gradient(k, D, G, i, j, x, g, &d2) == 0.0)
@@ -177,27 +151,18 @@ LV_HOT double neumann_weight(const lv_ctx *k, int D, int G, size_t i, size_t j)
         double Cg = 0;
         for (int b = 0; b < D; ++b)
             Cg += C[a * D + b] * g[b];
-        w += mob_of(k, a, i) * k->nnormal[a][i] * Cg;
+        w += pst_mob(&k->c, a, i) * k->c.normal[a][i] * Cg;
     }
-    return k->V[j] * w;
+    return k->c.V[j] * w;
 }
 
 /* Row i into y (apply) or its weights into w (emission), for constant D, G, T, H. */
-LV_HOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
+PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
                   const double *u, double *y, double *w, int D, int G, int T, int H)
 {
-    int neumann = k->kind[i] == PST_NEUMANN;
-    double ui = u ? u[i] : 0, s = 0;
-    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-        size_t j = idx[e];
-        double wij = neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, H, i, j);
-        if (w)
-            w[e - off[i]] = wij;
-        else
-            s += wij * (u[j] - ui);
-    }
-    if (!w)
-        y[i] = s;
+    int neumann = k->c.kind[i] == PST_NEUMANN;
+    PST_ROW_LOOP(off, idx, i, u, y, w, j,
+                 neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, H, i, j));
 }
 
 typedef void (*row_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t,
@@ -223,7 +188,7 @@ static const row_fn row_table[2][4][2][2] = {
  * components; the harmonic pair mobility (H) when asked for. */
 static row_fn row_for(const lv_ctx *k)
 {
-    return row_table[k->dim - 2][k->variant - 1][k->ncomp > 1][k->harmonic];
+    return row_table[k->c.dim - 2][k->variant - 1][k->c.ncomp > 1][k->harmonic];
 }
 
 /* ---- precompute ------------------------------------------------------------------------ */
@@ -258,17 +223,17 @@ static int lv_min_msph(int dim) { return min_neighbours(LV_MSPH, dim); }
 static void shepard(const lv_ctx *k, size_t i, const int64_t *off, const uint32_t *idx,
                     double *nu, double *gnu)
 {
-    double s = pst_sph_w(k->kernel, k->dim, 0.0, h_of(k, i)) * k->V[i], gs[3] = {0, 0, 0};
+    double s = pst_sph_w(k->c.kernel, k->c.dim, 0.0, pst_h(&k->c, i)) * k->c.V[i], gs[3] = {0, 0, 0};
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
-        double x[3], d2, W, a = pair_geometry(k, k->dim, 1, i, j, x, &d2, &W);
-        s += W * k->V[j];
-        for (int c = 0; c < k->dim; ++c)
-            gs[c] += k->V[j] * a * x[c];
+        double x[3], d2, W, a = pair_geometry(k, k->c.dim, 1, i, j, x, &d2, &W);
+        s += W * k->c.V[j];
+        for (int c = 0; c < k->c.dim; ++c)
+            gs[c] += k->c.V[j] * a * x[c];
     }
     *nu = s;
     if (gnu)
-        for (int c = 0; c < k->dim; ++c)
+        for (int c = 0; c < k->c.dim; ++c)
             gnu[c] = gs[c];
 }
 
@@ -296,7 +261,7 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
                         const uint32_t *idx)
 {
     lv_data *d = op->data;
-    int dim = k->dim, nn = dim * dim, which = d->which;
+    int dim = k->c.dim, nn = dim * dim, which = d->which;
     double *C = d->C + (size_t)nn * i, *zeta = d->zeta + (size_t)dim * i,
            *eta = d->eta + (size_t)dim * i;
     uint8_t st = PST_ROW_OK;
@@ -309,7 +274,7 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
     int64_t count = off[i + 1] - off[i];
     if (count < min_neighbours(which, dim))
         return PST_ROW_TOO_FEW;
-    int needs_C = which != LV_BROOKSHAW || k->kind[i] == PST_NEUMANN;
+    int needs_C = which != LV_BROOKSHAW || k->c.kind[i] == PST_NEUMANN;
     if (!needs_C)
         return PST_ROW_OK;
 
@@ -318,7 +283,7 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
         double x[3], g[3], d2, F = pair_gradient(k, dim, k->variant, i, j, x, g, &d2);
-        double V = k->V[j];
+        double V = k->c.V[j];
         for (int a = 0; a < dim; ++a) {
             N[a] += V * g[a];
             Nt[a] += V * F * x[a];
@@ -330,7 +295,7 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
     }
     if (k->variant == PST_GRAD_G2) /* the self term of (16) in (53): makes N = 0 exactly */
         for (int a = 0; a < dim; ++a)
-            N[a] -= k->V[i] * pst_sph_w(k->kernel, dim, 0.0, h_of(k, i)) *
+            N[a] -= k->c.V[i] * pst_sph_w(k->c.kernel, dim, 0.0, pst_h(&k->c, i)) *
                     d->gnu[(size_t)dim * i + a] / (d->nu[i] * d->nu[i]);
     double At[9], Cinv[9];
     for (int a = 0; a < dim; ++a)
@@ -341,7 +306,7 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
         return cs; /* C = I, Brookshaw row */
     st = worse(st, cs);
     memcpy(C, Cinv, (size_t)nn * sizeof *C);
-    if (which == LV_BROOKSHAW || k->kind[i] == PST_NEUMANN)
+    if (which == LV_BROOKSHAW || k->c.kind[i] == PST_NEUMANN)
         return st;
     if (which == LV_CB) {
         double s = trace(dim, C) / dim;
@@ -373,7 +338,7 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
                 xg += xi[c] * g[c];
             for (int a = 0; a < dim; ++a)
                 for (int b = 0; b < dim; ++b)
-                    Gs[a * dim + b] += k->V[j] * x[a] * (g[b] - x[b] * xg);
+                    Gs[a * dim + b] += k->c.V[j] * x[a] * (g[b] - x[b] * xg);
         }
         if (pst_mat_sdd_positive(dim, Gs))
             memcpy(norm, Gs, sizeof norm);
@@ -454,7 +419,7 @@ static void lv_apply(const pst_op *op, const double *u, double *y)
     const uint32_t *idx = pst_nlist_indices(op->nl);
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < op->n; ++i)
-        if (k.kind[i] != PST_DIRICHLET)
+        if (k.c.kind[i] != PST_DIRICHLET)
             row(&k, off, idx, i, u, y, NULL);
 }
 
@@ -476,7 +441,7 @@ static void lv_gradient(const pst_op *op, const double *u, double *const grad[3]
     lv_ctx k = make_ctx(op);
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
-    int dim = k.dim;
+    int dim = k.c.dim;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < op->n; ++i) {
         const double *C = k.d->C + (size_t)dim * dim * i;
@@ -485,7 +450,7 @@ static void lv_gradient(const pst_op *op, const double *u, double *const grad[3]
             size_t j = idx[e];
             double x[3], g[3], d2;
             pair_gradient(&k, dim, k.variant, i, j, x, g, &d2);
-            double du = k.V[j] * (u[j] - u[i]);
+            double du = k.c.V[j] * (u[j] - u[i]);
             for (int c = 0; c < dim; ++c)
                 acc[c] += du * g[c];
         }
@@ -505,7 +470,7 @@ static void lv_lemma3(const pst_op *op, size_t i, int *sign_mixed, int *xi_large
     lv_ctx k = make_ctx(op);
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
-    int dim = k.dim;
+    int dim = k.c.dim;
     const double *eta = k.d->eta + (size_t)dim * i;
     int pos = 0, neg = 0;
     double dmax = 0, xi2 = 0;
@@ -539,18 +504,20 @@ static void lv_degrade(pst_op *op, size_t i)
     double sum = 0;
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         double x[3], g[3], d2, F = pair_gradient(&k, dim, k.variant, i, idx[e], x, g, &d2);
-        sum += k.V[idx[e]] * F * d2;
+        sum += k.c.V[idx[e]] * F * d2;
     }
     d->s[i] = sum > 0 ? dim / sum : 1.0;
     for (int a = 0; a < dim; ++a)
         d->zeta[(size_t)dim * i + a] = d->eta[(size_t)dim * i + a] = 0.0;
 }
 
-#define LV_SCHEME(ID, NAME, DESC, FALLBACK, PRE, MIN, GRAD, LEMMA, DEGRADE)                   \
+#define LV_SCHEME(ID, NAME, DESC, FALLBACK, DEG, DEGL, PRE, MIN, GRAD, LEMMA, DEGRADE)       \
     const pst_scheme ID = {.name = NAME,                                                      \
                            .description = DESC,                                               \
                            .fallback = FALLBACK,                                              \
                            .default_kernel = PST_KERNEL_CUBIC,                                \
+                           .degree = DEG,                                                     \
+                           .degree_lattice = DEGL,                                            \
                            .pair_mobility = 1,                                                \
                            .mobility = 1,                                                     \
                            .min_neighbours = MIN,                                             \
@@ -564,18 +531,17 @@ static void lv_degrade(pst_op *op, size_t i)
                            .free_data = lv_free}
 
 LV_SCHEME(pst_scheme_brookshaw, "brookshaw", "Brookshaw 1985, m_I + m_J (LV eq. 27)",
-          "no neighbour -> zero row (the Brookshaw row is the other schemes' last resort)",
+          "no neighbour -> zero row (the Brookshaw row is the other schemes' last resort)", 0, 0,
           pre_brookshaw, lv_min_brookshaw, NULL, NULL, NULL);
 LV_SCHEME(pst_scheme_cb, "cb", "corrected Brookshaw, times tr C / n (LV eq. 51)",
-          "too few neighbours, C singular or tr C <= 0 -> Brookshaw row -> zero row", pre_cb,
+          "too few neighbours, C singular or tr C <= 0 -> Brookshaw row -> zero row", 0, 3, pre_cb,
           lv_min_cb, lv_gradient, NULL, NULL);
 LV_SCHEME(pst_scheme_schwaiger, "schwaiger", "Schwaiger 2008 (LV eqs. 52-55)",
           "too few neighbours, C or Gamma singular, tr Gamma^-1 <= 0 -> Brookshaw row -> zero "
           "row; flat neighbours off the particle -> normalised Brookshaw row",
-          pre_schwaiger,
-          lv_min_schwaiger, lv_gradient, lv_lemma3, lv_degrade);
+          1, 1, pre_schwaiger, lv_min_schwaiger, lv_gradient, lv_lemma3, lv_degrade);
 LV_SCHEME(pst_scheme_lv, "lv", "Lukyanov-Vuik two-point scheme M-SPH (LV eqs. 69-71, 90-91)",
           "Gamma* not SDD -> Gamma-bar = Gamma (eq. 70); too few neighbours, C or Gamma-bar "
           "singular, tr Gamma-bar^-1 <= 0 -> Brookshaw row -> zero row; flat neighbours off the "
           "particle -> normalised Brookshaw row",
-          pre_msph, lv_min_msph, lv_gradient, lv_lemma3, lv_degrade);
+          1, 1, pre_msph, lv_min_msph, lv_gradient, lv_lemma3, lv_degrade);

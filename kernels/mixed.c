@@ -22,7 +22,7 @@
  * particle's gradient is the uncorrected kernel gradient sum_J V_J (u_J - u_I) grad W_IJ (cloud
  * volumes) and its interior row is the Brookshaw row V_J sum_a (M^a_I + M^a_J) a_IJ x_a^2 / d^2.
  * Neumann rows are n . M_I . (D u)_I with the particle's gradient. Never NaN. */
-#include "operator.h"
+#include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
 
@@ -51,48 +51,23 @@ typedef struct {
     uint32_t *pidx;
 } mx_data;
 
+/* Everything the pair functions read, gathered once per call: c.off / c.idx are the
+ * neighbour list, not the neighbours-of-neighbours pattern. */
 typedef struct {
-    int dim, ncomp;
-    pst_kernel kernel;
-    const double *x[3], *V, *h, *mob[3], *normal[3];
-    double h_uniform;
-    const uint8_t *kind;
-    const int64_t *off; /* the neighbour list */
-    const uint32_t *idx;
+    pst_kctx c;
     const mx_data *d;
-    double pair_eps; /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
 } mx_ctx;
 
-static mx_ctx make_ctx(const pst_op *op)
-{
-    const pst_cloud *c = op->cloud;
-    mx_ctx k = {.dim = c->dim, .ncomp = c->mob_ncomp, .kernel = op->kernel, .V = c->V,
-                .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind,
-                .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
-                .d = op->data, .pair_eps = op->opts.min_pair_distance};
-    for (int a = 0; a < 3; ++a) {
-        k.x[a] = c->x[a];
-        k.mob[a] = c->mob[a];
-        k.normal[a] = op->normal[a];
-    }
-    return k;
-}
+static mx_ctx make_ctx(const pst_op *op) { return (mx_ctx){.c = pst_kctx_of(op), .d = op->data}; }
 
-static inline double h_of(const mx_ctx *k, size_t i) { return k->h ? k->h[i] : k->h_uniform; }
-static inline double mob_of(const mx_ctx *k, int comp, size_t i)
-{
-    return k->ncomp ? k->mob[k->ncomp == 1 ? 0 : comp][i] : 1.0;
-}
-
-/* The hot functions take the dimension D and the scheme S as arguments; the applies call them
- * with constants (one instantiation per combination), so pair loops carry no branch on them. */
-#define MX_HOT static inline __attribute__((always_inline))
-
+/* The hot functions (PST_KHOT) take the dimension D and the scheme S as arguments; the applies
+ * call them with constants (one instantiation per combination), so pair loops carry no branch
+ * on them. */
 static inline int basis_size(int D, int S) { return S == MX_QUADRATIC ? (D + 1) * (D + 2) / 2 : D + 1; }
 
 /* Taylor basis at offset x: 1, x_a, then (quadratic) x_a^2/2 and the cross products in the
  * order of pst_op_hessian (2D: xx, yy, xy; 3D: xx, yy, zz, xy, xz, yz). */
-MX_HOT void basis(int D, int S, const double x[3], double *p)
+PST_KHOT void basis(int D, int S, const double x[3], double *p)
 {
     p[0] = 1.0;
     for (int a = 0; a < D; ++a)
@@ -109,43 +84,38 @@ MX_HOT void basis(int D, int S, const double x[3], double *p)
 }
 
 /* Offset x = r_j - r_i, its length, and whether the pair is non-degenerate. */
-MX_HOT int pair_offset(const mx_ctx *k, int D, size_t i, size_t j, double x[3], double *d)
+PST_KHOT int pair_offset(const mx_ctx *k, int D, size_t i, size_t j, double x[3], double *d)
 {
-    double d2 = 0;
-    for (int a = 0; a < D; ++a) {
-        x[a] = k->x[a][j] - k->x[a][i];
-        d2 += x[a] * x[a];
-    }
-    *d = sqrt(d2);
-    return *d > k->pair_eps * h_of(k, i);
+    *d = sqrt(pst_pair_offset(&k->c, D, i, j, x));
+    return pst_pair_live(&k->c, *d, pst_h(&k->c, i));
 }
 
 /* The LS fit weight w_j of pair (i, j) (the head comment), 0 when degenerate. */
-MX_HOT double fit_weight(const mx_ctx *k, int D, int S, size_t i, size_t j, double x[3])
+PST_KHOT double fit_weight(const mx_ctx *k, int D, int S, size_t i, size_t j, double x[3])
 {
     double d;
     if (!pair_offset(k, D, i, j, x, &d))
         return 0.0;
-    double W = pst_sph_w(k->kernel, D, d, h_of(k, i));
+    double W = pst_sph_w(k->c.kernel, D, d, pst_h(&k->c, i));
     return S == MX_ORDINARY ? W * k->d->Vn[j] : W;
 }
 
 /* a_ij = -dW/dr / d >= 0 with h_I: the uncorrected kernel gradient is a x. */
-MX_HOT double radial_factor(const mx_ctx *k, int D, size_t i, size_t j, double x[3], double *d2)
+PST_KHOT double radial_factor(const mx_ctx *k, int D, size_t i, size_t j, double x[3], double *d2)
 {
     double d;
     int ok = pair_offset(k, D, i, j, x, &d);
     *d2 = d * d;
-    return ok ? -pst_sph_dw(k->kernel, D, d, h_of(k, i)) / d : 0.0;
+    return ok ? -pst_sph_dw(k->c.kernel, D, d, pst_h(&k->c, i)) / d : 0.0;
 }
 
 /* phi^a_ij, the derivative weights of pair (i, j) with i's fit (or its fallback gradient).
  * Shared by the applies, emit_row and the gradient, so all of them use the same numbers. */
-MX_HOT void deriv_weights(const mx_ctx *k, int D, int S, size_t i, size_t j, double phi[3])
+PST_KHOT void deriv_weights(const mx_ctx *k, int D, int S, size_t i, size_t j, double phi[3])
 {
     double x[3];
     if (k->d->mode[i] == MX_NOFIT) {
-        double d2, a = radial_factor(k, D, i, j, x, &d2) * k->V[j];
+        double d2, a = radial_factor(k, D, i, j, x, &d2) * k->c.V[j];
         for (int c = 0; c < D; ++c)
             phi[c] = a * x[c];
         return;
@@ -163,22 +133,22 @@ MX_HOT void deriv_weights(const mx_ctx *k, int D, int S, size_t i, size_t j, dou
 }
 
 /* The Brookshaw weight of the fallback row: V_J a sum_a (M^a_I + M^a_J) x_a^2 / d^2. */
-MX_HOT double brookshaw_weight(const mx_ctx *k, int D, size_t i, size_t j)
+PST_KHOT double brookshaw_weight(const mx_ctx *k, int D, size_t i, size_t j)
 {
     double x[3], d2, a = radial_factor(k, D, i, j, x, &d2);
     if (a == 0.0)
         return 0.0;
     double s = 0;
     for (int c = 0; c < D; ++c)
-        s += (mob_of(k, c, i) + mob_of(k, c, j)) * x[c] * x[c];
-    return k->V[j] * a * s / d2;
+        s += (pst_mob(&k->c, c, i) + pst_mob(&k->c, c, j)) * x[c] * x[c];
+    return k->c.V[j] * a * s / d2;
 }
 
 /* (D u)_i into g. */
-MX_HOT void grad_row(const mx_ctx *k, int D, int S, size_t i, const double *u, double g[3])
+PST_KHOT void grad_row(const mx_ctx *k, int D, int S, size_t i, const double *u, double g[3])
 {
-    const int64_t *off = k->off;
-    const uint32_t *idx = k->idx;
+    const int64_t *off = k->c.off;
+    const uint32_t *idx = k->c.idx;
     double ui = u[i];
     for (int a = 0; a < D; ++a)
         g[a] = 0;
@@ -194,7 +164,7 @@ MX_HOT void grad_row(const mx_ctx *k, int D, int S, size_t i, const double *u, d
 /* Sweep 1: G[a][i] = M^a_i (D_a u)_i for every particle (Dirichlet ones too: interior rows
  * use their one-sided gradients). Compute-bound like sweep 2: one sqrt, the kernel and D*m
  * multiply-adds per pair. */
-MX_HOT void sweep_gradient(const mx_ctx *k, int D, int S, size_t n, const double *u,
+PST_KHOT void sweep_gradient(const mx_ctx *k, int D, int S, size_t n, const double *u,
                            double *const G[3])
 {
 #pragma omp parallel for schedule(static)
@@ -202,27 +172,43 @@ MX_HOT void sweep_gradient(const mx_ctx *k, int D, int S, size_t n, const double
         double g[3];
         grad_row(k, D, S, i, u, g);
         for (int a = 0; a < D; ++a)
-            G[a][i] = mob_of(k, a, i) * g[a];
+            G[a][i] = pst_mob(&k->c, a, i) * g[a];
     }
 }
 
-/* Sweep 2, row i of L from G (not Dirichlet). */
-MX_HOT double divergence_row(const mx_ctx *k, int D, int S, size_t i, const double *u,
-                             double *const G[3])
+/* The rows of sweep 2 that take no divergence: a Neumann row, the flux n . g of the particle's
+ * g = M D u, and a no-fit particle's Brookshaw row. Returns 1 with the row's value in *y for
+ * those, 0 otherwise. */
+PST_KHOT int flux_or_nofit_row(const mx_ctx *k, int D, size_t i, const double *u,
+                               const double g[3], double *y)
 {
-    const int64_t *off = k->off;
-    const uint32_t *idx = k->idx;
-    double y = 0;
-    if (k->kind[i] == PST_NEUMANN) {
+    const int64_t *off = k->c.off;
+    const uint32_t *idx = k->c.idx;
+    *y = 0;
+    if (k->c.kind[i] == PST_NEUMANN) {
         for (int a = 0; a < D; ++a)
-            y += k->normal[a][i] * G[a][i];
-        return y;
+            *y += k->c.normal[a][i] * g[a];
+        return 1;
     }
     if (k->d->mode[i] == MX_NOFIT) {
         for (int64_t e = off[i]; e < off[i + 1]; ++e)
-            y += brookshaw_weight(k, D, i, idx[e]) * (u[idx[e]] - u[i]);
-        return y;
+            *y += brookshaw_weight(k, D, i, idx[e]) * (u[idx[e]] - u[i]);
+        return 1;
     }
+    return 0;
+}
+
+/* Sweep 2, row i of L from G (not Dirichlet). */
+PST_KHOT double divergence_row(const mx_ctx *k, int D, int S, size_t i, const double *u,
+                             double *const G[3])
+{
+    const int64_t *off = k->c.off;
+    const uint32_t *idx = k->c.idx;
+    double y, gi[3] = {0, 0, 0};
+    for (int a = 0; a < D; ++a)
+        gi[a] = G[a][i];
+    if (flux_or_nofit_row(k, D, i, u, gi, &y))
+        return y;
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
         double phi[3];
@@ -235,31 +221,23 @@ MX_HOT double divergence_row(const mx_ctx *k, int D, int S, size_t i, const doub
 
 /* Row i without the sweep-1 buffer (used only when it cannot be allocated): every neighbour's
  * gradient is recomputed, |N|^2 pair evaluations per row. */
-MX_HOT double divergence_row_direct(const mx_ctx *k, int D, int S, size_t i, const double *u)
+PST_KHOT double divergence_row_direct(const mx_ctx *k, int D, int S, size_t i, const double *u)
 {
-    const int64_t *off = k->off;
-    const uint32_t *idx = k->idx;
+    const int64_t *off = k->c.off;
+    const uint32_t *idx = k->c.idx;
     double gi[3], y = 0;
     grad_row(k, D, S, i, u, gi);
     for (int a = 0; a < D; ++a)
-        gi[a] *= mob_of(k, a, i);
-    if (k->kind[i] == PST_NEUMANN) {
-        for (int a = 0; a < D; ++a)
-            y += k->normal[a][i] * gi[a];
+        gi[a] *= pst_mob(&k->c, a, i);
+    if (flux_or_nofit_row(k, D, i, u, gi, &y))
         return y;
-    }
-    if (k->d->mode[i] == MX_NOFIT) {
-        for (int64_t e = off[i]; e < off[i + 1]; ++e)
-            y += brookshaw_weight(k, D, i, idx[e]) * (u[idx[e]] - u[i]);
-        return y;
-    }
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
         double phi[3], gj[3];
         deriv_weights(k, D, S, i, j, phi);
         grad_row(k, D, S, j, u, gj);
         for (int a = 0; a < D; ++a)
-            y += phi[a] * (mob_of(k, a, j) * gj[a] - gi[a]);
+            y += phi[a] * (pst_mob(&k->c, a, j) * gj[a] - gi[a]);
     }
     return y;
 }
@@ -280,21 +258,21 @@ static inline int64_t pattern_pos(const uint32_t *pidx, int64_t lo, int64_t hi, 
 /* The weights of row i in the pattern's order: the composition of the two sweeps with the
  * diagonal dropped (rows sum to zero, so it is minus the sum of the others). |N|^2 pair
  * evaluations and binary searches per row. */
-MX_HOT void emit_t(const mx_ctx *k, int D, int S, const int64_t *poff, const uint32_t *pidx,
+PST_KHOT void emit_t(const mx_ctx *k, int D, int S, const int64_t *poff, const uint32_t *pidx,
                    size_t i, double *w)
 {
-    const int64_t *off = k->off;
-    const uint32_t *idx = k->idx;
+    const int64_t *off = k->c.off;
+    const uint32_t *idx = k->c.idx;
     int64_t lo = poff[i], hi = poff[i + 1];
     memset(w, 0, (size_t)(hi - lo) * sizeof *w);
-    if (k->kind[i] == PST_NEUMANN || k->d->mode[i] == MX_NOFIT) {
+    if (k->c.kind[i] == PST_NEUMANN || k->d->mode[i] == MX_NOFIT) {
         for (int64_t e = off[i]; e < off[i + 1]; ++e) {
             size_t j = idx[e];
             double v = 0, phi[3];
-            if (k->kind[i] == PST_NEUMANN) {
+            if (k->c.kind[i] == PST_NEUMANN) {
                 deriv_weights(k, D, S, i, j, phi);
                 for (int a = 0; a < D; ++a)
-                    v += k->normal[a][i] * mob_of(k, a, i) * phi[a];
+                    v += k->c.normal[a][i] * pst_mob(&k->c, a, i) * phi[a];
             } else {
                 v = brookshaw_weight(k, D, i, j);
             }
@@ -309,7 +287,7 @@ MX_HOT void emit_t(const mx_ctx *k, int D, int S, const int64_t *poff, const uin
         deriv_weights(k, D, S, i, j, phi);
         for (int a = 0; a < D; ++a) {
             S_i[a] += phi[a];
-            mphi[a] = phi[a] * mob_of(k, a, j);
+            mphi[a] = phi[a] * pst_mob(&k->c, a, j);
         }
         for (int64_t f = off[j]; f < off[j + 1]; ++f) {
             size_t l = idx[f];
@@ -324,7 +302,7 @@ MX_HOT void emit_t(const mx_ctx *k, int D, int S, const int64_t *poff, const uin
         w[pattern_pos(pidx, lo, hi, (uint32_t)j) - lo] -= cj; /* the -u_j of (D u)_j */
     }
     for (int a = 0; a < D; ++a)
-        S_i[a] *= mob_of(k, a, i);
+        S_i[a] *= pst_mob(&k->c, a, i);
     for (int64_t e = off[i]; e < off[i + 1]; ++e) { /* the -(D u)_i term */
         size_t j = idx[e];
         double phi[3], c = 0;
@@ -377,7 +355,7 @@ MX_INST(3, 2)
 static const mx_fns fns_table[2][3] = {{MX_FNS(2, 0), MX_FNS(2, 1), MX_FNS(2, 2)},
                                        {MX_FNS(3, 0), MX_FNS(3, 1), MX_FNS(3, 2)}};
 
-static const mx_fns *fns_for(const mx_ctx *k) { return &fns_table[k->dim - 2][k->d->which]; }
+static const mx_fns *fns_for(const mx_ctx *k) { return &fns_table[k->c.dim - 2][k->d->which]; }
 
 /* ---- precompute ------------------------------------------------------------------------ */
 
@@ -404,14 +382,14 @@ static inline uint8_t worse(uint8_t a, uint8_t b) { return a > b ? a : b; }
 /* GEOMETRY (mixed0 only): V~_i = 1 / (W(0) + sum_j W_ij), h_i (eq. 4, pinned choice 3). */
 static void volumes(const mx_ctx *k, size_t n, double *Vn)
 {
-    int D = k->dim;
+    int D = k->c.dim;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; ++i) {
-        double s = pst_sph_w(k->kernel, D, 0.0, h_of(k, i));
-        for (int64_t e = k->off[i]; e < k->off[i + 1]; ++e) {
+        double s = pst_sph_w(k->c.kernel, D, 0.0, pst_h(&k->c, i));
+        for (int64_t e = k->c.off[i]; e < k->c.off[i + 1]; ++e) {
             double x[3], d;
-            if (pair_offset(k, D, i, k->idx[e], x, &d))
-                s += pst_sph_w(k->kernel, D, d, h_of(k, i));
+            if (pair_offset(k, D, i, k->c.idx[e], x, &d))
+                s += pst_sph_w(k->c.kernel, D, d, pst_h(&k->c, i));
         }
         Vn[i] = s > 0 ? 1.0 / s : 0.0;
     }
@@ -422,15 +400,15 @@ static void volumes(const mx_ctx *k, size_t n, double *Vn)
  * per neighbour (55 in 3D quadratic), not memory. */
 static void moments(const mx_ctx *k, int S, size_t i, double *tri)
 {
-    int D = k->dim, m = basis_size(D, S), nt = m * (m + 1) / 2;
-    double ih = 1.0 / h_of(k, i);
+    int D = k->c.dim, m = basis_size(D, S), nt = m * (m + 1) / 2;
+    double ih = 1.0 / pst_h(&k->c, i);
     for (int t = 0; t < nt; ++t)
         tri[t] = 0;
-    double w0 = pst_sph_w(k->kernel, D, 0.0, h_of(k, i));
+    double w0 = pst_sph_w(k->c.kernel, D, 0.0, pst_h(&k->c, i));
     tri[0] = S == MX_ORDINARY ? w0 * k->d->Vn[i] : w0; /* the self term, p = e_0 */
-    for (int64_t e = k->off[i]; e < k->off[i + 1]; ++e) {
+    for (int64_t e = k->c.off[i]; e < k->c.off[i + 1]; ++e) {
         double x[3], p[10];
-        double w = fit_weight(k, D, S, i, k->idx[e], x);
+        double w = fit_weight(k, D, S, i, k->c.idx[e], x);
         if (w == 0.0)
             continue;
         for (int a = 0; a < D; ++a)
@@ -484,16 +462,16 @@ static uint8_t invert(const pst_op *op, int D, const double *tri, int m, double 
 static uint8_t inversion(const pst_op *op, const mx_ctx *k, size_t i, const double *tri)
 {
     mx_data *d = op->data;
-    int D = k->dim, S = d->which, m = d->m;
+    int D = k->c.dim, S = d->which, m = d->m;
     double *Q = d->Q + (size_t)D * m * i;
-    int64_t count = k->off[i + 1] - k->off[i];
+    int64_t count = k->c.off[i + 1] - k->c.off[i];
     uint8_t st = PST_ROW_OK;
     d->mode[i] = MX_FIT;
     if (S == MX_QUADRATIC) {
         if (count < mx_min_quadratic(D))
             st = PST_ROW_TOO_FEW;
         else {
-            uint8_t s = invert(op, D, tri, m, h_of(k, i), Q, m);
+            uint8_t s = invert(op, D, tri, m, pst_h(&k->c, i), Q, m);
             if (s != PST_ROW_RANK_DEFICIENT)
                 return s;
             st = s;
@@ -504,7 +482,7 @@ static uint8_t inversion(const pst_op *op, const mx_ctx *k, size_t i, const doub
     if (count < mx_min_linear(D)) {
         st = worse(st, PST_ROW_TOO_FEW);
     } else {
-        uint8_t s = invert(op, D, tri, D + 1, h_of(k, i), Q, m);
+        uint8_t s = invert(op, D, tri, D + 1, pst_h(&k->c, i), Q, m);
         if (s != PST_ROW_RANK_DEFICIENT)
             return worse(st, s);
         st = worse(st, s);
@@ -555,8 +533,8 @@ static void sort_u32(uint32_t *a, int64_t n)
  * out == NULL only counted. mark[] (one per thread) holds the last row that took a column. */
 static int64_t ring2(const mx_ctx *k, size_t i, uint32_t *mark, uint32_t *out)
 {
-    const int64_t *off = k->off;
-    const uint32_t *idx = k->idx;
+    const int64_t *off = k->c.off;
+    const uint32_t *idx = k->c.idx;
     int64_t c = 0;
     mark[i] = (uint32_t)i;
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
@@ -701,19 +679,19 @@ static void mx_apply(const pst_op *op, const double *u, double *y)
     mx_ctx k = make_ctx(op);
     const mx_fns *f = fns_for(&k);
     size_t n = op->n;
-    double *buf = pst_alloc((size_t)k.dim * (n ? n : 1) * sizeof *buf);
+    double *buf = pst_alloc((size_t)k.c.dim * (n ? n : 1) * sizeof *buf);
     if (!buf) {
 #pragma omp parallel for schedule(dynamic, 256)
         for (size_t i = 0; i < n; ++i)
-            if (k.kind[i] != PST_DIRICHLET)
+            if (k.c.kind[i] != PST_DIRICHLET)
                 y[i] = f->row_direct(&k, i, u);
         return;
     }
-    double *const G[3] = {buf, buf + n, k.dim == 3 ? buf + 2 * n : buf};
+    double *const G[3] = {buf, buf + n, k.c.dim == 3 ? buf + 2 * n : buf};
     f->sweep(&k, n, u, G);
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; ++i)
-        if (k.kind[i] != PST_DIRICHLET)
+        if (k.c.kind[i] != PST_DIRICHLET)
             y[i] = f->row(&k, i, u, G);
     pst_free(buf);
 }
@@ -733,7 +711,7 @@ static void mx_gradient(const pst_op *op, const double *u, double *const grad[3]
     for (size_t i = 0; i < op->n; ++i) {
         double g[3];
         f->grad(&k, i, u, g);
-        for (int a = 0; a < k.dim; ++a)
+        for (int a = 0; a < k.c.dim; ++a)
             grad[a][i] = g[a];
     }
 }
@@ -744,7 +722,7 @@ static void mx_gradient(const pst_op *op, const double *u, double *const grad[3]
 static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
 {
     mx_ctx k = make_ctx(op);
-    int D = k.dim, m = basis_size(D, MX_QUADRATIC), nh = m - 1 - D;
+    int D = k.c.dim, m = basis_size(D, MX_QUADRATIC), nh = m - 1 - D;
     const mx_data *d = op->data;
 #pragma omp parallel for schedule(dynamic, 64)
     for (size_t i = 0; i < op->n; ++i) {
@@ -754,9 +732,9 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
         if (d->mode[i] != MX_FIT)
             continue;
         moments(&k, MX_QUADRATIC, i, tri);
-        double ih = 1.0 / h_of(&k, i);
-        for (int64_t e = k.off[i]; e < k.off[i + 1]; ++e) {
-            size_t j = k.idx[e];
+        double ih = 1.0 / pst_h(&k.c, i);
+        for (int64_t e = k.c.off[i]; e < k.c.off[i + 1]; ++e) {
+            size_t j = k.c.idx[e];
             double x[3] = {0, 0, 0}, p[10], w = fit_weight(&k, D, MX_QUADRATIC, i, j, x);
             for (int c = 0; c < D; ++c)
                 x[c] *= ih;
@@ -778,11 +756,13 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
 #define MX_FALLBACK_LINEAR                                                                     \
     "linear fit: too few neighbours or singular -> kernel gradient and Brookshaw row -> zero row"
 
-#define MX_SCHEME(ID, NAME, DESC, FALLBACK, PRE, MIN, HESS)                                    \
+#define MX_SCHEME(ID, NAME, DESC, FALLBACK, DEG, PRE, MIN, HESS)                               \
     const pst_scheme ID = {.name = NAME,                                                       \
                            .description = DESC,                                                \
                            .fallback = FALLBACK,                                               \
                            .default_kernel = PST_KERNEL_QUINTIC,                               \
+                           .degree = DEG,                                                      \
+                           .degree_lattice = 2,                                                \
                            .mobility = 1,                                                      \
                            .min_neighbours = MIN,                                              \
                            .precompute = PRE,                                                  \
@@ -794,12 +774,12 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
 
 MX_SCHEME(pst_scheme_mixed0, "mixed0",
           "mixed ordinary method, nested LS gradient with W V weights (seed 003 Model 3)",
-          MX_FALLBACK_LINEAR, pre_ordinary, mx_min_linear, NULL);
+          MX_FALLBACK_LINEAR, 1, pre_ordinary, mx_min_linear, NULL);
 MX_SCHEME(pst_scheme_mixed1, "mixed1",
           "mixed least squares 1st order, nested linear LS gradient (seed 003 Model 4)",
-          MX_FALLBACK_LINEAR, pre_linear, mx_min_linear, NULL);
+          MX_FALLBACK_LINEAR, 1, pre_linear, mx_min_linear, NULL);
 MX_SCHEME(pst_scheme_mixed2, "mixed2",
           "mixed least squares 2nd order, nested quadratic LS gradient (seed 003 Model 5)",
           "quadratic fit: too few neighbours or singular -> linear fit -> kernel gradient and "
           "Brookshaw row -> zero row",
-          pre_quadratic, mx_min_quadratic, mx_hessian);
+          2, pre_quadratic, mx_min_quadratic, mx_hessian);

@@ -6,7 +6,7 @@
  *   omega2 = w / d^2, omega4 = w / d^4, m = (r, r2s, r2c) (5 in 2D, 9 in 3D);
  *   MOMENTS:   21 (2D) / 56 (3D) sums in one pass over the neighbours: the omega2 moments of
  *              degree 2-4 (S2 = <m, m>_2) and the omega4 moments of degree 3-4, as vectorised
- *              loops over the gathered neighbours (the sum loops are lsmps.c's engine's);
+ *              loops over the gathered neighbours (the sum loops are the WLS engine's, wls.c);
  *   INVERSION: the three SPD matrices M2c, M2s (Schur complement of M2c), M1q (spec §1.10-1.11)
  *              and the small products that link them (state below);
  *   WEIGHTS:   kappa (8 / 15 numbers): a_IJ = omega4 kappa4 . (r2s, r2c) + omega2 kappa2 . m.
@@ -19,6 +19,7 @@
  * c omega2 (1 - xi . r), xi = (sum omega2 r r^T)^-1 sum omega2 r, c fixing lap |x|^2 = 2D; if
  * that matrix is singular or c <= 0 the Brookshaw-type row c w / d^2, c = 2D / sum w; with no
  * neighbour the row is 0. Neumann rows fall back to n . (linear WLS gradient), else 0. */
+#include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
 #include "wls.h"
@@ -61,7 +62,6 @@ static const unsigned char qs_prod3[9][9] = {
 
 static inline int qs_prod(int D, int a, int b) { return D == 2 ? qs_prod2[a][b] : qs_prod3[a][b]; }
 
-#define QS_HOT static inline __attribute__((always_inline))
 
 typedef struct {
     double *kap; /* nk per particle: kappa4 (nq) then kappa2 (nm), with the 1/h^2 (1/h) in */
@@ -69,45 +69,30 @@ typedef struct {
 
 /* What the pair functions read. */
 typedef struct {
-    int dim;
-    pst_kernel kernel;
+    pst_kctx c;
     double supp;
-    const double *x[3], *h, *normal[3];
-    double h_uniform;
-    const uint8_t *kind;
     double cond_max, rank_tol;
-    double pair_eps; /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
 } qs_ctx;
 
 static qs_ctx make_ctx(const pst_op *op)
 {
-    const pst_cloud *c = op->cloud;
-    qs_ctx k = {.dim = c->dim, .kernel = op->kernel, .supp = pst_kernel_support(op->kernel),
-                .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind,
-                .cond_max = op->opts.cond_max, .rank_tol = op->opts.rank_tol,
-                .pair_eps = op->opts.min_pair_distance};
-    for (int a = 0; a < 3; ++a) {
-        k.x[a] = c->x[a];
-        k.normal[a] = op->normal[a];
-    }
-    return k;
+    return (qs_ctx){.c = pst_kctx_of(op), .supp = pst_kernel_support(op->kernel),
+                    .cond_max = op->opts.cond_max, .rank_tol = op->opts.rank_tol};
 }
-
-static inline double qs_h(const qs_ctx *k, size_t i) { return k->h ? k->h[i] : k->h_uniform; }
 
 /* Scaled offset r = (x_j - x_I) / h_I and omega2, omega4 of a pair; degenerate pairs and pairs
  * beyond the support (possible with per-particle h) get 0 weights. Returns 1 for a live pair. */
-QS_HOT int qs_pair(const qs_ctx *k, int D, const double xi[3], double ih, size_t j, double r[3],
+PST_KHOT int qs_pair(const qs_ctx *k, int D, const double xi[3], double ih, size_t j, double r[3],
                    double *o2, double *o4)
 {
     double d2 = 0;
     for (int a = 0; a < D; ++a) {
-        r[a] = (k->x[a][j] - xi[a]) * ih;
+        r[a] = (k->c.x[a][j] - xi[a]) * ih;
         d2 += r[a] * r[a];
     }
     double q = sqrt(d2);
-    int ok = q > k->pair_eps && q < k->supp;
-    double w = ok ? pst_sph_shape(k->kernel, D, q, 0) : 0.0; /* constant C_D cancels */
+    int ok = q > k->c.pair_eps && q < k->supp;
+    double w = ok ? pst_sph_shape(k->c.kernel, D, q, 0) : 0.0; /* constant C_D cancels */
     double id2 = 1.0 / (ok ? d2 : 1.0);
     *o2 = w * id2;
     *o4 = *o2 * id2;
@@ -115,7 +100,7 @@ QS_HOT int qs_pair(const qs_ctx *k, int D, const double xi[3], double ih, size_t
 }
 
 /* The quadratic monomials (r2s, r2c) of r. */
-QS_HOT void qs_quad(int D, const double r[3], double qm[6])
+PST_KHOT void qs_quad(int D, const double r[3], double qm[6])
 {
     for (int a = 0; a < D; ++a)
         qm[a] = r[a] * r[a];
@@ -127,7 +112,7 @@ QS_HOT void qs_quad(int D, const double r[3], double qm[6])
 }
 
 /* a_IJ = omega4 kappa4 . (r2s, r2c) + omega2 kappa2 . (r, r2s, r2c). */
-QS_HOT double qs_weight(int D, const double r[3], double o2, double o4, const double *kap)
+PST_KHOT double qs_weight(int D, const double r[3], double o2, double o4, const double *kap)
 {
     double qm[6];
     qs_quad(D, r, qm);
@@ -155,7 +140,7 @@ QS_HOT double qs_weight(int D, const double r[3], double o2, double o4, const do
  * in place; 0 for degenerate pairs and pairs beyond the support. Returns the live pairs.
  * Vectorised (the count is a double: an integer count of double compares does not vectorise
  * with SSE2); bound by the division, ~2 ns per neighbour (3D, 1 thread, default flags). */
-QS_HOT int qs_omegas(pst_kernel K, int D, double supp, double eps, int n, double *restrict o2,
+PST_KHOT int qs_omegas(pst_kernel K, int D, double supp, double eps, int n, double *restrict o2,
                      double *restrict o4)
 {
     double live = 0;
@@ -177,21 +162,21 @@ QS_HOT int qs_omegas(pst_kernel K, int D, double supp, double eps, int n, double
  * omega4 (qs_pair's values up to rounding). Returns the live pairs. Three loops, so that only
  * the sqrt stays scalar (GCC does not vectorise sqrt while it may set errno, the default
  * -fmath-errno): bound by it and the gather, ~2 ns per neighbour without qs_omegas. */
-QS_HOT int qs_gather(const qs_ctx *k, int D, const double xi[3], double ih, const uint32_t *idx,
+PST_KHOT int qs_gather(const qs_ctx *k, int D, const double xi[3], double ih, const uint32_t *idx,
                      int n, double (*r)[QS_CHUNK], double *o2, double *o4)
 {
     for (int c = 0; c < n; ++c)
         for (int a = 0; a < D; ++a)
-            r[a][c] = (k->x[a][idx[c]] - xi[a]) * ih;
+            r[a][c] = (k->c.x[a][idx[c]] - xi[a]) * ih;
     for (int c = 0; c < n; ++c)
         o4[c] = r[0][c] * r[0][c] + r[1][c] * r[1][c] + (D == 3 ? r[2][c] * r[2][c] : 0.0);
     for (int c = 0; c < n; ++c)
         o2[c] = sqrt(o4[c]);
-    switch (k->kernel) { /* one vectorised instantiation per kernel */
-    case PST_KERNEL_CUBIC: return qs_omegas(PST_KERNEL_CUBIC, D, k->supp, k->pair_eps, n, o2, o4);
-    case PST_KERNEL_QUINTIC: return qs_omegas(PST_KERNEL_QUINTIC, D, k->supp, k->pair_eps, n, o2, o4);
-    case PST_KERNEL_WENDLAND_C2: return qs_omegas(PST_KERNEL_WENDLAND_C2, D, k->supp, k->pair_eps, n, o2, o4);
-    default: return qs_omegas(PST_KERNEL_WENDLAND_C4, D, k->supp, k->pair_eps, n, o2, o4);
+    switch (k->c.kernel) { /* one vectorised instantiation per kernel */
+    case PST_KERNEL_CUBIC: return qs_omegas(PST_KERNEL_CUBIC, D, k->supp, k->c.pair_eps, n, o2, o4);
+    case PST_KERNEL_QUINTIC: return qs_omegas(PST_KERNEL_QUINTIC, D, k->supp, k->c.pair_eps, n, o2, o4);
+    case PST_KERNEL_WENDLAND_C2: return qs_omegas(PST_KERNEL_WENDLAND_C2, D, k->supp, k->c.pair_eps, n, o2, o4);
+    default: return qs_omegas(PST_KERNEL_WENDLAND_C4, D, k->supp, k->c.pair_eps, n, o2, o4);
     }
 }
 
@@ -206,7 +191,7 @@ static const unsigned char qs_gl2q[2][6] = {{0, 2, 1}, {0, 3, 5, 1, 2, 4}};
  * omega2 and 9 / 25 omega4 sums in pst_wls_msums' vectorised loops (compute-bound, ~2/3 of
  * the time). Measured (3D, 1 thread): 12.2 ns per neighbour with default flags, 8.0 native
  * (was ~57 ns before the gather and the separate sum loops). */
-QS_HOT int qs_moments(const qs_ctx *k, int D, const double xi[3], double ih, const uint32_t *idx,
+PST_KHOT int qs_moments(const qs_ctx *k, int D, const double xi[3], double ih, const uint32_t *idx,
                       int64_t e0, int64_t e1, const double *u, double ui, double *restrict nu,
                       double *restrict mu, double *restrict du2, double *restrict du4)
 {
@@ -289,15 +274,12 @@ static inline double qs_inverse(int n, const double *a, double *inv)
     return pst_mat_inverse(n, a, inv);
 }
 
-/* The inversions of spec §1.10-1.11 from the moments: returns the row status (ok,
- * ill-conditioned or rank-deficient; the state is complete only when not rank-deficient).
- * Roughly 300 (2D) / 1500 (3D) flops, no inter-particle dependencies. */
-QS_HOT uint8_t qs_invert(const qs_ctx *k, int D, const double *nu, const double *mu,
-                         qs_state *st)
+/* The moment matrices of a row from its moments: S2 = <m, m>_2 (nm x nm), and the omega4
+ * blocks Gq = <q, q>_4 (nq x nq) and Gqr = <q, r>_4 (nq x D), q the quadratic monomials. */
+PST_KHOT void qs_moment_blocks(int D, const double *nu, const double *mu, double *S2,
+                               double *Gq, double *Gqr)
 {
-    const int ns = D, nc = QS_NC(D), nq = QS_NQ(D), nm = QS_NM(D), nd2 = QS_ND2(D);
-    double S2[81], Gq[36], Gqr[18];
-    memset(st, 0, sizeof *st); /* a singular inverse leaves its block untouched */
+    const int nq = QS_NQ(D), nm = QS_NM(D), nd2 = QS_ND2(D);
     for (int a = 0; a < nm; ++a)
         for (int b = 0; b < nm; ++b)
             S2[a * nm + b] = nu[qs_prod(D, a, b)];
@@ -307,6 +289,18 @@ QS_HOT uint8_t qs_invert(const qs_ctx *k, int D, const double *nu, const double 
         for (int b = 0; b < D; ++b)
             Gqr[a * D + b] = mu[qs_prod(D, D + a, b) - nd2];
     }
+}
+
+/* The inversions of spec §1.10-1.11 from the moments: returns the row status (ok,
+ * ill-conditioned or rank-deficient; the state is complete only when not rank-deficient).
+ * Roughly 300 (2D) / 1500 (3D) flops, no inter-particle dependencies. */
+PST_KHOT uint8_t qs_invert(const qs_ctx *k, int D, const double *nu, const double *mu,
+                         qs_state *st)
+{
+    const int ns = D, nc = QS_NC(D), nq = QS_NQ(D), nm = QS_NM(D);
+    double S2[81], Gq[36], Gqr[18];
+    memset(st, 0, sizeof *st); /* a singular inverse leaves its block untouched */
+    qs_moment_blocks(D, nu, mu, S2, Gq, Gqr);
     /* M2c = <r2c, r2c>_4, A = <r2c, r>_4, B = <r2c, r2s>_4 */
     double M2c[9], A[9], B[9];
     for (int c = 0; c < nc; ++c) {
@@ -421,7 +415,7 @@ QS_HOT uint8_t qs_invert(const qs_ctx *k, int D, const double *nu, const double 
 /* kappa of the functional l_g . grad + l_s . d2s + l_c . d2c (scaled coordinates): the
  * adjoint of the weights of spec §1.6 (docs/schemes/qsfdi.md derives it; with l_s = 1 it is
  * the kappa of §1.9). About 150 (2D) / 400 (3D) flops. */
-QS_HOT void qs_functional(int D, const qs_state *st, const double *lg, const double *ls,
+PST_KHOT void qs_functional(int D, const qs_state *st, const double *lg, const double *ls,
                           const double *lc, double *kap)
 {
     const int ns = D, nc = QS_NC(D), nq = QS_NQ(D);
@@ -506,7 +500,7 @@ QS_HOT void qs_functional(int D, const qs_state *st, const double *lg, const dou
 
 /* The linear WLS pieces of the fallbacks from the moments: N1 = sum omega2 r r^T (its inverse
  * into n1i) and g1 = sum omega2 r. Returns 0 when N1 is singular. */
-QS_HOT int qs_linear(const qs_ctx *k, int D, const double *nu, const double *mu, double *n1i,
+PST_KHOT int qs_linear(const qs_ctx *k, int D, const double *nu, const double *mu, double *n1i,
                      double *g1)
 {
     double N1[9];
@@ -521,7 +515,7 @@ QS_HOT int qs_linear(const qs_ctx *k, int D, const double *nu, const double *mu,
 }
 
 /* The fallback Laplacian row (file comment) as kappa, scaled coordinates. */
-QS_HOT void qs_fallback_laplacian(const qs_ctx *k, int D, const double *nu, const double *mu,
+PST_KHOT void qs_fallback_laplacian(const qs_ctx *k, int D, const double *nu, const double *mu,
                                   double *kap)
 {
     const int nq = QS_NQ(D);
@@ -558,7 +552,7 @@ QS_HOT void qs_fallback_laplacian(const qs_ctx *k, int D, const double *nu, cons
 }
 
 /* The fallback gradient functional l . grad: l . N1^-1 sum omega2 r u (linear-exact), or 0. */
-QS_HOT void qs_fallback_gradient(const qs_ctx *k, int D, const double *nu, const double *mu,
+PST_KHOT void qs_fallback_gradient(const qs_ctx *k, int D, const double *nu, const double *mu,
                                  const double *l, double *kap)
 {
     memset(kap, 0, (size_t)QS_NK(D) * sizeof *kap);
@@ -584,16 +578,16 @@ static void qs_free(void *p)
 }
 
 /* kappa of row i from its moments and state (WEIGHTS phase), with the h factors. */
-QS_HOT void qs_row_kappa(const qs_ctx *k, int D, size_t i, uint8_t status, const double *nu,
+PST_KHOT void qs_row_kappa(const qs_ctx *k, int D, size_t i, uint8_t status, const double *nu,
                          const double *mu, const qs_state *st, double *kap)
 {
     const int nk = QS_NK(D);
-    double ih = 1.0 / qs_h(k, i), zero[3] = {0, 0, 0}, scale;
-    int neumann = k->kind[i] == PST_NEUMANN, fit = status < PST_ROW_RANK_DEFICIENT;
+    double ih = 1.0 / pst_h(&k->c, i), zero[3] = {0, 0, 0}, scale;
+    int neumann = k->c.kind[i] == PST_NEUMANN, fit = status < PST_ROW_RANK_DEFICIENT;
     if (neumann) {
         double n[3];
         for (int a = 0; a < D; ++a)
-            n[a] = k->normal[a][i];
+            n[a] = k->c.normal[a][i];
         if (fit)
             qs_functional(D, st, n, zero, zero, kap);
         else
@@ -611,7 +605,7 @@ QS_HOT void qs_row_kappa(const qs_ctx *k, int D, size_t i, uint8_t status, const
         kap[a] *= scale;
 }
 
-QS_HOT int qs_precompute_t(pst_op *op, int D)
+PST_KHOT int qs_precompute_t(pst_op *op, int D)
 {
     qs_ctx k = make_ctx(op);
     qs_data *d = op->data;
@@ -634,20 +628,20 @@ QS_HOT int qs_precompute_t(pst_op *op, int D)
 #pragma omp parallel for schedule(dynamic, 64)
         for (long t = 0; t < nb; ++t) {
             size_t i = b0 + (size_t)t;
-            if (k.kind[i] == PST_DIRICHLET)
+            if (k.c.kind[i] == PST_DIRICHLET)
                 continue;
             double xi[3] = {0, 0, 0};
             for (int a = 0; a < D; ++a)
-                xi[a] = k.x[a][i];
+                xi[a] = k.c.x[a][i];
             double *m = mom + (size_t)t * QS_NMOM;
-            live[t] = qs_moments(&k, D, xi, 1.0 / qs_h(&k, i), idx, off[i], off[i + 1], NULL,
+            live[t] = qs_moments(&k, D, xi, 1.0 / pst_h(&k.c, i), idx, off[i], off[i + 1], NULL,
                                  0.0, m, m + n2, NULL, NULL);
         }
         double t1 = omp_get_wtime();
 #pragma omp parallel for schedule(static)
         for (long t = 0; t < nb; ++t) {
             size_t i = b0 + (size_t)t;
-            if (k.kind[i] == PST_DIRICHLET) {
+            if (k.c.kind[i] == PST_DIRICHLET) {
                 op->status[i] = PST_ROW_OK;
                 continue;
             }
@@ -659,7 +653,7 @@ QS_HOT int qs_precompute_t(pst_op *op, int D)
         for (long t = 0; t < nb; ++t) {
             size_t i = b0 + (size_t)t;
             double *kap = d->kap + (size_t)nk * i;
-            if (k.kind[i] == PST_DIRICHLET) {
+            if (k.c.kind[i] == PST_DIRICHLET) {
                 memset(kap, 0, (size_t)nk * sizeof *kap);
                 continue;
             }
@@ -704,28 +698,25 @@ static int qs_precompute(pst_op *op, char *err)
 
 /* ---- apply and emission ------------------------------------------------------------------ */
 
+/* The weight a_IJ of row i (centre xi, 1/h_I ih, coefficients kap) for neighbour j. */
+PST_KHOT double qs_row_weight(const qs_ctx *k, int D, const double xi[3], double ih,
+                              const double *kap, size_t j)
+{
+    double r[3] = {0, 0, 0}, o2, o4;
+    qs_pair(k, D, xi, ih, j, r, &o2, &o4);
+    return qs_weight(D, r, o2, o4, kap);
+}
+
 /* Row i into y (apply) or its weights into w (emission), for constant D. */
-QS_HOT void qs_row_t(const qs_ctx *k, const qs_data *d, const int64_t *off, const uint32_t *idx,
+PST_KHOT void qs_row_t(const qs_ctx *k, const qs_data *d, const int64_t *off, const uint32_t *idx,
                      size_t i, const double *u, double *y, double *w, int D)
 {
     const int nk = QS_NK(D);
-    double kap[15], xi[3] = {0, 0, 0}, ih = 1.0 / qs_h(k, i);
+    double kap[15], xi[3] = {0, 0, 0}, ih = 1.0 / pst_h(&k->c, i);
     memcpy(kap, d->kap + (size_t)nk * i, (size_t)nk * sizeof *kap);
     for (int a = 0; a < D; ++a)
-        xi[a] = k->x[a][i];
-    double ui = u ? u[i] : 0, s = 0;
-    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-        size_t j = idx[e];
-        double r[3] = {0, 0, 0}, o2, o4;
-        qs_pair(k, D, xi, ih, j, r, &o2, &o4);
-        double wij = qs_weight(D, r, o2, o4, kap);
-        if (w)
-            w[e - off[i]] = wij;
-        else
-            s += wij * (u[j] - ui);
-    }
-    if (!w)
-        y[i] = s;
+        xi[a] = k->c.x[a][i];
+    PST_ROW_LOOP(off, idx, i, u, y, w, j, qs_row_weight(k, D, xi, ih, kap, j));
 }
 
 /* Matrix-free apply: each pair's weight recomputed from positions and kappa_I. Compute-bound:
@@ -737,15 +728,15 @@ static void qs_apply(const pst_op *op, const double *u, double *y)
     const qs_data *d = op->data;
     const int64_t *off = op->poff;
     const uint32_t *idx = op->pidx;
-    if (k.dim == 2) {
+    if (k.c.dim == 2) {
 #pragma omp parallel for schedule(static)
         for (size_t i = 0; i < op->n; ++i)
-            if (k.kind[i] != PST_DIRICHLET)
+            if (k.c.kind[i] != PST_DIRICHLET)
                 qs_row_t(&k, d, off, idx, i, u, y, NULL, 2);
     } else {
 #pragma omp parallel for schedule(static)
         for (size_t i = 0; i < op->n; ++i)
-            if (k.kind[i] != PST_DIRICHLET)
+            if (k.c.kind[i] != PST_DIRICHLET)
                 qs_row_t(&k, d, off, idx, i, u, y, NULL, 3);
     }
 }
@@ -753,7 +744,7 @@ static void qs_apply(const pst_op *op, const double *u, double *y)
 static void qs_emit_row(const pst_op *op, size_t i, double *w)
 {
     qs_ctx k = make_ctx(op);
-    if (k.dim == 2)
+    if (k.c.dim == 2)
         qs_row_t(&k, op->data, op->poff, op->pidx, i, NULL, NULL, w, 2);
     else
         qs_row_t(&k, op->data, op->poff, op->pidx, i, NULL, NULL, w, 3);
@@ -765,7 +756,7 @@ static void qs_emit_row(const pst_op *op, size_t i, double *w)
  * moments per particle, the inversions, then one kappa per component dotted with the data
  * moments (spec §1.9: no stored weights needed). Fallback rows: the linear WLS gradient (or 0)
  * and a zero Hessian. */
-QS_HOT void qs_derivs_t(const pst_op *op, const double *u, double *const out[6], int which,
+PST_KHOT void qs_derivs_t(const pst_op *op, const double *u, double *const out[6], int which,
                         int D)
 {
     qs_ctx k = make_ctx(op);
@@ -775,9 +766,9 @@ QS_HOT void qs_derivs_t(const pst_op *op, const double *u, double *const out[6],
     const int ncomp = which ? nq : D;
 #pragma omp parallel for schedule(dynamic, 64)
     for (size_t i = 0; i < op->n; ++i) {
-        double xi[3] = {0, 0, 0}, mom[QS_NMOM], du2[9], du4[6], h = qs_h(&k, i);
+        double xi[3] = {0, 0, 0}, mom[QS_NMOM], du2[9], du4[6], h = pst_h(&k.c, i);
         for (int a = 0; a < D; ++a)
-            xi[a] = k.x[a][i];
+            xi[a] = k.c.x[a][i];
         int live = qs_moments(&k, D, xi, 1.0 / h, idx, off[i], off[i + 1], u, u[i], mom,
                               mom + n2, du2, du4);
         qs_state st;
@@ -829,7 +820,7 @@ static void qs_hessian(const pst_op *op, const double *u, double *const hess[6])
  * Phi_k = omega1_k - tau^T Phi^all_k, <p> = sum Phi_k u_k / M0, lap = sum a_k (u_k - <p>).
  * Returns 0 (fallback) for too few neighbours, a singular fit or M0 not positive. The data
  * are taken relative to uref (the nearest neighbour's value) to keep rounding small. */
-QS_HOT int qs_point_t(const qs_ctx *k, int D, const double p[3], double h, const uint32_t *idx,
+PST_KHOT int qs_point_t(const qs_ctx *k, int D, const double p[3], double h, const uint32_t *idx,
                       int64_t e0, int64_t e1, const double *u, double uref, double *value,
                       double *lap)
 {
@@ -913,7 +904,7 @@ static int qs_interpolate(const pst_op *op, const double *const pts[3], size_t m
             size_t j = e0 < e1 ? idx[e0 + (int64_t)t] : t;
             double d2 = 0;
             for (int a = 0; a < D; ++a)
-                d2 += (k.x[a][j] - p[a]) * (k.x[a][j] - p[a]);
+                d2 += (k.c.x[a][j] - p[a]) * (k.c.x[a][j] - p[a]);
             if (d2 < best) {
                 best = d2;
                 near = j;
@@ -945,6 +936,8 @@ const pst_scheme pst_scheme_qsfdi = {
     .fallback = "quadric fit: too few neighbours or singular -> linear-exact row -> "
                 "Brookshaw-type row -> zero row",
     .default_kernel = PST_KERNEL_QUINTIC,
+    .degree = 2,
+    .degree_lattice = 2,
     .min_neighbours = qs_min,
     .precompute = qs_precompute,
     .apply = qs_apply,

@@ -1,6 +1,6 @@
-/* The weighted-least-squares engine of kernels/lsmps.c, shared by lsmps (types A and B), lpmps
- * (which supplies only its block factorisation) and qsfdi (which uses the vectorised moment
- * sums). Internal. */
+/* The weighted-least-squares engine (kernels/wls.c), shared by lsmps (types A and B, LDL^T),
+ * lpmps (which supplies only its block factorisation) and qsfdi (which uses the vectorised
+ * moment sums). Internal. */
 #ifndef PSTENCIL_WLS_H
 #define PSTENCIL_WLS_H
 
@@ -30,5 +30,16 @@ void pst_wls_degrade(pst_op *op, size_t i);
  * order; r holds x, y[, z] at stride `stride`, n pairs. Vectorised reduction loops. */
 void pst_wls_msums(int dim, int deg, int n, const double *r, int stride, const double *w,
                    double *s);
+
+/* The fields of a WLS scheme's table other than its name, description and precompute. */
+#define PST_WLS_FALLBACK                                                                       \
+    "quadric fit: too few neighbours or singular -> linear-exact reduced fit -> radial row -> " \
+    "zero row; flat neighbours off the particle -> radial row"
+#define PST_WLS_ENTRY_POINTS                                                                   \
+    .fallback = PST_WLS_FALLBACK, .default_kernel = PST_KERNEL_QUINTIC, .degree = 2,          \
+    .degree_lattice = 2,                                                                       \
+    .min_neighbours = pst_wls_min_neighbours, .apply = pst_wls_apply,                          \
+    .emit_row = pst_wls_emit_row, .gradient = pst_wls_gradient, .hessian = pst_wls_hessian,    \
+    .interpolate = pst_wls_interpolate, .degrade = pst_wls_degrade, .free_data = pst_wls_free
 
 #endif

@@ -235,9 +235,9 @@ static void test_oracle(void)
     }
 }
 
-/* Matrix-free vs stored vs assembled, the diagonal, and 1 vs 2 threads bit for bit, with
- * interior, Dirichlet and Neumann rows; Neumann rows give n . grad u exactly for quadratics. */
-static void test_paths_and_threads(void)
+/* Neumann rows give n . grad u exactly for quadratics (test_contract checks linear fields and
+ * the apply paths); the precompute's phases are timed. */
+static void test_neumann_and_phases(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
         double s0 = dim == 2 ? 0.05 : 0.1;
@@ -247,19 +247,9 @@ static void test_paths_and_threads(void)
         test_make_neumann(c, 3);
         pst_nlist *nl = test_nlist(c, 3.0);
         quad q = make_quad(dim);
-        double *u = quad_field(c, &q), *y1 = malloc(n * sizeof *y1),
-               *y2 = malloc(n * sizeof *y2), *y3 = malloc(n * sizeof *y3);
-        test_threads t = test_one_vs_two_threads(c, nl, "qsfdi", PST_GRAD_G1, 0, u, y3, y1, 1);
-        pst_op *op = t.op2;
-        CHECK(t.same_apply);
-        CHECK(t.same_status);
-        for (int a = 0; a < dim; ++a)
-            CHECK(t.same_grad[a]);
-        test_paths p = test_compare_paths(op, u, y1, y2);
-        CHECK_INT(p.store, PST_OK);
-        CHECK_INT(p.stored, PST_OK);
-        CHECK_INT(p.assemble, PST_OK);
-        CHECK_INT(p.diagonal, PST_OK);
+        double *u = quad_field(c, &q), *y1 = malloc(n * sizeof *y1);
+        pst_op *op = test_op(c, nl, "qsfdi", PST_GRAD_G1, 0);
+        pst_op_apply(op, u, y1);
         double neu = 0;
         size_t nneu = 0;
         const uint8_t *st = pst_op_status(op);
@@ -276,13 +266,7 @@ static void test_paths_and_threads(void)
                 neu = fmax(neu, fabs(y1[i] - flux));
                 ++nneu;
             }
-        printf("paths %dD: matrix-free vs stored %.2e, assembled %.2e, diagonal %.1e; "
-               "%zu Neumann rows, max |row - n.grad u| %.2e\n",
-               dim, p.worst, p.worst_csr, p.worst_diag, nneu, neu);
-        CHECK(p.finite);
-        CHECK(p.worst <= 1e-13);
-        CHECK(p.worst_csr <= 1e-13);
-        CHECK(p.worst_diag == 0.0);
+        printf("Neumann %dD: %zu rows, max |row - n.grad u| %.2e\n", dim, nneu, neu);
         CHECK(nneu > 0);
         CHECK(neu <= 1e-8);
         double t_ph[PST_NPHASES];
@@ -292,12 +276,9 @@ static void test_paths_and_threads(void)
               t_ph[PST_PHASE_WEIGHTS] > 0);
         CHECK(t_ph[PST_PHASE_MOMENTS] + t_ph[PST_PHASE_INVERSION] + t_ph[PST_PHASE_WEIGHTS] <=
               t_ph[PST_PHASE_PRECOMPUTE]);
-        pst_op_destroy(t.op2);
-        pst_op_destroy(t.op1);
+        pst_op_destroy(op);
         free(u);
         free(y1);
-        free(y2);
-        free(y3);
         pst_nlist_destroy(nl);
         pst_cloud_destroy(c);
     }
@@ -419,26 +400,13 @@ static void test_degenerate(void)
 static void test_errors(void)
 {
     pst_cloud *c = test_lattice(2, 2.0, 3.0, 0.1, 1.2, 0.0, 1, 0);
-    pst_nlist *nl = test_nlist(c, 2.0);
+    pst_nlist *nl = test_nlist(c, 3.0);
     pst_op_opts o;
     pst_op *op = NULL;
     char err[PST_ERRLEN];
     pst_op_defaults(&o);
     o.scheme = "qsfdi";
     CHECK_INT(pst_scheme_default_kernel("qsfdi"), PST_KERNEL_QUINTIC);
-    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL); /* list radius 2h < 3h */
-    CHECK(strstr(err, "support") != NULL);
-    pst_nlist_destroy(nl);
-    nl = test_nlist(c, 3.0);
-    o.variant = 1;
-    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
-    CHECK(strstr(err, "variant") != NULL);
-    o.variant = 0;
-    pst_cloud_set_mobility(c, 1, NULL);
-    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
-    CHECK(strstr(err, "mobility") != NULL);
-    CHECK(op == NULL);
-    pst_cloud_set_mobility(c, 0, NULL);
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_OK);
     double nan = NAN, zero = 0, u[121] = {0}, v;
     const double *pts[3] = {&nan, &zero, &zero};
@@ -519,7 +487,7 @@ int main(void)
 {
     test_exactness();
     test_oracle();
-    test_paths_and_threads();
+    test_neumann_and_phases();
     test_degenerate();
     test_errors();
     const double p04[2] = {1.70e-2, 9.0e-4}, p08[2] = {3.0e-2, 1.7e-3};

@@ -114,6 +114,14 @@ int pst_scheme_default_kernel(const char *name);
  * ("quadric fit: too few neighbours or singular -> linear-exact row -> ..."); NULL for an
  * unknown name. docs/operators.md, "Row status and fallbacks". */
 const char *pst_scheme_fallback(const char *name);
+/* The highest polynomial degree whose Laplacian a scheme's interior rows reproduce to rounding:
+ * on any cloud (lattice = 0: jittered particles, rows cut by the cloud's edge included) or on
+ * the rows of a regular lattice with full support (lattice = 1). -1 for an unknown name.
+ * tests/test_contract.c holds every scheme to it; docs/schemes/README.md, "exact for". */
+int pst_scheme_degree(const char *name, int lattice);
+/* The number of values pst_op_opts.variant takes for a scheme (0 .. n-1; 1: only the default
+ * 0), 0 for an unknown name. */
+int pst_scheme_variants(const char *name);
 
 /* What a scheme can do, for planning before an operator exists (0 for an unknown name). */
 enum {

@@ -111,6 +111,18 @@ const char *pst_scheme_fallback(const char *name)
     return s ? s->fallback : NULL;
 }
 
+int pst_scheme_degree(const char *name, int lattice)
+{
+    const pst_scheme *s = find_scheme(name);
+    return !s ? -1 : lattice ? s->degree_lattice : s->degree;
+}
+
+int pst_scheme_variants(const char *name)
+{
+    const pst_scheme *s = find_scheme(name);
+    return !s ? 0 : s->variants > 1 ? s->variants : 1;
+}
+
 /* The boundary override of opts (kinds, normals): known kinds, finite Neumann normals. */
 static int check_boundary(const pst_op_opts *o, const pst_cloud *c, char *err)
 {
@@ -127,71 +139,58 @@ static int check_boundary(const pst_op_opts *o, const pst_cloud *c, char *err)
     return PST_OK;
 }
 
+/* The names of the registered schemes, ", "-separated, for a message. */
+static const char *scheme_names(char *names, size_t size)
+{
+    names[0] = '\0';
+    for (int i = 0; i < NSCHEMES; ++i) {
+        strncat(names, i ? ", " : "", size - strlen(names) - 1);
+        strncat(names, registry[i]->name, size - strlen(names) - 1);
+    }
+    return names;
+}
+
 static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist *nl,
                       const pst_scheme **scheme, char *err)
 {
-    int st;
+    char names[256];
     *scheme = find_scheme(o->scheme);
-    if (!*scheme) {
-        char names[256] = "";
-        for (int i = 0; i < NSCHEMES; ++i) {
-            strncat(names, i ? ", " : "", sizeof names - strlen(names) - 1);
-            strncat(names, registry[i]->name, sizeof names - strlen(names) - 1);
-        }
-        pst_set_err(err, "unknown scheme '%s' (known: %s)", o->scheme ? o->scheme : "(null)",
-                    names);
-        return PST_EINVAL;
-    }
-    if (o->kernel < -1 || o->kernel > PST_KERNEL_WENDLAND_C4) {
-        pst_set_err(err, "unknown kernel %d", o->kernel);
-        return PST_EINVAL;
-    }
-    if (o->gradient < PST_GRAD_G1 || o->gradient > PST_GRAD_G4) {
-        pst_set_err(err, "gradient variant must be G1..G4 (got %d)", o->gradient);
-        return PST_EINVAL;
-    }
-    if (!(o->cond_max >= 1) || !(o->rank_tol > 0 && o->rank_tol < 1)) {
-        pst_set_err(err, "cond_max must be >= 1 and rank_tol in (0, 1) (got %g, %g)",
-                    o->cond_max, o->rank_tol);
-        return PST_EINVAL;
-    }
-    if (!(o->min_pair_distance > 0 && o->min_pair_distance < 0.5)) {
-        pst_set_err(err, "min_pair_distance must be in (0, 0.5) (got %g)", o->min_pair_distance);
-        return PST_EINVAL;
-    }
-    if (o->on_degenerate != PST_DEGENERATE_FALL_BACK && o->on_degenerate != PST_DEGENERATE_REFUSE) {
-        pst_set_err(err, "on_degenerate must be PST_DEGENERATE_FALL_BACK (0) or "
-                         "PST_DEGENERATE_REFUSE (1) (got %d)",
-                    o->on_degenerate);
-        return PST_EINVAL;
-    }
-    if (o->mobility_mean != PST_MEAN_ARITHMETIC && o->mobility_mean != PST_MEAN_HARMONIC) {
-        pst_set_err(err, "mobility_mean must be PST_MEAN_ARITHMETIC (0) or PST_MEAN_HARMONIC "
-                         "(1) (got %d)",
-                    o->mobility_mean);
-        return PST_EINVAL;
-    }
-    if (o->mobility_mean == PST_MEAN_HARMONIC && !(*scheme)->pair_mobility) {
-        pst_set_err(err, "scheme '%s' does not average the mobility pairwise: the harmonic "
-                         "mobility mean applies only to brookshaw, cb, schwaiger and lv",
-                    (*scheme)->name);
-        return PST_EINVAL;
-    }
-    if (pst_nlist_rows(nl) != c->n) {
-        pst_set_err(err, "the neighbour list has %zu rows for a cloud of %zu particles",
-                    pst_nlist_rows(nl), c->n);
-        return PST_EINVAL;
-    }
-    if ((st = check_boundary(o, c, err)) != PST_OK)
-        return st;
+    PST_CHECK(!*scheme, PST_EINVAL, err, "unknown scheme '%s' (known: %s)",
+              o->scheme ? o->scheme : "(null)", scheme_names(names, sizeof names));
+    PST_CHECK(o->kernel < -1 || o->kernel > PST_KERNEL_WENDLAND_C4, PST_EINVAL, err,
+              "unknown kernel %d", o->kernel);
+    PST_CHECK(o->gradient < PST_GRAD_G1 || o->gradient > PST_GRAD_G4, PST_EINVAL, err,
+              "gradient variant must be G1..G4 (got %d)", o->gradient);
+    PST_CHECK(!(o->cond_max >= 1) || !(o->rank_tol > 0 && o->rank_tol < 1), PST_EINVAL, err,
+              "cond_max must be >= 1 and rank_tol in (0, 1) (got %g, %g)", o->cond_max,
+              o->rank_tol);
+    PST_CHECK(!(o->min_pair_distance > 0 && o->min_pair_distance < 0.5), PST_EINVAL, err,
+              "min_pair_distance must be in (0, 0.5) (got %g)", o->min_pair_distance);
+    PST_CHECK(o->on_degenerate != PST_DEGENERATE_FALL_BACK &&
+                  o->on_degenerate != PST_DEGENERATE_REFUSE,
+              PST_EINVAL, err,
+              "on_degenerate must be PST_DEGENERATE_FALL_BACK (0) or PST_DEGENERATE_REFUSE (1) "
+              "(got %d)",
+              o->on_degenerate);
+    PST_CHECK(o->mobility_mean != PST_MEAN_ARITHMETIC && o->mobility_mean != PST_MEAN_HARMONIC,
+              PST_EINVAL, err,
+              "mobility_mean must be PST_MEAN_ARITHMETIC (0) or PST_MEAN_HARMONIC (1) (got %d)",
+              o->mobility_mean);
+    PST_CHECK(o->mobility_mean == PST_MEAN_HARMONIC && !(*scheme)->pair_mobility, PST_EINVAL,
+              err,
+              "scheme '%s' does not average the mobility pairwise: the harmonic mobility mean "
+              "applies only to brookshaw, cb, schwaiger and lv",
+              (*scheme)->name);
+    PST_CHECK(pst_nlist_rows(nl) != c->n, PST_EINVAL, err,
+              "the neighbour list has %zu rows for a cloud of %zu particles", pst_nlist_rows(nl),
+              c->n);
+    PST_TRY(check_boundary(o, c, err));
     pst_kernel k = o->kernel < 0 ? (*scheme)->default_kernel : (pst_kernel)o->kernel;
-    if (pst_nlist_support(nl) < pst_kernel_support(k)) {
-        pst_set_err(err, "the neighbour list's radius (%g h) is smaller than the support of "
-                         "the %s kernel (%g h): rebuild it with support %g",
-                    pst_nlist_support(nl), pst_kernel_name(k), pst_kernel_support(k),
-                    pst_kernel_support(k));
-        return PST_EINVAL;
-    }
+    PST_CHECK(pst_nlist_support(nl) < pst_kernel_support(k), PST_EINVAL, err,
+              "the neighbour list's radius (%g h) is smaller than the support of the %s kernel "
+              "(%g h): rebuild it with support %g",
+              pst_nlist_support(nl), pst_kernel_name(k), pst_kernel_support(k),
+              pst_kernel_support(k));
     return PST_OK;
 }
 
@@ -228,12 +227,9 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
         o = &defaults;
     }
     const pst_scheme *scheme;
-    int st = check_opts(o, c, nl, &scheme, err);
-    if (st != PST_OK)
-        return st;
+    PST_TRY(check_opts(o, c, nl, &scheme, err));
     pst_op *op = calloc(1, sizeof *op);
-    if (!op)
-        return PST_ENOMEM;
+    PST_CHECK_ALLOC(op, err, "cannot allocate an operator");
     op->scheme = scheme;
     op->cloud = c;
     op->nl = nl;
@@ -257,7 +253,7 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
      * read them (the planner's "model only what a scene needs"). */
     op->rows = o->laplacian || !scheme->derivatives_standalone;
     double t0 = omp_get_wtime();
-    st = op->rows ? scheme->precompute(op, err) : PST_OK;
+    int st = op->rows ? scheme->precompute(op, err) : PST_OK;
     if (st == PST_OK && op->rows)
         pst_op_check_flat_rows(op);
     op->phase[PST_PHASE_PRECOMPUTE] = omp_get_wtime() - t0;
@@ -630,10 +626,8 @@ int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6])
 int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, const double *u,
                        double *value, double *lap, size_t *fallbacks, char *err)
 {
-    if (!op->scheme->interpolate) {
-        pst_set_err(err, "scheme %s has no interpolation", op->scheme->name);
-        return PST_EINVAL;
-    }
+    PST_CHECK(!op->scheme->interpolate, PST_EINVAL, err, "scheme %s has no interpolation",
+              op->scheme->name);
     size_t none = 0;
     return op->scheme->interpolate(op, pts, m, u, value, lap, fallbacks ? fallbacks : &none,
                                    err);

@@ -16,6 +16,13 @@ typedef struct pst_scheme {
     /* the fallback chain of a degenerate row, in order (pst_scheme_fallback) */
     const char *fallback;
     pst_kernel default_kernel;
+    /* The contract tests/test_contract.c checks for every scheme: the interior rows reproduce
+     * the Laplacian of every polynomial of degree <= `degree` to rounding on any cloud (a
+     * jittered lattice, the rows cut by its edges included), and of degree <= `degree_lattice`
+     * on the rows of a regular lattice with full support (pst_scheme_degree). */
+    int degree, degree_lattice;
+    /* opts.variant takes the values 0 .. variants - 1 (pst_scheme_variants); 0 is read as 1 */
+    int variants;
     /* 1 when the rows average the mobility pairwise, (M_I + M_J), and honour
      * opts.mobility_mean (the LV family); 0: PST_MEAN_HARMONIC is refused */
     int pair_mobility;

@@ -1,0 +1,86 @@
+/* The scaffolding every kernel file shares: the context its pair functions read, filled once per
+ * call from the operator, the h and mobility lookups and the pair helpers (offset, the
+ * min_pair_distance rule). A scheme's own context holds this one as its member `c` and adds
+ * only what is its own (its per-particle data, its variant flags). Internal. */
+#ifndef PSTENCIL_KERNEL_COMMON_H
+#define PSTENCIL_KERNEL_COMMON_H
+
+#include "operator.h"
+
+/* The hot functions of a kernel file take the dimension (and the scheme's flags) as arguments;
+ * their instantiations call them with constants, so the pair loops carry no branches on them. */
+#define PST_KHOT static inline __attribute__((always_inline))
+
+typedef struct {
+    int dim, ncomp;      /* ncomp: the cloud's mobility components (0: none)             */
+    pst_kernel kernel;
+    const double *x[3], *V, *h, *mob[3];
+    double h_uniform;    /* h when the cloud has no per-particle h                       */
+    /* the boundary description of the operator (op->kind, op->normal): the cloud's, or the
+     * override of opts.kinds / opts.normals */
+    const uint8_t *kind;
+    const double *normal[3];
+    const int64_t *off; /* the neighbour list (op->nl) */
+    const uint32_t *idx;
+    double pair_eps;    /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
+} pst_kctx;
+
+static inline pst_kctx pst_kctx_of(const pst_op *op)
+{
+    const pst_cloud *c = op->cloud;
+    pst_kctx k = {.dim = c->dim, .ncomp = c->mob_ncomp, .kernel = op->kernel, .V = c->V,
+                  .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind,
+                  .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
+                  .pair_eps = op->opts.min_pair_distance};
+    for (int a = 0; a < 3; ++a) {
+        k.x[a] = c->x[a];
+        k.mob[a] = c->mob[a];
+        k.normal[a] = op->normal[a];
+    }
+    return k;
+}
+
+/* h of particle i. */
+static inline double pst_h(const pst_kctx *k, size_t i) { return k->h ? k->h[i] : k->h_uniform; }
+
+/* Mobility component comp of particle i: 1 without mobility, the scalar for one component. */
+static inline double pst_mob(const pst_kctx *k, int comp, size_t i)
+{
+    return k->ncomp ? k->mob[k->ncomp == 1 ? 0 : comp][i] : 1.0;
+}
+
+/* The offset x = r_j - r_i of a pair (D components); returns |x|^2. */
+PST_KHOT double pst_pair_offset(const pst_kctx *k, int D, size_t i, size_t j, double x[3])
+{
+    double d2 = 0;
+    for (int a = 0; a < D; ++a) {
+        x[a] = k->x[a][j] - k->x[a][i];
+        d2 += x[a] * x[a];
+    }
+    return d2;
+}
+
+/* The min_pair_distance rule: a pair at distance d is live when d > eps h (h the pair's
+ * smoothing length; 1 for distances already scaled by h). */
+PST_KHOT int pst_pair_live(const pst_kctx *k, double d, double h) { return d > k->pair_eps * h; }
+
+/* Row i of the pattern (off, idx) in the two-point form, for apply and emission alike: with
+ * w != NULL the weights w_ij go to w in pattern order, else y[i] = sum_j w_ij (u_j - u_i),
+ * summed in pattern order. `wij` is an expression in the neighbour index `j`; one expression for
+ * both paths keeps their weights bit-identical (operator.h). */
+#define PST_ROW_LOOP(off, idx, i, u, y, w, j, wij)                                            \
+    do {                                                                                       \
+        double pst_ui_ = (u) ? (u)[i] : 0, pst_s_ = 0;                                         \
+        for (int64_t pst_e_ = (off)[i]; pst_e_ < (off)[(i) + 1]; ++pst_e_) {                   \
+            size_t j = (idx)[pst_e_];                                                          \
+            double pst_w_ = (wij);                                                             \
+            if (w)                                                                             \
+                (w)[pst_e_ - (off)[i]] = pst_w_;                                               \
+            else                                                                               \
+                pst_s_ += pst_w_ * ((u)[j] - pst_ui_);                                         \
+        }                                                                                      \
+        if (!(w))                                                                              \
+            (y)[i] = pst_s_;                                                                   \
+    } while (0)
+
+#endif
