@@ -66,7 +66,7 @@ static double contraction(const problem *p, const pst_prec *m, int cycles)
         rlast = rn;
         if (k == cycles)
             break;
-        m->apply(m->ctx, r, z);
+        m->lin.apply(m->lin.ctx, r, z);
         for (size_t i = 0; i < n; ++i)
             x[i] += z[i];
     }
@@ -88,7 +88,7 @@ static void test_contraction(void)
         printf("brookshaw s0 = 1/%.0f (%zu particles): AMG stationary contraction %.3f per "
                "cycle\n", 1 / s0s[k], p.n, rho);
         CHECK(rho < 0.3);
-        m.destroy(m.ctx);
+        pst_prec_free(&m);
         free_problem(&p);
     }
     problem p = make_problem("lv", 1.0 / 64);
@@ -105,7 +105,7 @@ static void test_contraction(void)
         printf("lv s0 = 1/64: stationary contraction with the %s AMG %.3f per cycle\n",
                src == PST_AMG_OWN ? "own" : "brookshaw", rho);
         CHECK(rho < 1.0); /* a convergent splitting: the Brookshaw AMG is spectrally close */
-        m.destroy(m.ctx);
+        pst_prec_free(&m);
     }
     free_problem(&p);
 }
@@ -124,12 +124,12 @@ static void test_threads_and_dirichlet(void)
     char err[PST_ERRLEN];
     omp_set_num_threads(1);
     CHECK_INT(pst_prec_amg(&m, p.op, PST_AMG_BROOKSHAW, err), PST_OK);
-    m.apply(m.ctx, r, z1);
-    m.destroy(m.ctx);
+    m.lin.apply(m.lin.ctx, r, z1);
+    pst_prec_free(&m);
     omp_set_num_threads(2);
     CHECK_INT(pst_prec_amg(&m, p.op, PST_AMG_BROOKSHAW, err), PST_OK);
-    m.apply(m.ctx, r, z2);
-    m.destroy(m.ctx);
+    m.lin.apply(m.lin.ctx, r, z2);
+    pst_prec_free(&m);
     omp_set_num_threads(nt);
     CHECK(memcmp(z1, z2, n * sizeof *z1) == 0);
     const uint8_t *kind = pst_cloud_kinds_const(p.c);
@@ -153,7 +153,7 @@ static void test_errors(void)
     char err[PST_ERRLEN] = "";
     CHECK_INT(pst_prec_amg(&m, p.op, 7, err), PST_EINVAL);
     CHECK(strstr(err, "unknown AMG source 7") != NULL);
-    CHECK(m.apply == NULL && m.ctx == NULL);
+    CHECK(m.lin.apply == NULL && m.lin.ctx == NULL);
     free_problem(&p);
 
     /* one interior particle far from the others: its row is empty, diagonal 0 */
@@ -268,7 +268,7 @@ static void test_neumann(void)
             double *r = malloc(p.n * sizeof *r), *z = malloc(p.n * sizeof *z), big = 0;
             for (size_t i = 0; i < p.n; ++i)
                 r[i] = pst_rng_symmetric(3, i, 2);
-            m.apply(m.ctx, r, z);
+            m.lin.apply(m.lin.ctx, r, z);
             int finite = 1;
             for (size_t i = 0; i < p.n; ++i) {
                 finite &= isfinite(z[i]);
@@ -277,7 +277,7 @@ static void test_neumann(void)
             printf("lv, pure Neumann, N = %zu: max |M^-1 r| = %.3g for |r| <= 1\n", p.n, big);
             CHECK(finite);
             CHECK(big < 10);
-            m.destroy(m.ctx);
+            pst_prec_free(&m);
             free(r), free(z);
         }
         free_problem(&p);
@@ -286,6 +286,7 @@ static void test_neumann(void)
 
 int main(void)
 {
+    test_mpi_init();
     test_errors();
     test_contraction();
     test_threads_and_dirichlet();
