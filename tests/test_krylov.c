@@ -103,6 +103,8 @@ static pst_linop grid_linop(grid *g)
 
 /* ---- helpers -------------------------------------------------------------------------------- */
 
+static const char *const method_name[4] = {"auto", "CG", "GMRES", "BiCGSTAB"};
+
 /* A discrete solution u* = x (1 - x) y (1 - y) (1 + x + 2 y) e^(seed y / 2) (no eigenvector of
  * the grid, so no Krylov method finds it in one step), and b = A u*. */
 static void manufacture(grid *g, int seed, double *ustar, double *b)
@@ -182,7 +184,6 @@ static void test_methods(void)
     double *u = malloc(n * sizeof *u);
     manufacture(&g, 0, ustar, b);
     static const int solvers[3] = {PST_SOLVER_CG, PST_SOLVER_GMRES, PST_SOLVER_BICGSTAB};
-    static const char *const sname[3] = {"CG", "GMRES", "BiCGSTAB"};
     static const char *const pname[3] = {"none", "Jacobi", "user SGS"};
     for (int s = 0; s < 3; ++s) {
         int it[3];
@@ -198,7 +199,7 @@ static void test_methods(void)
             CHECK(e < 1e-6);
             it[p] = r.iterations;
             printf("user grid n = %zu, %-8s %-8s: %4d iterations, error %.2e\n", n,
-                   sname[s], pname[p], r.iterations, e);
+                   method_name[solvers[s]], pname[p], r.iterations, e);
             pst_solve_result_free(&r);
         }
         CHECK(it[2] < it[0]);
@@ -283,8 +284,8 @@ static int stop_of(const pst_linop *A, const pst_linop *M, int solver, int resta
         finite &= isfinite(u[i]);
     CHECK(finite); /* u is the last finite iterate on every exit */
     free(b), free(u);
-    printf("%-9s stop %-15s: %s\n", solver == PST_SOLVER_CG ? "CG" : solver == PST_SOLVER_GMRES ? "GMRES" : "BiCGSTAB",
-           pst_stop_reason_name(r->stop), r->message);
+    printf("%-9s stop %-15s: %s\n", method_name[solver], pst_stop_reason_name(r->stop),
+           r->message);
     pst_solve_result_free(r);
     return st;
 }
@@ -338,7 +339,8 @@ static void test_stop_reasons(void)
     double *b = calloc(n, sizeof *b), *u = malloc(n * sizeof *u);
     pst_solve_opts o = opts(PST_SOLVER_GMRES, PST_PREC_NONE);
     CHECK_INT(solve_once(&A, NULL, &o, b, u, &r), PST_OK);
-    CHECK(r.stop == PST_STOP_CONVERGED && r.iterations == 0 && strcmp(r.message, "b = 0: u = 0") == 0);
+    CHECK(r.stop == PST_STOP_CONVERGED && r.iterations == 0);
+    CHECK(strcmp(r.message, "b = 0: u = 0") == 0);
     pst_solve_result_free(&r);
     free(b), free(u);
     CHECK(strcmp(pst_stop_reason_name(PST_STOP_STAGNATION), "stagnation") == 0);

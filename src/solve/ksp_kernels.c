@@ -203,6 +203,14 @@ void pst_ksp_finish(pst_ksp *k, const char *method, double rnorm)
                     k->max_iter, k->rel_residual, k->target / k->bnorm, method);
 }
 
+int pst_ksp_broke(pst_ksp_break *b, int finite, double value, const char *breakdown,
+                  const char *nonfinite)
+{
+    *b = finite ? (pst_ksp_break){breakdown, PST_STOP_BREAKDOWN, value}
+                : (pst_ksp_break){nonfinite, PST_STOP_NON_FINITE, value};
+    return 1;
+}
+
 void pst_ksp_fail(pst_ksp *k, int stop, double rnorm, const char *fmt, ...)
 {
     char what[PST_ERRLEN];

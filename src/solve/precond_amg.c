@@ -107,11 +107,15 @@ typedef struct {
     HYPRE_Solver amg;
 } amg_ctx;
 
+/* hypre's destroy calls make MPI calls, which MPI forbids after MPI_Finalize (Open MPI aborts
+ * the process): then hypre's objects are left allocated and only pstencil's memory is freed. */
 static void amg_free(amg_ctx *c)
 {
     if (!c)
         return;
-    if (c->amg || c->A || c->B || c->X) {
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized && (c->amg || c->A || c->B || c->X)) {
 #pragma omp critical(pst_hypre)
         {
             if (c->amg)

@@ -69,6 +69,19 @@ typedef struct {
     char *message;         /* PST_ERRLEN bytes                                            */
 } pst_ksp;
 
+/* Why a method's pass or cycle stopped early: the message, its pst_stop_reason and the value
+ * the message shows (what NULL: it did not stop early). */
+typedef struct {
+    const char *what;
+    int stop;
+    double value;
+} pst_ksp_break;
+
+/* Record a breakdown of the recurrence (message `breakdown`), or an overflow when the
+ * quantities behind it are not finite (message `nonfinite`). Returns 1. */
+int pst_ksp_broke(pst_ksp_break *b, int finite, double value, const char *breakdown,
+                  const char *nonfinite);
+
 /* The workspace of `solver` (a pst_solver, not AUTO) for k->n rows and k->restart; PST_ENOMEM
  * with a message. pst_ksp_free releases it (also after a failed alloc). */
 int pst_ksp_alloc(pst_ksp *k, int solver, char *err);

@@ -8,24 +8,6 @@
 
 #define TINY 1e-14 /* relative size of rho, (r^, v) or omega treated as zero */
 
-/* Why a pass stopped early: the message, its pst_stop_reason and the value shown (what NULL:
- * it did not). */
-typedef struct {
-    const char *what;
-    int stop;
-    double value;
-} bicg_break;
-
-/* A breakdown of the recurrence, or an overflow when the quantities behind it are not finite
- * (then the message names what overflowed). Returns 1. */
-static int broke(bicg_break *b, int finite, double value, const char *breakdown,
-                 const char *nonfinite)
-{
-    *b = finite ? (bicg_break){breakdown, PST_STOP_BREAKDOWN, value}
-                : (bicg_break){nonfinite, PST_STOP_NON_FINITE, value};
-    return 1;
-}
-
 /* s = r - alpha v, returns ||s||. */
 static double half_step(pst_ksp *k, double alpha, const double *r, const double *v, double *s)
 {
@@ -37,7 +19,7 @@ static double half_step(pst_ksp *k, double alpha, const double *r, const double 
 
 /* One pass from the residual r with the shadow r^ = r (norm rhn): iterations until the
  * recursive residual reaches the target, the limit, or a breakdown (in *b). */
-static void bicg_pass(pst_ksp *k, double rhn, bicg_break *b)
+static void bicg_pass(pst_ksp *k, double rhn, pst_ksp_break *b)
 {
     size_t n = k->n;
     double *r = k->vec[0], *rh = k->vec[1], *p = k->vec[2], *v = k->vec[3], *ph = k->vec[4],
@@ -46,7 +28,7 @@ static void bicg_pass(pst_ksp *k, double rhn, bicg_break *b)
     for (int first = 1; k->iterations < k->max_iter; first = 0) {
         double rho = pst_ksp_dot(k, rh, r);
         if (!(fabs(rho) > TINY * rhn * rn) &&
-            broke(b, isfinite(rho), rho, "breakdown: rho = (r^, r) ~ 0",
+            pst_ksp_broke(b, isfinite(rho), rho, "breakdown: rho = (r^, r) ~ 0",
                   "non-finite rho = (r^, r): stopped at the last finite iterate"))
             return;
         if (first) {
@@ -61,14 +43,14 @@ static void bicg_pass(pst_ksp *k, double rhn, bicg_break *b)
         pst_ksp_apply(k, ph, v);
         double rv = pst_ksp_dot(k, rh, v), vn = sqrt(pst_ksp_dot(k, v, v));
         if ((!(fabs(rv) > TINY * rhn * vn) || !isfinite(rv)) &&
-            broke(b, isfinite(rv) && isfinite(vn), rv, "breakdown: (r^, A p) ~ 0",
+            pst_ksp_broke(b, isfinite(rv) && isfinite(vn), rv, "breakdown: (r^, A p) ~ 0",
                   "non-finite (r^, A p): stopped at the last finite iterate"))
             return;
         alpha = rho / rv;
         double sn = half_step(k, alpha, r, v, s);
         if (sn <= k->target) {
             if (!pst_ksp_update(k, x, alpha, ph, 0, NULL))
-                *b = (bicg_break){"non-finite iterate: stopped at the last finite iterate",
+                *b = (pst_ksp_break){"non-finite iterate: stopped at the last finite iterate",
                                   PST_STOP_NON_FINITE, 0};
             k->iterations++;
             pst_ksp_record(k, sn);
@@ -79,11 +61,11 @@ static void bicg_pass(pst_ksp *k, double rhn, bicg_break *b)
         double tt = pst_ksp_dot(k, t, t), ts = pst_ksp_dot(k, t, s);
         omega = ts / tt;
         if ((!(fabs(omega) > 0) || !isfinite(omega) || !(fabs(ts) > TINY * sqrt(tt) * sn)) &&
-            broke(b, isfinite(tt) && isfinite(ts), omega, "breakdown: omega ~ 0",
+            pst_ksp_broke(b, isfinite(tt) && isfinite(ts), omega, "breakdown: omega ~ 0",
                   "non-finite omega: stopped at the last finite iterate"))
             return;
         if (!pst_ksp_update(k, x, alpha, ph, omega, sh)) {
-            *b = (bicg_break){"non-finite iterate: stopped at the last finite iterate",
+            *b = (pst_ksp_break){"non-finite iterate: stopped at the last finite iterate",
                               PST_STOP_NON_FINITE, 0};
             return;
         }
@@ -93,7 +75,7 @@ static void bicg_pass(pst_ksp *k, double rhn, bicg_break *b)
         k->iterations++;
         double est = sqrt(pst_ksp_dot(k, r, r));
         if (!isfinite(est)) {
-            *b = (bicg_break){"non-finite residual: stopped at the last finite iterate",
+            *b = (pst_ksp_break){"non-finite residual: stopped at the last finite iterate",
                               PST_STOP_NON_FINITE, 0};
             return;
         }
@@ -108,19 +90,19 @@ static void bicg_pass(pst_ksp *k, double rhn, bicg_break *b)
 int pst_ksp_bicgstab(pst_ksp *k)
 {
     double *r = k->vec[0], *rh = k->vec[1];
-    bicg_break b = {0};
+    pst_ksp_break b = {0};
     double rn = pst_ksp_residual(k, k->x, r);
     pst_ksp_record(k, rn);
     double rn_pass = rn; /* true residual at the start of the pass */
     while (rn > k->target && k->iterations < k->max_iter) {
         memcpy(rh, r, k->n * sizeof *r);
-        b = (bicg_break){0};
+        b = (pst_ksp_break){0};
         bicg_pass(k, rn, &b);
         rn = pst_ksp_residual(k, k->x, r);
         /* a pass that ended in a breakdown without lowering the true residual is final */
         if (b.what && !(rn < rn_pass))
             break;
-        b = (bicg_break){0};
+        b = (pst_ksp_break){0};
         rn_pass = rn;
     }
     if (b.what && !(rn <= k->target)) /* also a non-finite rn */

@@ -41,28 +41,17 @@ static double unscaled_norm(pst_ksp *k, const double *S, const double *r)
     return sqrt(S ? pst_ksp_norm2_div(k, r, S) : pst_ksp_dot(k, r, r));
 }
 
-/* Why an inner pass stopped early: the message, its pst_stop_reason and the value shown. */
-typedef struct {
-    const char *what;
-    int stop;
-    double value;
-} cg_break;
-
 /* A curvature p.Ap or r.z that must be positive, with the step it gives: 0 when both are
  * fine, else 1 with the reason in *b (a non-finite curvature is an overflow, not a breakdown). */
-static int broken(cg_break *b, double v, double step, const char *breakdown,
+static int broken(pst_ksp_break *b, double v, double step, const char *breakdown,
                   const char *nonfinite)
 {
-    if (v > 0 && isfinite(step))
-        return 0;
-    *b = isfinite(v) ? (cg_break){breakdown, PST_STOP_BREAKDOWN, v}
-                     : (cg_break){nonfinite, PST_STOP_NON_FINITE, v};
-    return 1;
+    return !(v > 0 && isfinite(step)) && pst_ksp_broke(b, isfinite(v), v, breakdown, nonfinite);
 }
 
 /* One pass from the residual r (scaled in place): iterations until the recursive residual
  * reaches the target, the limit, or a breakdown (returned in *b, what NULL when none). */
-static void cg_pass(pst_ksp *k, const double *S, cg_break *b)
+static void cg_pass(pst_ksp *k, const double *S, pst_ksp_break *b)
 {
     size_t n = k->n;
     double *r = k->vec[0], *z = k->vec[1], *p = k->vec[2], *q = k->vec[3], *x = k->x;
@@ -79,7 +68,7 @@ static void cg_pass(pst_ksp *k, const double *S, cg_break *b)
                    "non-finite p.Ap: stopped at the last finite iterate"))
             return;
         if (!pst_ksp_update(k, x, alpha, p, 0, NULL)) {
-            *b = (cg_break){"non-finite iterate: stopped at the last finite iterate",
+            *b = (pst_ksp_break){"non-finite iterate: stopped at the last finite iterate",
                             PST_STOP_NON_FINITE, 0};
             return;
         }
@@ -87,7 +76,7 @@ static void cg_pass(pst_ksp *k, const double *S, cg_break *b)
         k->iterations++;
         double est = unscaled_norm(k, S, r);
         if (!isfinite(est)) {
-            *b = (cg_break){"non-finite residual: stopped at the last finite iterate",
+            *b = (pst_ksp_break){"non-finite residual: stopped at the last finite iterate",
                             PST_STOP_NON_FINITE, 0};
             return;
         }
@@ -110,7 +99,7 @@ int pst_ksp_cg(pst_ksp *k, const double *S)
     double *r = k->vec[0];
     double rn = pst_ksp_residual(k, k->x, r);
     pst_ksp_record(k, rn);
-    cg_break b = {0};
+    pst_ksp_break b = {0};
     /* Each pass restarts from the true residual: after the recursive residual reaches the
      * target, or never when the true one confirms it. Every pass makes >= 1 iteration. */
     while (rn > k->target && k->iterations < k->max_iter && !b.what) {

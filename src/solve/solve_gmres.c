@@ -25,16 +25,10 @@ typedef struct {
     double *cs, *sn, *g, *h, *h2, *y;
 } gmres_small;
 
-/* Why a cycle stopped early: the message and its pst_stop_reason (what NULL: it did not). */
-typedef struct {
-    const char *what;
-    int stop;
-} gmres_break;
-
 /* Arnoldi step j: V[j + 1] = A M^-1 V[j] orthogonalised (CGS2), its rotation applied and
  * column j of H stored. Returns ||w|| after orthogonalisation (hn) and, in *w0, before it;
  * -1 after a breakdown or a non-finite value (reason in *b). */
-static double arnoldi_step(pst_ksp *k, int j, gmres_small *a, double *w0, gmres_break *b)
+static double arnoldi_step(pst_ksp *k, int j, gmres_small *a, double *w0, pst_ksp_break *b)
 {
     size_t n = k->n;
     int m = k->restart;
@@ -55,8 +49,8 @@ static double arnoldi_step(pst_ksp *k, int j, gmres_small *a, double *w0, gmres_
     for (int i = 0; i <= j; ++i)
         finite = finite && isfinite(h[i]);
     if (!finite) {
-        *b = (gmres_break){"non-finite value in the Arnoldi process: stopped at the last finite "
-                           "iterate", PST_STOP_NON_FINITE};
+        *b = (pst_ksp_break){"non-finite value in the Arnoldi process: stopped at the last finite "
+                           "iterate", PST_STOP_NON_FINITE, 0};
         return -1;
     }
     /* apply the previous rotations, then the one that zeroes H[j+1][j] */
@@ -67,8 +61,8 @@ static double arnoldi_step(pst_ksp *k, int j, gmres_small *a, double *w0, gmres_
     }
     double rr = hypot(h[j], hn);
     if (rr == 0) {
-        *b = (gmres_break){"breakdown: L M^-1 maps a Krylov vector to 0 (singular system)",
-                           PST_STOP_BREAKDOWN};
+        *b = (pst_ksp_break){"breakdown: L M^-1 maps a Krylov vector to 0 (singular system)",
+                           PST_STOP_BREAKDOWN, 0};
         return -1;
     }
     a->cs[j] = h[j] / rr;
@@ -83,7 +77,7 @@ static double arnoldi_step(pst_ksp *k, int j, gmres_small *a, double *w0, gmres_
 
 /* x += M^-1 (V y) with y = R^-1 g over the j finished columns. A y of exact zeros leaves x as
  * it was, and the next cycle would repeat this one bit for bit: stagnation. */
-static void cycle_update(pst_ksp *k, int j, gmres_small *a, gmres_break *b)
+static void cycle_update(pst_ksp *k, int j, gmres_small *a, pst_ksp_break *b)
 {
     int m = k->restart;
     double **V = k->vec, *w = k->vec[m + 1], *t = k->vec[m + 2], *y = a->y;
@@ -100,8 +94,8 @@ static void cycle_update(pst_ksp *k, int j, gmres_small *a, gmres_break *b)
         return;
     if (!moved) {
         if (!b->what)
-            *b = (gmres_break){"stagnation: the cycle's update is 0 and every restart would "
-                               "repeat it", PST_STOP_STAGNATION};
+            *b = (pst_ksp_break){"stagnation: the cycle's update is 0 and every restart would "
+                               "repeat it", PST_STOP_STAGNATION, 0};
         return;
     }
 #pragma omp parallel for schedule(static)
@@ -113,13 +107,13 @@ static void cycle_update(pst_ksp *k, int j, gmres_small *a, gmres_break *b)
     }
     pst_ksp_prec(k, t, w);
     if (!pst_ksp_update(k, k->x, 1.0, w, 0, NULL))
-        *b = (gmres_break){"non-finite update: stopped at the last finite iterate",
-                           PST_STOP_NON_FINITE};
+        *b = (pst_ksp_break){"non-finite update: stopped at the last finite iterate",
+                           PST_STOP_NON_FINITE, 0};
 }
 
 /* One cycle from the residual V[0] of norm rn: Arnoldi steps until m, the limit, the target,
  * a lucky breakdown or a failure (in *b); then the update of x. */
-static void gmres_cycle(pst_ksp *k, double rn, gmres_small *a, gmres_break *b)
+static void gmres_cycle(pst_ksp *k, double rn, gmres_small *a, pst_ksp_break *b)
 {
     size_t n = k->n;
     int m = k->restart;
@@ -155,7 +149,7 @@ int pst_ksp_gmres(pst_ksp *k)
     double *s = k->small;
     gmres_small a = {s, s + m + 2, s + 2 * (m + 2), s + 3 * (m + 2), s + 4 * (m + 2),
                      s + 5 * (m + 2)};
-    gmres_break b = {0};
+    pst_ksp_break b = {0};
     double rn = pst_ksp_residual(k, k->x, k->vec[0]);
     pst_ksp_record(k, rn);
     while (rn > k->target && k->iterations < k->max_iter && !b.what) {
