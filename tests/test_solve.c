@@ -563,7 +563,9 @@ static void test_handle(void)
     o = opts(PST_SOLVER_GMRES);
     CHECK_INT(pst_krylov_create(&s, p.op, &o, err), PST_EINVAL); /* stored, not stored yet */
     CHECK(strstr(err, "pst_op_store") != NULL);
+    s = (pst_krylov *)&p; /* a stale value, cleared by every failing create */
     CHECK_INT(pst_krylov_create(&s, NULL, NULL, err), PST_EINVAL);
+    CHECK(s == NULL && strstr(err, "needs an operator") != NULL);
     destroy(&p);
 }
 

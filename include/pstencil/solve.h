@@ -78,6 +78,7 @@ typedef struct {
     void *monitor_ctx;
 } pst_solve_opts;
 
+/* The defaults noted beside each field. */
 void pst_solve_defaults(pst_solve_opts *o);
 
 /* Why a solve stopped (pst_solve_result.stop); the message gives the numbers. */
@@ -109,6 +110,7 @@ typedef struct {
     double seconds;
     char message[PST_ERRLEN]; /* why it stopped, in words, with the numbers                  */
 } pst_solve_result;
+/* Free the history of r and reset it (NULL allowed); the other fields stay readable. */
 void pst_solve_result_free(pst_solve_result *r);
 
 /* Returns PST_OK when converged, PST_ENUMERIC (with the reached residual in r->message) when
@@ -151,10 +153,10 @@ int pst_krylov_create_linop(pst_krylov **out, const pst_linop *A, const pst_lino
                             const pst_solve_opts *o, char *err);
 
 /* Solve with a new right-hand side b and initial guess u (solution on return), n values each,
- * as pst_solve describes; r (NULL allowed) receives the result, with r->seconds the time of
- * this solve only. Returns PST_OK, PST_ENUMERIC (not converged: r->stop says why),
- * PST_EINPUT (non-finite b or u), PST_EINVAL (NULL arguments). Nothing of the set-up is
- * rebuilt. */
+ * not aliased, as pst_solve describes; r (NULL allowed) receives the result, with r->seconds
+ * the time of this solve only. Returns PST_OK, PST_ENUMERIC (not converged: r->stop says why),
+ * PST_EINPUT (non-finite b or u), PST_EINVAL (NULL arguments; an AMG handle after
+ * MPI_Finalize), PST_ENOMEM (the history). Nothing of the set-up is rebuilt. */
 int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result *r,
                      char *err);
 
@@ -162,13 +164,16 @@ int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result
 typedef struct {
     size_t n;              /* rows of the operator                                            */
     int solver;            /* the pst_solver chosen at set-up                                 */
-    int precond;           /* the pst_precond in use; PST_PREC_NONE with a user M too         */
+    int precond;           /* the pst_precond in use (PST_PREC_NONE when M is the user's)    */
     int user_precond;      /* 1 when the preconditioner is the caller's M                     */
     int precond_setups;    /* preconditioner set-ups (AMG hierarchies, Jacobi diagonals) done */
     int solves;            /* pst_krylov_solve calls that iterated (or found b = 0)           */
 } pst_krylov_stats;
+/* The counters of s (all 0 for NULL). */
 void pst_krylov_get_stats(const pst_krylov *s, pst_krylov_stats *st);
 
+/* Free a handle and its preconditioner (NULL allowed). An AMG handle is destroyed before
+ * MPI_Finalize: after it, hypre's objects cannot be freed and are left allocated. */
 void pst_krylov_destroy(pst_krylov *s);
 
 #ifdef __cplusplus

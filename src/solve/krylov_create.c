@@ -172,8 +172,9 @@ int pst_krylov_build(pst_krylov **out, const pst_op *op, const pst_solve_opts *o
     }
     *solver = o->solver;
     *stop = PST_STOP_NONE;
+    if (out)
+        *out = NULL;
     PST_CHECK(!out || !op, PST_EINVAL, err, "pst_krylov_create needs an operator and a handle");
-    *out = NULL;
     PST_TRY(pst_solve_check_opts(o, op, err));
     pst_linop A;
     PST_TRY(pst_op_linop(op, o->stored, &A, err));
