@@ -35,7 +35,7 @@ int pst_prec_amg_ready(char *err);
 void pst_prec_free(pst_prec *p);
 
 /* ---- The Krylov methods (src/solve/solve_cg.c, solve_gmres.c, solve_bicgstab.c) ----------- *
- * A handle from an engine operator (src/solve/krylov.c) eliminates the Dirichlet values and
+ * A handle of an engine operator (src/solve/krylov_solve.c) eliminates the Dirichlet values and
  * hands the methods the system L x = b' with full-length vectors: b' and every Krylov vector
  * are 0 on Dirichlet rows, and L keeps its identity Dirichlet rows, so L x = b' is equivalent
  * to the original L u = b with u = x + u_D, and ||b' - L x|| = ||b - L u|| row by row. A user

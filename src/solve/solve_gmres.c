@@ -75,8 +75,8 @@ static double arnoldi_step(pst_ksp *k, int j, gmres_small *a, double *w0, pst_ks
     return hn;
 }
 
-/* x += M^-1 (V y) with y = R^-1 g over the j finished columns. A y of exact zeros leaves x as
- * it was, and the next cycle would repeat this one bit for bit: stagnation. */
+/* x += M^-1 (V y) with y = R^-1 g over the j finished columns. A y of exact zeros would leave
+ * x as it was (M^-1 0 = 0), and the next cycle would repeat this one bit for bit: stagnation. */
 static void cycle_update(pst_ksp *k, int j, gmres_small *a, pst_ksp_break *b)
 {
     int m = k->restart;
