@@ -83,6 +83,15 @@ static int check_solve(const pst_krylov *s, const double *b, const double *u, ch
     return PST_OK;
 }
 
+int pst_solve_refused(pst_solve_result *r, int st, const char *err, char *err_out, double t0)
+{
+    pst_set_err(r->message, "%s", err);
+    if (err_out)
+        pst_set_err(err_out, "%s", err);
+    r->seconds = omp_get_wtime() - t0;
+    return st;
+}
+
 int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result *r,
                      char *err_out)
 {
@@ -97,13 +106,8 @@ int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result
         r->solver = s->solver;
     if (st == PST_OK)
         st = start(s, b, u, r->message, err);
-    if (st != PST_OK) {
-        pst_set_err(r->message, "%s", err);
-        if (err_out)
-            pst_set_err(err_out, "%s", err);
-        r->seconds = omp_get_wtime() - t0;
-        return st;
-    }
+    if (st != PST_OK)
+        return pst_solve_refused(r, st, err, err_out, t0);
     st = iterate(s);
     s->solves++;
     pst_ksp *k = &s->k;

@@ -69,11 +69,7 @@ int pst_solve(const pst_op *op, const double *b, double *u, const pst_solve_opts
     if (st != PST_OK) {
         r->solver = op && b && u ? solver : 0;
         r->stop = stop;
-        pst_set_err(r->message, "%s", err);
-        if (err_out)
-            pst_set_err(err_out, "%s", err);
-        r->seconds = omp_get_wtime() - t0;
-        return st;
+        return pst_solve_refused(r, st, err, err_out, t0);
     }
     st = pst_krylov_solve(s, b, u, r, err_out);
     pst_krylov_destroy(s);

@@ -153,6 +153,10 @@ int pst_solve_check_finite(const pst_op *op, size_t n, const double *b, const do
 int pst_krylov_build(pst_krylov **out, const pst_op *op, const pst_solve_opts *o, int *solver,
                      int *stop, char *err);
 
+/* A request refused before iterating: err into r->message and err_out (NULL allowed), the
+ * time since t0 into r->seconds. Returns st. */
+int pst_solve_refused(pst_solve_result *r, int st, const char *err, char *err_out, double t0);
+
 /* The name of a pst_solver ("CG", "GMRES", "BiCGSTAB"), for messages. */
 const char *pst_solver_label(int solver);
 
