@@ -15,6 +15,7 @@
 #include "pstencil.h"
 #include "peak.h"
 #include "stream.h"
+#include "support.h"
 
 #include <math.h>
 #include <omp.h>
@@ -68,6 +69,7 @@ static void print_header(void)
 
 int main(int argc, char **argv)
 {
+    test_mpi_init();
     int dim = 2, stored = 1, precond = PST_PREC_AMG, max_iter = 0;
     size_t n = 1000000;
     double ratio = 1.2;

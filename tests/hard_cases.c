@@ -1188,6 +1188,7 @@ static void print_table(FILE *fp)
 
 int main(int argc, char **argv)
 {
+    test_mpi_init();
     int markdown = argc > 1 && !strcmp(argv[1], "--markdown");
     if (argc > 1 && !markdown) {
         fprintf(stderr, "usage: hard_cases [--markdown]\n");

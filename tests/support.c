@@ -5,6 +5,7 @@
 
 #include <dirent.h>
 #include <math.h>
+#include <mpi.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -261,4 +262,20 @@ void test_remove_dir(const char *dir)
     if (d)
         closedir(d);
     rmdir(dir);
+}
+
+/* MPI_Finalize for atexit, once the test's handles are gone. */
+static void finalize_mpi(void)
+{
+    MPI_Finalize();
+}
+
+void test_mpi_init(void)
+{
+    int provided = 0;
+    if (MPI_Init_thread(NULL, NULL, MPI_THREAD_SERIALIZED, &provided) != MPI_SUCCESS ||
+        atexit(finalize_mpi) != 0) {
+        fprintf(stderr, "test_mpi_init: cannot initialise MPI\n");
+        exit(1);
+    }
 }

@@ -99,4 +99,9 @@ int test_scratch_dir(char *dir, size_t size, const char *prefix);
 /* Remove the files of a scratch folder, then the folder (it holds no subfolders). */
 void test_remove_dir(const char *dir);
 
+/* Initialise MPI (MPI_THREAD_SERIALIZED) and finalise it at exit: the library leaves MPI to
+ * the program, and the AMG preconditioner (hypre) needs it. For the main() of every test that
+ * runs an AMG solve. Exits on failure. */
+void test_mpi_init(void);
+
 #endif

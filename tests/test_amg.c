@@ -1,7 +1,8 @@
 /* The BoomerAMG preconditioner (src/precond_amg.c): a real multigrid contraction of the
  * stationary iteration on Brookshaw, independent of the resolution; AMG-GMRES against
  * Jacobi-GMRES on 2D Dirichlet Poisson problems with an iteration count that stays flat when N
- * grows 16x; thread independence; bad requests. */
+ * grows 16x; thread independence; bad requests; a reusable solver that builds the hierarchy
+ * once; a failed set-up's stop reason. */
 #include "check.h"
 #include "operator.h"
 #include "pstencil.h"
@@ -66,7 +67,7 @@ static double contraction(const problem *p, const pst_prec *m, int cycles)
         rlast = rn;
         if (k == cycles)
             break;
-        m->apply(m->ctx, r, z);
+        m->lin.apply(m->lin.ctx, r, z);
         for (size_t i = 0; i < n; ++i)
             x[i] += z[i];
     }
@@ -88,7 +89,7 @@ static void test_contraction(void)
         printf("brookshaw s0 = 1/%.0f (%zu particles): AMG stationary contraction %.3f per "
                "cycle\n", 1 / s0s[k], p.n, rho);
         CHECK(rho < 0.3);
-        m.destroy(m.ctx);
+        pst_prec_free(&m);
         free_problem(&p);
     }
     problem p = make_problem("lv", 1.0 / 64);
@@ -105,7 +106,7 @@ static void test_contraction(void)
         printf("lv s0 = 1/64: stationary contraction with the %s AMG %.3f per cycle\n",
                src == PST_AMG_OWN ? "own" : "brookshaw", rho);
         CHECK(rho < 1.0); /* a convergent splitting: the Brookshaw AMG is spectrally close */
-        m.destroy(m.ctx);
+        pst_prec_free(&m);
     }
     free_problem(&p);
 }
@@ -124,12 +125,12 @@ static void test_threads_and_dirichlet(void)
     char err[PST_ERRLEN];
     omp_set_num_threads(1);
     CHECK_INT(pst_prec_amg(&m, p.op, PST_AMG_BROOKSHAW, err), PST_OK);
-    m.apply(m.ctx, r, z1);
-    m.destroy(m.ctx);
+    m.lin.apply(m.lin.ctx, r, z1);
+    pst_prec_free(&m);
     omp_set_num_threads(2);
     CHECK_INT(pst_prec_amg(&m, p.op, PST_AMG_BROOKSHAW, err), PST_OK);
-    m.apply(m.ctx, r, z2);
-    m.destroy(m.ctx);
+    m.lin.apply(m.lin.ctx, r, z2);
+    pst_prec_free(&m);
     omp_set_num_threads(nt);
     CHECK(memcmp(z1, z2, n * sizeof *z1) == 0);
     const uint8_t *kind = pst_cloud_kinds_const(p.c);
@@ -144,6 +145,28 @@ static void test_threads_and_dirichlet(void)
     free_problem(&p);
 }
 
+/* A Dirichlet problem on a 17 x 17 lattice plus one interior particle far from the others:
+ * its row is empty, diagonal 0. The isolated particle is the last one. */
+static problem make_isolated(void)
+{
+    pst_cloud *c = test_lattice(2, 0.0, 1.0, 1.0 / 16, 1.2, 0.0, 3, 1);
+    size_t n = pst_cloud_size(c);
+    problem p = {NULL, NULL, NULL, n + 1};
+    CHECK_INT(pst_cloud_create(&p.c, 2, n + 1), PST_OK);
+    for (int a = 0; a < 2; ++a) {
+        memcpy(pst_cloud_coord(p.c, a), pst_cloud_coord(c, a), n * sizeof(double));
+        pst_cloud_coord(p.c, a)[n] = 5.0;
+    }
+    memcpy(pst_cloud_kinds(p.c), pst_cloud_kinds_const(c), n);
+    pst_cloud_destroy(c);
+    for (size_t i = 0; i <= n; ++i)
+        pst_cloud_volume(p.c)[i] = 1.0 / 256;
+    pst_cloud_set_h_uniform(p.c, 1.2 / 16, NULL);
+    p.nl = test_nlist(p.c, 2.0);
+    p.op = test_op(p.c, p.nl, "brookshaw", PST_GRAD_G1, 0);
+    return p;
+}
+
 /* Bad requests: an unknown source; a zero-diagonal row (an isolated particle) with the own
  * stencil is refused with PST_ENUMERIC naming the row. */
 static void test_errors(void)
@@ -153,32 +176,30 @@ static void test_errors(void)
     char err[PST_ERRLEN] = "";
     CHECK_INT(pst_prec_amg(&m, p.op, 7, err), PST_EINVAL);
     CHECK(strstr(err, "unknown AMG source 7") != NULL);
-    CHECK(m.apply == NULL && m.ctx == NULL);
+    CHECK(m.lin.apply == NULL && m.lin.ctx == NULL);
     free_problem(&p);
 
     /* one interior particle far from the others: its row is empty, diagonal 0 */
-    pst_cloud *c = test_lattice(2, 0.0, 1.0, 1.0 / 16, 1.2, 0.0, 3, 1);
-    size_t n = pst_cloud_size(c);
-    pst_cloud *c2 = NULL;
-    CHECK_INT(pst_cloud_create(&c2, 2, n + 1), PST_OK);
-    for (int a = 0; a < 2; ++a) {
-        memcpy(pst_cloud_coord(c2, a), pst_cloud_coord(c, a), n * sizeof(double));
-        pst_cloud_coord(c2, a)[n] = 5.0;
-    }
-    memcpy(pst_cloud_kinds(c2), pst_cloud_kinds_const(c), n);
-    for (size_t i = 0; i <= n; ++i)
-        pst_cloud_volume(c2)[i] = 1.0 / 256;
-    pst_cloud_set_h_uniform(c2, 1.2 / 16, NULL);
-    pst_nlist *nl = test_nlist(c2, 2.0);
-    pst_op *op = test_op(c2, nl, "brookshaw", PST_GRAD_G1, 0);
+    problem iso = make_isolated();
     err[0] = 0;
-    CHECK_INT(pst_prec_amg(&m, op, PST_AMG_OWN, err), PST_ENUMERIC);
+    CHECK_INT(pst_prec_amg(&m, iso.op, PST_AMG_OWN, err), PST_ENUMERIC);
     CHECK(strstr(err, "diagonal") != NULL);
     printf("isolated particle: %s\n", err);
-    pst_op_destroy(op);
-    pst_nlist_destroy(nl);
-    pst_cloud_destroy(c2);
-    pst_cloud_destroy(c);
+    free_problem(&iso);
+}
+
+/* GMRES with the stored weights (cheaper applies for the wide qsfdi stencils). */
+static pst_solve_opts gmres_opts(int precond, int source, double rtol, int max_iter)
+{
+    pst_solve_opts o;
+    pst_solve_defaults(&o);
+    o.solver = PST_SOLVER_GMRES;
+    o.precond = precond;
+    o.amg_source = source;
+    o.rtol = rtol;
+    o.max_iter = max_iter;
+    o.stored = 1;
+    return o;
 }
 
 /* GMRES on a Poisson problem: b = 1 inside, u = 0 on the Dirichlet layer. */
@@ -190,14 +211,7 @@ static int gmres_iterations(const problem *p, int precond, int source, int max_i
     const uint8_t *kind = pst_cloud_kinds_const(p->c);
     for (size_t i = 0; i < n; ++i)
         b[i] = kind[i] == PST_DIRICHLET ? 0.0 : 1.0;
-    pst_solve_opts o;
-    pst_solve_defaults(&o);
-    o.solver = PST_SOLVER_GMRES;
-    o.precond = precond;
-    o.amg_source = source;
-    o.rtol = 1e-8;
-    o.max_iter = max_iter;
-    o.stored = 1; /* the stored weights: cheaper applies for the wide qsfdi stencils */
+    pst_solve_opts o = gmres_opts(precond, source, 1e-8, max_iter);
     pst_solve_result r;
     char err[PST_ERRLEN] = "";
     int st = pst_solve(p->op, b, u, &o, &r, err);
@@ -268,7 +282,7 @@ static void test_neumann(void)
             double *r = malloc(p.n * sizeof *r), *z = malloc(p.n * sizeof *z), big = 0;
             for (size_t i = 0; i < p.n; ++i)
                 r[i] = pst_rng_symmetric(3, i, 2);
-            m.apply(m.ctx, r, z);
+            m.lin.apply(m.lin.ctx, r, z);
             int finite = 1;
             for (size_t i = 0; i < p.n; ++i) {
                 finite &= isfinite(z[i]);
@@ -277,19 +291,91 @@ static void test_neumann(void)
             printf("lv, pure Neumann, N = %zu: max |M^-1 r| = %.3g for |r| <= 1\n", p.n, big);
             CHECK(finite);
             CHECK(big < 10);
-            m.destroy(m.ctx);
+            pst_prec_free(&m);
             free(r), free(z);
         }
         free_problem(&p);
     }
 }
 
+/* The reusable solver with AMG: the hierarchy is built once (the handle counts one
+ * preconditioner set-up after three solves), each solve gives the bits of a fresh pst_solve
+ * (solution, iterations, message, history), and 1 and 2 threads agree bit for bit. */
+static void test_handle_reuse(void)
+{
+    problem p = make_problem("lv", 1.0 / 48);
+    CHECK_INT(pst_op_store(p.op), PST_OK);
+    size_t n = p.n;
+    const uint8_t *kind = pst_cloud_kinds_const(p.c);
+    pst_solve_opts o = gmres_opts(PST_PREC_AMG, PST_AMG_BROOKSHAW, 1e-9, 5000);
+    o.history = 1;
+    pst_krylov *s = NULL;
+    char err[PST_ERRLEN] = "";
+    CHECK_INT(pst_krylov_create(&s, p.op, &o, err), PST_OK);
+    double *b = malloc(n * sizeof *b), *u = malloc(n * sizeof *u), *uf = malloc(n * sizeof *uf);
+    int nt = omp_get_max_threads();
+    for (int rhs = 0; rhs < 3; ++rhs) {
+        for (size_t i = 0; i < n; ++i) {
+            b[i] = kind[i] == PST_DIRICHLET ? 0.1 * rhs : 1.0 + pst_rng_symmetric(21, i, rhs);
+            u[i] = uf[i] = 0.05 * rhs;
+        }
+        pst_solve_result r, rf;
+        omp_set_num_threads(rhs == 1 ? 1 : 2);
+        CHECK_INT(pst_krylov_solve(s, b, u, &r, err), PST_OK);
+        omp_set_num_threads(rhs == 1 ? 2 : 1);
+        CHECK_INT(pst_solve(p.op, b, uf, &o, &rf, err), PST_OK);
+        CHECK(memcmp(u, uf, n * sizeof *u) == 0);
+        CHECK(r.iterations == rf.iterations && strcmp(r.message, rf.message) == 0);
+        CHECK(r.nhistory == rf.nhistory &&
+              memcmp(r.history, rf.history, (size_t)r.nhistory * sizeof(double)) == 0);
+        CHECK_INT(r.stop, PST_STOP_CONVERGED);
+        printf("AMG handle, right-hand side %d: %s\n", rhs, r.message);
+        pst_solve_result_free(&r), pst_solve_result_free(&rf);
+    }
+    omp_set_num_threads(nt);
+    pst_krylov_stats st;
+    pst_krylov_get_stats(s, &st);
+    CHECK_INT(st.precond_setups, 1);
+    CHECK_INT(st.solves, 3);
+    CHECK_INT(st.precond, PST_PREC_AMG);
+    CHECK_INT(st.solver, PST_SOLVER_GMRES);
+    pst_krylov_destroy(s);
+    free(b), free(u), free(uf);
+    free_problem(&p);
+}
+
+/* An AMG set-up that fails ends the solve before iterating with the stop reason
+ * PST_STOP_PRECOND_SETUP and u untouched. */
+static void test_setup_failure(void)
+{
+    problem p = make_isolated();
+    size_t n = p.n - 1;
+    double *b = calloc(n + 1, sizeof *b), *u = calloc(n + 1, sizeof *u);
+    b[n] = 1.0;
+    u[n] = 0.25;
+    pst_solve_opts o = gmres_opts(PST_PREC_AMG, PST_AMG_OWN, 1e-10, 5000);
+    o.stored = 0;
+    pst_solve_result r;
+    char err[PST_ERRLEN] = "";
+    CHECK_INT(pst_solve(p.op, b, u, &o, &r, err), PST_ENUMERIC);
+    CHECK_INT(r.stop, PST_STOP_PRECOND_SETUP);
+    CHECK(r.iterations == 0 && u[n] == 0.25 && strstr(r.message, "diagonal") != NULL);
+    pst_krylov *s = NULL;
+    CHECK_INT(pst_krylov_create(&s, p.op, &o, err), PST_ENUMERIC);
+    CHECK(s == NULL);
+    free(b), free(u);
+    free_problem(&p);
+}
+
 int main(void)
 {
+    test_mpi_init();
     test_errors();
     test_contraction();
     test_threads_and_dirichlet();
     test_gmres();
     test_neumann();
+    test_handle_reuse();
+    test_setup_failure();
     return check_summary("test_amg");
 }

@@ -6,7 +6,8 @@
  * nonsymmetric scheme, bad options) are clear statuses with finite u; a mixed Dirichlet /
  * Neumann problem converges to the manufactured solution. icspm converges at second order where
  * its Poisson operator is stable (h = 0.9 s0, K <= 0.2 in 2D, K <= 0.1 in 3D); at the QSFDI
- * family's K = 0.35, h = 1.2 s0 it is not, and the solver says so (docs/schemes/icspm.md). */
+ * family's K = 0.35, h = 1.2 s0 it is not, and the solver says so (docs/schemes/icspm.md). The
+ * reusable solver (pst_krylov) on engine operators gives the bits of pst_solve. */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"
@@ -250,6 +251,7 @@ static void test_cg(void)
         pst_solve_result rc, rg;
         CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &rc, NULL), PST_OK);
         CHECK_INT(rc.solver, PST_SOLVER_CG);
+        CHECK_INT(rc.stop, PST_STOP_CONVERGED);
         double *ug = calloc(p.n, sizeof *ug);
         o.solver = PST_SOLVER_GMRES;
         CHECK_INT(pst_solve(p.op, p.b, ug, &o, &rg, NULL), PST_OK);
@@ -364,18 +366,21 @@ static void test_failures(void)
     CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_ENUMERIC);
     CHECK(r.converged == 0 && r.iterations == 5 && all_finite(p.u, p.n));
     CHECK(strstr(r.message, "iteration limit 5") && strstr(r.message, "relative residual"));
+    CHECK_INT(r.stop, PST_STOP_ITERATION_LIMIT);
     CHECK(r.rel_residual > 0 && r.rel_residual < 1);
     printf("limit: %s\n", r.message);
     for (int s = PST_SOLVER_BICGSTAB; s <= PST_SOLVER_BICGSTAB; ++s) {
         o.solver = s;
         CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_ENUMERIC);
         CHECK(r.converged == 0 && all_finite(p.u, p.n) && strstr(r.message, "residual"));
+        CHECK_INT(r.stop, PST_STOP_ITERATION_LIMIT);
     }
     /* CG on a nonsymmetric scheme */
     o = opts(PST_SOLVER_CG);
     o.stored = 0;
     CHECK_INT(pst_solve(p.op, p.b, p.u, &o, &r, err), PST_EINVAL);
     CHECK(strstr(err, "CG needs a symmetrisable operator") != NULL);
+    CHECK(r.stop == PST_STOP_NONE && r.solver == PST_SOLVER_CG && r.iterations == 0);
     printf("CG on lv: %s\n", err);
     /* bad options */
     o = opts(PST_SOLVER_GMRES);
@@ -399,6 +404,7 @@ static void test_failures(void)
         p.u[i] = 1.0;
     CHECK_INT(pst_solve(p.op, zero, p.u, &o, &r, err), PST_OK);
     CHECK(strcmp(r.message, "b = 0: u = u_D") == 0 && r.iterations == 0);
+    CHECK_INT(r.stop, PST_STOP_CONVERGED);
     CHECK(memcmp(p.u, zero, p.n * sizeof *zero) == 0);
     free(zero);
     /* NULL result and options are allowed */
@@ -414,6 +420,7 @@ static void test_failures(void)
     double *b = test_field(c, lap2), *u = calloc(n, sizeof *u);
     CHECK_INT(pst_solve(op, b, u, NULL, &r, err), PST_EINVAL);
     CHECK(strstr(err, "up to a constant") && strstr(err, "Dirichlet"));
+    CHECK_INT(r.stop, PST_STOP_NONE);
     printf("singular: %s\n", err);
     pst_op_destroy(op);
     pst_nlist_destroy(nl);
@@ -488,10 +495,85 @@ static void test_neumann(void)
     CHECK(e[1] < e[0]);
 }
 
+/* Two solves bit for bit: solution, iterations, stop, message and history. */
+static int same_bits(const pst_solve_result *a, const double *ua, const pst_solve_result *b,
+                     const double *ub, size_t n)
+{
+    return a->iterations == b->iterations && a->stop == b->stop && a->solver == b->solver &&
+           a->rel_residual == b->rel_residual && strcmp(a->message, b->message) == 0 &&
+           a->nhistory == b->nhistory &&
+           memcmp(a->history, b->history, (size_t)a->nhistory * sizeof(double)) == 0 &&
+           memcmp(ua, ub, n * sizeof *ua) == 0;
+}
+
+/* The reusable solver on engine operators, one handle per method (AUTO: CG with its scaling
+ * on brookshaw; GMRES and BiCGSTAB on lv): three right-hand sides and initial guesses each,
+ * alternating 1 and 2 threads, give the bits of fresh pst_solve calls; the Jacobi diagonal is
+ * set up once; a stored handle whose Dirichlet values change still eliminates them. */
+static void test_handle(void)
+{
+    static const char *const schemes[] = {"brookshaw", "lv", "lv"};
+    static const int solvers[] = {PST_SOLVER_AUTO, PST_SOLVER_GMRES, PST_SOLVER_BICGSTAB};
+    int nt = omp_get_max_threads();
+    for (int k = 0; k < 3; ++k) {
+        problem p = make(2, 1.0 / 30, schemes[k], 0.35, 19);
+        pst_op_store(p.op);
+        pst_solve_opts o = opts(solvers[k]);
+        o.history = 1;
+        pst_krylov *s = NULL;
+        char err[PST_ERRLEN] = "";
+        CHECK_INT(pst_krylov_create(&s, p.op, &o, err), PST_OK);
+        double *b = malloc(p.n * sizeof *b), *uf = malloc(p.n * sizeof *uf);
+        for (int rhs = 0; rhs < 3; ++rhs) {
+            for (size_t i = 0; i < p.n; ++i) {
+                b[i] = p.b[i] * (1 + 0.5 * rhs);
+                p.u[i] = uf[i] = 0.1 * rhs;
+            }
+            pst_solve_result r, rf;
+            omp_set_num_threads(rhs == 1 ? 1 : 2);
+            CHECK_INT(pst_krylov_solve(s, b, p.u, &r, err), PST_OK);
+            omp_set_num_threads(rhs == 1 ? 2 : 1);
+            CHECK_INT(pst_solve(p.op, b, uf, &o, &rf, err), PST_OK);
+            CHECK(same_bits(&r, p.u, &rf, uf, p.n));
+            CHECK(r.stop == PST_STOP_CONVERGED && r.rel_residual <= 1e-10);
+            pst_solve_result_free(&r), pst_solve_result_free(&rf);
+        }
+        pst_krylov_stats st;
+        pst_krylov_get_stats(s, &st);
+        printf("%-9s handle: %s, %d solves, %d preconditioner set-up\n", schemes[k],
+               st.solver == PST_SOLVER_CG ? "CG" : st.solver == PST_SOLVER_GMRES ? "GMRES"
+                                                                                 : "BiCGSTAB",
+               st.solves, st.precond_setups);
+        CHECK_INT(st.solver, k == 0 ? PST_SOLVER_CG : solvers[k]);
+        CHECK(st.solves == 3 && st.precond_setups == 1 && st.precond == PST_PREC_JACOBI);
+        CHECK(st.n == p.n && !st.user_precond);
+        pst_krylov_destroy(s);
+        free(b), free(uf);
+        destroy(&p);
+    }
+    omp_set_num_threads(nt);
+    /* refusals of the create call */
+    problem p = make(2, 1.0 / 10, "lv", 0.35, 19);
+    pst_krylov *s = NULL;
+    char err[PST_ERRLEN] = "";
+    pst_solve_opts o = opts(PST_SOLVER_CG);
+    o.stored = 0;
+    CHECK_INT(pst_krylov_create(&s, p.op, &o, err), PST_EINVAL);
+    CHECK(s == NULL && strstr(err, "CG needs a symmetrisable operator") != NULL);
+    o = opts(PST_SOLVER_GMRES);
+    CHECK_INT(pst_krylov_create(&s, p.op, &o, err), PST_EINVAL); /* stored, not stored yet */
+    CHECK(strstr(err, "pst_op_store") != NULL);
+    s = (pst_krylov *)&p; /* a stale value, cleared by every failing create */
+    CHECK_INT(pst_krylov_create(&s, NULL, NULL, err), PST_EINVAL);
+    CHECK(s == NULL && strstr(err, "needs an operator") != NULL);
+    destroy(&p);
+}
+
 int main(void)
 {
     double t0 = omp_get_wtime();
     test_failures();
+    test_handle();
     test_cg();
     test_bicgstab();
     test_apply_paths();

@@ -451,6 +451,7 @@ static void test_spe10(void)
 
 int main(void)
 {
+    test_mpi_init();
     test_tpfa_linear();
     test_tpfa_layered();
     test_spe10();

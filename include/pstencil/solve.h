@@ -9,6 +9,29 @@ extern "C" {
 #endif
 
 /* ------------------------------------------------------------------------------------------ */
+/* The operator contract                                                                      */
+/* ------------------------------------------------------------------------------------------ */
+
+/* A linear operator as every solver sees it (docs/solving.md, "The operator contract"): n rows
+ * and columns, y = A x through `apply` (x and y of n values, never aliased; it must not keep
+ * them, and it is called from the calling thread outside any parallel region, so it may use
+ * OpenMP itself), and optionally the diagonal of A through `diagonal` (n values; PST_OK or a
+ * PST_E* code; NULL when the operator has none). A preconditioner is a pst_linop too: its
+ * `apply` computes z = M^-1 r. A deterministic `apply` keeps the solves deterministic. */
+typedef struct {
+    size_t n;
+    void (*apply)(void *ctx, const double *x, double *y);
+    int (*diagonal)(void *ctx, double *d);
+    void *ctx;
+} pst_linop;
+
+/* The solve layer's view of an engine operator: apply is pst_op_apply (stored = 0) or
+ * pst_op_apply_stored (stored = 1, after pst_op_store), diagonal is pst_op_diagonal, ctx is op
+ * (which must outlive the linop). PST_EINVAL for a NULL argument, an operator without rows,
+ * or stored = 1 before pst_op_store. */
+int pst_op_linop(const pst_op *op, int stored, pst_linop *out, char *err);
+
+/* ------------------------------------------------------------------------------------------ */
 /* Solving                                                                                    */
 /* ------------------------------------------------------------------------------------------ */
 
@@ -20,16 +43,18 @@ extern "C" {
  * return, also on failure (the last iterate, never NaN). */
 typedef enum {
     PST_SOLVER_AUTO = 0,   /* CG when the operator is symmetrisable (brookshaw, cb with G1
-                              and without Neumann rows), else GMRES                          */
-    PST_SOLVER_CG = 1,     /* on diag(V/s) K, the symmetric scaling of spec lukyanov_vuik §4.5 */
+                              and without Neumann rows), else GMRES; GMRES for a user linop   */
+    PST_SOLVER_CG = 1,     /* on diag(V/s) K, the symmetric scaling of spec lukyanov_vuik §4.5;
+                              on a user linop as it is, which must then be SPD               */
     PST_SOLVER_GMRES = 2,  /* restarted GMRES(m), right preconditioning, CGS2 orthogonalisation */
     PST_SOLVER_BICGSTAB = 3
 } pst_solver;
 
 typedef enum {
     PST_PREC_NONE = 0,
-    PST_PREC_JACOBI = 1,   /* 1 / diag(L) (pst_op_diagonal)                                   */
-    PST_PREC_AMG = 2       /* hypre BoomerAMG on an assembled low-order M-matrix              */
+    PST_PREC_JACOBI = 1,   /* 1 / diag(L) (pst_op_diagonal, or the linop's diagonal)          */
+    PST_PREC_AMG = 2       /* hypre BoomerAMG on an assembled low-order M-matrix; engine
+                              operators only, and MPI must be initialised by the caller      */
 } pst_precond;
 
 typedef enum {
@@ -53,10 +78,29 @@ typedef struct {
     void *monitor_ctx;
 } pst_solve_opts;
 
+/* The defaults noted beside each field. */
 void pst_solve_defaults(pst_solve_opts *o);
+
+/* Why a solve stopped (pst_solve_result.stop); the message gives the numbers. */
+typedef enum {
+    PST_STOP_NONE = 0,            /* refused before iterating: see the status and message    */
+    PST_STOP_CONVERGED = 1,       /* ||b - L u|| <= rtol ||b|| (also b = 0)                   */
+    PST_STOP_ITERATION_LIMIT = 2, /* max_iter iterations without reaching the tolerance       */
+    PST_STOP_BREAKDOWN = 3,       /* a method's recurrence broke down (CG p.Ap <= 0, GMRES
+                                     L M^-1 v = 0, BiCGSTAB rho, (r^, v) or omega ~ 0)        */
+    PST_STOP_STAGNATION = 4,      /* a GMRES(m) cycle left u unchanged: every later cycle
+                                     would repeat it                                          */
+    PST_STOP_NON_FINITE = 5,      /* an iterate, residual or Krylov value overflowed: u is the
+                                     last finite iterate                                      */
+    PST_STOP_PRECOND_SETUP = 6    /* the preconditioner could not be set up (AMG, Jacobi)    */
+} pst_stop_reason;
+
+/* A short lower-case name of a pst_stop_reason ("converged", "iteration limit", ...). */
+const char *pst_stop_reason_name(int stop);
 
 typedef struct {
     int converged;         /* 1 when the tolerance was reached                                */
+    int stop;              /* pst_stop_reason: why it stopped                                 */
     int solver;            /* the pst_solver actually used                                    */
     int iterations;
     double rel_residual;   /* true residual ||b - L u|| / ||b|| at return                      */
@@ -64,15 +108,73 @@ typedef struct {
                               pst_solve_result_free                                          */
     int nhistory;
     double seconds;
-    char message[PST_ERRLEN]; /* why it stopped: converged, iteration limit, breakdown, ...   */
+    char message[PST_ERRLEN]; /* why it stopped, in words, with the numbers                  */
 } pst_solve_result;
+/* Free the history of r and reset it (NULL allowed); the other fields stay readable. */
 void pst_solve_result_free(pst_solve_result *r);
 
 /* Returns PST_OK when converged, PST_ENUMERIC (with the reached residual in r->message) when
  * not converged or broken down, PST_EINVAL for a bad request (e.g. CG on a non-symmetrisable
- * operator, AMG without hypre), PST_ENOMEM. Results are identical for every thread count. */
+ * operator, AMG without hypre or without MPI initialised), PST_ENOMEM. Results are identical
+ * for every thread count. One call is pst_krylov_create + pst_krylov_solve +
+ * pst_krylov_destroy, with the same bits. */
 int pst_solve(const pst_op *op, const double *b, double *u, const pst_solve_opts *o,
               pst_solve_result *r, char *err);
+
+/* ------------------------------------------------------------------------------------------ */
+/* A reusable solver: set up once, solve many times                                           */
+/* ------------------------------------------------------------------------------------------ */
+
+/* pst_krylov holds everything a solve needs besides b and u: the chosen method, the
+ * preconditioner (the Jacobi diagonal, the AMG hierarchy) and the Krylov workspace. It is
+ * built once by a create call; each pst_krylov_solve then only iterates, so time steps and
+ * parameter sweeps with a fixed operator pay the set-up once (docs/solving.md, "A reusable
+ * solver"). The options are copied at creation and fixed for the handle's life. A handle is
+ * used by one thread at a time. */
+typedef struct pst_krylov pst_krylov;
+
+/* For an engine operator, as pst_solve does it: Dirichlet elimination, AUTO chooses CG for a
+ * symmetrisable operator (with its symmetric scaling) and GMRES otherwise, the preconditioner
+ * of o->precond (AMG built from op). op (its rows, weights and kinds) must outlive the handle
+ * and not change. o NULL: the defaults. PST_EINVAL for a bad request (see pst_solve, and no
+ * Dirichlet particle), PST_ENUMERIC or PST_EINVAL when the preconditioner cannot be set up,
+ * PST_ENOMEM. */
+int pst_krylov_create(pst_krylov **out, const pst_op *op, const pst_solve_opts *o, char *err);
+
+/* For a user operator A: solves A u = b as it is (no rows are eliminated). M is the user's
+ * preconditioner (z = M^-1 r, right preconditioning; M->n == A->n) or NULL: then o->precond
+ * chooses NONE or JACOBI (1 / A->diagonal, which must then exist); AMG is refused (it needs an
+ * engine operator). AUTO means GMRES; CG assumes A (and M) symmetric positive definite and
+ * reports a breakdown when p.Ap <= 0. o->stored and o->amg_source are not used. A, M and
+ * their contexts are copied by pointer and must outlive the handle. PST_EINVAL for n = 0, a
+ * NULL apply, M->n != A->n or a bad option; PST_ENUMERIC when the diagonal callback fails or
+ * PST_ENOMEM. */
+int pst_krylov_create_linop(pst_krylov **out, const pst_linop *A, const pst_linop *M,
+                            const pst_solve_opts *o, char *err);
+
+/* Solve with a new right-hand side b and initial guess u (solution on return), n values each,
+ * not aliased, as pst_solve describes; r (NULL allowed) receives the result, with r->seconds
+ * the time of this solve only. Returns PST_OK, PST_ENUMERIC (not converged: r->stop says why),
+ * PST_EINPUT (non-finite b or u), PST_EINVAL (NULL arguments; an AMG handle after
+ * MPI_Finalize), PST_ENOMEM (the history). Nothing of the set-up is rebuilt. */
+int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result *r,
+                     char *err);
+
+/* What a handle did: counters a caller (or a test) can check. */
+typedef struct {
+    size_t n;              /* rows of the operator                                            */
+    int solver;            /* the pst_solver chosen at set-up                                 */
+    int precond;           /* the pst_precond in use (PST_PREC_NONE when M is the user's)    */
+    int user_precond;      /* 1 when the preconditioner is the caller's M                     */
+    int precond_setups;    /* preconditioner set-ups (AMG hierarchies, Jacobi diagonals) done */
+    int solves;            /* pst_krylov_solve calls that iterated (or found b = 0)           */
+} pst_krylov_stats;
+/* The counters of s (all 0 for NULL). */
+void pst_krylov_get_stats(const pst_krylov *s, pst_krylov_stats *st);
+
+/* Free a handle and its preconditioner (NULL allowed). An AMG handle is destroyed before
+ * MPI_Finalize: after it, hypre's objects cannot be freed and are left allocated. */
+void pst_krylov_destroy(pst_krylov *s);
 
 #ifdef __cplusplus
 }

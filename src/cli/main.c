@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <mpi.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -112,6 +113,26 @@ int cli_option(int argc, char **argv, int *i, const char *name, const char **val
     return 1;
 }
 
+/* hypre, the AMG preconditioner, needs MPI, and MPI belongs to the program, not the library
+ * (docs/solving.md, "MPI"): one process, initialised for serialised use from any thread, with
+ * MPI errors returned as codes instead of aborting. Only the commands that can run a solve
+ * start it; the others skip Open MPI's start-up (about 0.4 s). */
+static int needs_mpi(const char *command)
+{
+    return strcmp(command, "run") == 0 || strcmp(command, "sweep") == 0;
+}
+
+static int start_mpi(void)
+{
+    int provided = 0;
+    if (MPI_Init_thread(NULL, NULL, MPI_THREAD_SERIALIZED, &provided) != MPI_SUCCESS) {
+        fprintf(stderr, "pstencil: MPI_Init_thread failed: the AMG preconditioner needs MPI\n");
+        return -1;
+    }
+    MPI_Comm_set_errhandler(MPI_COMM_SELF, MPI_ERRORS_RETURN);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     cli_ctx ctx = {.quiet = 0};
@@ -135,6 +156,11 @@ int main(int argc, char **argv)
         } else {
             args[nargs++] = argv[i];
         }
+    }
+    int mpi = nargs > 0 && needs_mpi(args[0]);
+    if (mpi && start_mpi() != 0) {
+        free(args);
+        return CLI_NUMERIC;
     }
     int rc;
     if (nargs == 0) {
@@ -171,5 +197,7 @@ int main(int argc, char **argv)
         rc = usage_error("unknown command '%s'", args[0]);
     }
     free(args);
+    if (mpi)
+        MPI_Finalize();
     return rc;
 }

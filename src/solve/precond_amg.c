@@ -4,8 +4,8 @@
  * The AMG matrix is A = S L_low with a row sign S chosen so that every diagonal is positive:
  * interior rows of L have -sum_J w_IJ < 0 on the diagonal (S = -1); Neumann flux rows
  * n . M grad u have neighbours on the inner side of the outward normal, so their weights are
- * negative and their diagonal positive (S = +1, measured for brookshaw, cb, lv, qsfdi; src/solve.h
- * says -1 there, which would hand BoomerAMG negative diagonals); Dirichlet rows are the
+ * negative and their diagonal positive (S = +1, measured for brookshaw, cb, lv, qsfdi; -1 there
+ * would hand BoomerAMG negative diagonals); Dirichlet rows are the
  * identity (S = +1). Then M^-1 r = A^-1 (S r). Since z_D = r_D on Dirichlet rows, the Dirichlet
  * columns are eliminated: hypre gets only the non-Dirichlet block A_II and the right-hand side
  * S (r_I - L_ID r_D). That is the same z, and it keeps the boundary values out of the coarse
@@ -20,11 +20,15 @@
 int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err)
 {
     (void)op;
-    memset(p, 0, sizeof *p);
-    if (source != PST_AMG_BROOKSHAW && source != PST_AMG_OWN) {
-        pst_set_err(err, "unknown AMG source %d (brookshaw = 0, own = 1)", source);
-        return PST_EINVAL;
-    }
+    *p = (pst_prec){0};
+    PST_CHECK(source != PST_AMG_BROOKSHAW && source != PST_AMG_OWN, PST_EINVAL, err,
+              "unknown AMG source %d (brookshaw = 0, own = 1)", source);
+    pst_set_err(err, "pstencil was built without hypre: the AMG preconditioner is unavailable");
+    return PST_EINVAL;
+}
+
+int pst_prec_amg_ready(char *err)
+{
     pst_set_err(err, "pstencil was built without hypre: the AMG preconditioner is unavailable");
     return PST_EINVAL;
 }
@@ -40,60 +44,46 @@ int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err)
 #include <mpi.h>
 #include <stdlib.h>
 
-/* ---- process-wide runtime ---------------------------------------------------------------- */
-/* hypre is built with MPI, so MPI must be initialised before any hypre call, and hypre keeps
- * process-wide state (its handle and error flag). This is the one piece of global state of the
- * library, set once and never changed after: whether we initialised MPI (then we finalise it
- * at exit) and whether HYPRE_Init ran. Every hypre call runs inside the named critical section
- * pst_hypre, so concurrent solves from different threads serialise their AMG work (hypre's
- * error flag and MPI_THREAD_SERIALIZED both need that). */
-static int runtime_state;             /* 0: not tried; 1: ready; -1: failed */
-static char runtime_err[PST_ERRLEN];
+/* ---- MPI and hypre's process-wide state ---------------------------------------------------- */
+/* hypre is built with MPI, so MPI must be initialised before any hypre call. MPI belongs to
+ * the program: pstencil never initialises or finalises it, it checks at every AMG set-up (a
+ * program may finalise MPI between solves). hypre keeps process-wide state (its handle and
+ * error flag): HYPRE_Init runs at every set-up (in hypre 2.26 it returns at once when hypre is
+ * initialised), and pstencil never calls HYPRE_Finalize, so the library itself keeps no global
+ * state. Every hypre call runs inside the named critical section pst_hypre, so concurrent
+ * solves from different threads serialise their AMG work (hypre's error flag and
+ * MPI_THREAD_SERIALIZED both need that). */
 
-static void finalize_mpi(void)
-{
-    int finalized = 1;
-    MPI_Finalized(&finalized);
-    if (!finalized)
-        MPI_Finalize();
-}
-
-static void finalize_hypre(void) { HYPRE_Finalize(); }
-
-/* Called inside the critical section. atexit runs handlers in reverse order of registration:
- * finalize_mpi is registered first, so HYPRE_Finalize (which only frees hypre's handle and
- * makes no MPI call) runs before MPI_Finalize. */
-static void runtime_init(void)
+int pst_prec_amg_ready(char *err)
 {
     int initialized = 0, finalized = 0;
     MPI_Initialized(&initialized);
     MPI_Finalized(&finalized);
-    if (finalized) {
-        pst_set_err(runtime_err, "MPI has already been finalised: hypre cannot run");
-        runtime_state = -1;
-        return;
-    }
-    if (!initialized) {
-        int provided = 0;
-        if (MPI_Init_thread(NULL, NULL, MPI_THREAD_SERIALIZED, &provided) != MPI_SUCCESS) {
-            pst_set_err(runtime_err, "MPI_Init_thread failed: hypre cannot run");
-            runtime_state = -1;
-            return;
-        }
-        /* our MPI: errors return codes instead of aborting the process */
-        MPI_Comm_set_errhandler(MPI_COMM_SELF, MPI_ERRORS_RETURN);
-        if (atexit(finalize_mpi) != 0) {
-            pst_set_err(runtime_err, "cannot register MPI_Finalize with atexit");
-            runtime_state = -1;
-            return;
-        }
-    }
-    if (HYPRE_Init() != 0 || atexit(finalize_hypre) != 0) {
-        pst_set_err(runtime_err, "HYPRE_Init failed (hypre error %d)", (int)HYPRE_GetError());
-        runtime_state = -1;
-        return;
-    }
-    runtime_state = 1;
+    PST_CHECK(finalized, PST_EINVAL, err,
+              "MPI has already been finalised: the AMG preconditioner (hypre) needs MPI; call "
+              "MPI_Finalize only after the last AMG solve (docs/solving.md, \"MPI\")");
+    PST_CHECK(!initialized, PST_EINVAL, err,
+              "MPI is not initialised: the AMG preconditioner (hypre) needs MPI, and pstencil "
+              "leaves it to the program; call MPI_Init (or MPI_Init_thread) before the first "
+              "AMG solve and MPI_Finalize after the last (docs/solving.md, \"MPI\")");
+    int level = MPI_THREAD_SINGLE, main_thread = 1;
+    MPI_Query_thread(&level);
+    MPI_Is_thread_main(&main_thread);
+    PST_CHECK(!main_thread && level < MPI_THREAD_SERIALIZED, PST_EINVAL, err,
+              "an AMG solve on a thread other than MPI's main thread needs MPI initialised with "
+              "MPI_Init_thread(..., MPI_THREAD_SERIALIZED, ...) or higher");
+    return PST_OK;
+}
+
+/* MPI checked, then hypre initialised (when it is not yet). */
+static int runtime_ready(char *err)
+{
+    PST_TRY(pst_prec_amg_ready(err));
+    int e = 0;
+#pragma omp critical(pst_hypre)
+    e = (int)HYPRE_Init();
+    PST_CHECK(e != 0, PST_EINVAL, err, "HYPRE_Init failed (hypre error %d)", e);
+    return PST_OK;
 }
 
 /* ---- the preconditioner -------------------------------------------------------------------- */
@@ -117,11 +107,15 @@ typedef struct {
     HYPRE_Solver amg;
 } amg_ctx;
 
+/* hypre's destroy calls make MPI calls, which MPI forbids after MPI_Finalize (Open MPI aborts
+ * the process): then hypre's objects are left allocated and only pstencil's memory is freed. */
 static void amg_free(amg_ctx *c)
 {
     if (!c)
         return;
-    if (c->amg || c->A || c->B || c->X) {
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized && (c->amg || c->A || c->B || c->X)) {
 #pragma omp critical(pst_hypre)
         {
             if (c->amg)
@@ -277,31 +271,12 @@ static int hypre_setup(amg_ctx *c, int dim, HYPRE_Int *ncols, const HYPRE_BigInt
     return PST_OK;
 }
 
-int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err)
-{
-    memset(p, 0, sizeof *p);
-    if (source != PST_AMG_BROOKSHAW && source != PST_AMG_OWN) {
-        pst_set_err(err, "unknown AMG source %d (brookshaw = 0, own = 1)", source);
-        return PST_EINVAL;
-    }
-    if (op->n > (size_t)INT_MAX) {
-        pst_set_err(err, "%zu particles exceed hypre's 32-bit indices", op->n);
-        return PST_EINVAL;
-    }
-    int ready;
-#pragma omp critical(pst_hypre)
-    {
-        if (runtime_state == 0)
-            runtime_init();
-        ready = runtime_state;
-    }
-    if (ready < 0) {
-        pst_set_err(err, "%s", runtime_err);
-        return PST_EINVAL;
-    }
+/* ---- set-up ------------------------------------------------------------------------------- */
 
-    /* The low-order operator: Brookshaw with the operator's kernel, so the operator's
-     * neighbour list covers its support, or the operator itself. */
+/* The assembled low-order operator: Brookshaw with the operator's kernel, so the operator's
+ * neighbour list covers its support, or the operator itself. */
+static int low_order_matrix(const pst_op *op, int source, pst_csr *a, char *err)
+{
     const pst_op *low = op;
     pst_op *brookshaw = NULL;
     if (source == PST_AMG_BROOKSHAW && strcmp(op->scheme->name, "brookshaw") != 0) {
@@ -309,66 +284,79 @@ int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err)
         o.scheme = "brookshaw";
         o.kernel = (int)op->kernel;
         o.variant = 0;
-        int st = pst_op_create(&brookshaw, op->cloud, op->nl, &o, err);
-        if (st != PST_OK)
-            return st;
+        PST_TRY(pst_op_create(&brookshaw, op->cloud, op->nl, &o, err));
         low = brookshaw;
     }
-    pst_csr a;
-    int st = pst_op_assemble(low, &a);
+    int st = pst_op_assemble(low, a);
     pst_op_destroy(brookshaw);
-    if (st != PST_OK) {
-        pst_set_err(err, "cannot assemble the AMG matrix of %zu rows", op->n);
-        return st;
-    }
+    PST_CHECK(st != PST_OK, st, err, "cannot assemble the AMG matrix of %zu rows", op->n);
+    return PST_OK;
+}
 
-    const size_t n = op->n;
-    const uint8_t *kind = op->kind;
-    amg_ctx *c = calloc(1, sizeof *c);
-    HYPRE_Int *ncols = NULL;
-    HYPRE_BigInt *cols = NULL;
-    double *vals = NULL;
-    int64_t *aoff = NULL;   /* offsets of the AMG rows' entries */
-    st = PST_ENOMEM;
-    if (!c)
-        goto fail;
-    c->n = n;
+/* What the set-up holds only until hypre has its matrix. */
+typedef struct {
+    pst_csr a;             /* the low-order matrix                                            */
+    int64_t *aoff;         /* offsets of the AMG rows' entries (m + 1)                        */
+    HYPRE_Int *ncols;      /* entries per AMG row (m)                                         */
+    HYPRE_BigInt *cols;    /* the AMG matrix's columns and values                             */
+    double *vals;
+} amg_build;
+
+static void build_free(amg_build *t)
+{
+    pst_csr_free(&t->a);
+    pst_free(t->aoff);
+    pst_free(t->ncols);
+    pst_free(t->cols);
+    pst_free(t->vals);
+    *t = (amg_build){0};
+}
+
+/* The AMG unknowns (the non-Dirichlet rows, in row order), both maps and the per-row arrays. */
+static int amg_layout(amg_ctx *c, const uint8_t *kind, amg_build *t, char *err)
+{
+    const size_t n = c->n;
     c->map = pst_alloc(n * sizeof *c->map);
-    if (!c->map)
-        goto fail;
+    PST_CHECK_ALLOC(c->map, err, "cannot allocate the AMG matrix of %zu rows", n);
     HYPRE_Int m = 0;
     for (size_t i = 0; i < n; ++i)
         c->map[i] = kind[i] == PST_DIRICHLET ? -1 : m++;
     c->m = m;
     c->row = pst_alloc((size_t)m * sizeof *c->row);
     c->doff = pst_alloc(((size_t)m + 1) * sizeof *c->doff);
-    aoff = pst_alloc(((size_t)m + 1) * sizeof *aoff);
+    t->aoff = pst_alloc(((size_t)m + 1) * sizeof *t->aoff);
     c->diag = pst_alloc((size_t)m * sizeof *c->diag);
     c->sign = pst_alloc((size_t)m * sizeof *c->sign);
     c->idx = pst_alloc((size_t)m * sizeof *c->idx);
     c->b = pst_alloc((size_t)m * sizeof *c->b);
     c->x = pst_alloc((size_t)m * sizeof *c->x);
-    ncols = pst_alloc((size_t)m * sizeof *ncols);
-    if (!c->row || !c->doff || !aoff || !c->diag || !c->sign || !c->idx || !c->b || !c->x ||
-        !ncols)
-        goto fail;
+    t->ncols = pst_alloc((size_t)m * sizeof *t->ncols);
+    PST_CHECK_ALLOC(c->row && c->doff && t->aoff && c->diag && c->sign && c->idx && c->b &&
+                        c->x && t->ncols,
+                    err, "cannot allocate the AMG matrix of %zu rows", n);
     for (size_t i = 0; i < n; ++i)
         if (c->map[i] >= 0)
             c->row[c->map[i]] = i;
+    return PST_OK;
+}
 
-    /* Count each AMG row's entries: Dirichlet columns go to the elimination, exact zeros off
-     * the diagonal are dropped (they would only enlarge the strength graph). This pass and the
-     * fill below stream the assembled matrix once each: memory-bound, like an apply. */
-    size_t bad_row = SIZE_MAX;
+/* Count each AMG row's entries: Dirichlet columns go to the elimination, exact zeros off the
+ * diagonal are dropped (they would only enlarge the strength graph). This pass and the fill
+ * stream the assembled matrix once each: memory-bound, like an apply. */
+static int count_entries(amg_ctx *c, amg_build *t, char *err)
+{
+    const HYPRE_Int m = c->m;
+    const pst_csr *a = &t->a;
+    int64_t *aoff = t->aoff;
 #pragma omp parallel for schedule(static)
     for (HYPRE_Int k = 0; k < m; ++k) {
         size_t i = c->row[k];
         int64_t nd = 0, na = 0;
-        for (int64_t q = a.rowptr[i]; q < a.rowptr[i + 1]; ++q) {
-            if (c->map[a.col[q]] < 0)
-                nd += a.val[q] != 0;
+        for (int64_t q = a->rowptr[i]; q < a->rowptr[i + 1]; ++q) {
+            if (c->map[a->col[q]] < 0)
+                nd += a->val[q] != 0;
             else
-                na += a.col[q] == i || a.val[q] != 0;
+                na += a->col[q] == i || a->val[q] != 0;
         }
         c->doff[k + 1] = nd;
         aoff[k + 1] = na;
@@ -378,40 +366,47 @@ int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err)
     for (HYPRE_Int k = 0; k < m; ++k) {
         c->doff[k + 1] += c->doff[k];
         aoff[k + 1] += aoff[k];
-        ncols[k] = (HYPRE_Int)(aoff[k + 1] - aoff[k]);
+        t->ncols[k] = (HYPRE_Int)(aoff[k + 1] - aoff[k]);
     }
-    if (aoff[m] > INT_MAX) {
-        pst_set_err(err, "%lld AMG matrix entries exceed hypre's 32-bit indices",
-                    (long long)aoff[m]);
-        st = PST_EINVAL;
-        goto fail;
-    }
+    PST_CHECK(aoff[m] > INT_MAX, PST_EINVAL, err,
+              "%lld AMG matrix entries exceed hypre's 32-bit indices", (long long)aoff[m]);
     c->dcol = pst_alloc((size_t)c->doff[m] * sizeof *c->dcol);
     c->dval = pst_alloc((size_t)c->doff[m] * sizeof *c->dval);
-    cols = pst_alloc((size_t)aoff[m] * sizeof *cols);
-    vals = pst_alloc((size_t)aoff[m] * sizeof *vals);
-    if (!c->dcol || !c->dval || !cols || !vals)
-        goto fail;
+    t->cols = pst_alloc((size_t)aoff[m] * sizeof *t->cols);
+    t->vals = pst_alloc((size_t)aoff[m] * sizeof *t->vals);
+    PST_CHECK_ALLOC(c->dcol && c->dval && t->cols && t->vals, err,
+                    "cannot allocate the AMG matrix of %zu rows", c->n);
+    return PST_OK;
+}
+
+/* Fill A = S L row by row (and the Dirichlet couplings); a row without a positive diagonal or
+ * with a non-finite entry is refused, naming the first such row. */
+static int fill_entries(amg_ctx *c, amg_build *t, const pst_op *op, char *err)
+{
+    const HYPRE_Int m = c->m;
+    const pst_csr *a = &t->a;
+    const uint8_t *kind = op->kind;
+    size_t bad_row = SIZE_MAX;
 #pragma omp parallel for schedule(static)
     for (HYPRE_Int k = 0; k < m; ++k) {
         size_t i = c->row[k];
-        int64_t pd = c->doff[k], pa = aoff[k];
+        int64_t pd = c->doff[k], pa = t->aoff[k];
         double d = 0, sg = kind[i] == PST_INTERIOR ? -1.0 : 1.0;
         c->sign[k] = sg;
         int finite = 1;
-        for (int64_t q = a.rowptr[i]; q < a.rowptr[i + 1]; ++q) {
-            double v = a.val[q];
+        for (int64_t q = a->rowptr[i]; q < a->rowptr[i + 1]; ++q) {
+            double v = a->val[q];
             finite &= isfinite(v);
-            HYPRE_Int j = c->map[a.col[q]];
+            HYPRE_Int j = c->map[a->col[q]];
             if (j < 0) {
                 if (v != 0) {
-                    c->dcol[pd] = a.col[q];
+                    c->dcol[pd] = a->col[q];
                     c->dval[pd++] = v;
                 }
-            } else if (a.col[q] == i || v != 0) {
-                cols[pa] = j;
-                vals[pa++] = sg * v;   /* A = S L */
-                if (a.col[q] == i)
+            } else if (a->col[q] == i || v != 0) {
+                t->cols[pa] = j;
+                t->vals[pa++] = sg * v;   /* A = S L */
+                if (a->col[q] == i)
                     d = sg * v;
             }
         }
@@ -421,44 +416,49 @@ int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err)
             bad_row = i < bad_row ? i : bad_row;   /* the first such row: thread-independent */
         }
     }
-    if (bad_row != SIZE_MAX) {
-        double d = c->diag[c->map[bad_row]];
-        pst_set_err(err, "AMG matrix row %zu (particle id %lld) has diagonal %g or a non-finite "
-                         "entry: BoomerAMG needs a positive diagonal (the Brookshaw source "
-                         "always has one when every row has neighbours)",
-                    bad_row, (long long)op->cloud->id[bad_row], d + 0.0);
-        st = PST_ENUMERIC;
-        goto fail;
-    }
-    pst_csr_free(&a);
-    pst_free(aoff);
-    aoff = NULL;
+    PST_CHECK(bad_row != SIZE_MAX, PST_ENUMERIC, err,
+              "AMG matrix row %zu (particle id %lld) has diagonal %g or a non-finite entry: "
+              "BoomerAMG needs a positive diagonal (the Brookshaw source always has one when "
+              "every row has neighbours)",
+              bad_row, (long long)op->cloud->id[bad_row], c->diag[c->map[bad_row]] + 0.0);
+    return PST_OK;
+}
 
-    if (m > 0) {
+int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err)
+{
+    *p = (pst_prec){0};
+    PST_CHECK(source != PST_AMG_BROOKSHAW && source != PST_AMG_OWN, PST_EINVAL, err,
+              "unknown AMG source %d (brookshaw = 0, own = 1)", source);
+    PST_CHECK(op->n > (size_t)INT_MAX, PST_EINVAL, err,
+              "%zu particles exceed hypre's 32-bit indices", op->n);
+    PST_TRY(runtime_ready(err));
+    amg_build t = {0};
+    PST_TRY(low_order_matrix(op, source, &t.a, err));
+    int st = PST_OK;
+    amg_ctx *c = calloc(1, sizeof *c);
+    PST_CHECK_GOTO(!c, st, PST_ENOMEM, fail, err, "cannot allocate the AMG matrix of %zu rows",
+                   op->n);
+    c->n = op->n;
+    PST_TRY_GOTO(st, amg_layout(c, op->kind, &t, err), fail);
+    PST_TRY_GOTO(st, count_entries(c, &t, err), fail);
+    PST_TRY_GOTO(st, fill_entries(c, &t, op, err), fail);
+    pst_csr_free(&t.a);   /* before hypre builds its copy: a lower peak */
+    if (c->m > 0) {
 #pragma omp critical(pst_hypre)
         {
-            st = hypre_setup(c, op->dim, ncols, cols, vals, err);
+            st = hypre_setup(c, op->dim, t.ncols, t.cols, t.vals, err);
             HYPRE_ClearAllErrors();
         }
         if (st != PST_OK)
             goto fail;
     }
-    pst_free(ncols);
-    pst_free(cols);
-    pst_free(vals);
-    p->apply = amg_apply;
+    build_free(&t);
+    p->lin = (pst_linop){.n = op->n, .apply = amg_apply, .ctx = c};
     p->destroy = amg_destroy;
-    p->ctx = c;
     return PST_OK;
 
 fail:
-    if (st == PST_ENOMEM)
-        pst_set_err(err, "cannot allocate the AMG matrix of %zu rows", n);
-    pst_csr_free(&a);
-    pst_free(aoff);
-    pst_free(ncols);
-    pst_free(cols);
-    pst_free(vals);
+    build_free(&t);
     amg_free(c);
     return st;
 }

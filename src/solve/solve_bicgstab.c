@@ -6,112 +6,108 @@
 #include <math.h>
 #include <string.h>
 
-#define NVEC 8
 #define TINY 1e-14 /* relative size of rho, (r^, v) or omega treated as zero */
+
+/* s = r - alpha v, returns ||s||. */
+static double half_step(pst_ksp *k, double alpha, const double *r, const double *v, double *s)
+{
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < k->n; ++i)
+        s[i] = r[i] - alpha * v[i];
+    return sqrt(pst_ksp_dot(k, s, s));
+}
+
+/* One pass from the residual r with the shadow r^ = r (norm rhn): iterations until the
+ * recursive residual reaches the target, the limit, or a breakdown (in *b). */
+static void bicg_pass(pst_ksp *k, double rhn, pst_ksp_break *b)
+{
+    size_t n = k->n;
+    double *r = k->vec[0], *rh = k->vec[1], *p = k->vec[2], *v = k->vec[3], *ph = k->vec[4],
+           *s = k->vec[5], *sh = k->vec[6], *t = k->vec[7], *x = k->x;
+    double rn = rhn, rho_old = 1, alpha = 1, omega = 1;
+    for (int first = 1; k->iterations < k->max_iter; first = 0) {
+        double rho = pst_ksp_dot(k, rh, r);
+        if (!(fabs(rho) > TINY * rhn * rn) &&
+            pst_ksp_broke(b, isfinite(rho), rho, "breakdown: rho = (r^, r) ~ 0",
+                  "non-finite rho = (r^, r): stopped at the last finite iterate"))
+            return;
+        if (first) {
+            memcpy(p, r, n * sizeof *r);
+        } else {
+            double beta = rho / rho_old * (alpha / omega);
+#pragma omp parallel for schedule(static)
+            for (size_t i = 0; i < n; ++i)
+                p[i] = r[i] + beta * (p[i] - omega * v[i]);
+        }
+        pst_ksp_prec(k, p, ph);
+        pst_ksp_apply(k, ph, v);
+        double rv = pst_ksp_dot(k, rh, v), vn = sqrt(pst_ksp_dot(k, v, v));
+        if ((!(fabs(rv) > TINY * rhn * vn) || !isfinite(rv)) &&
+            pst_ksp_broke(b, isfinite(rv) && isfinite(vn), rv, "breakdown: (r^, A p) ~ 0",
+                  "non-finite (r^, A p): stopped at the last finite iterate"))
+            return;
+        alpha = rho / rv;
+        double sn = half_step(k, alpha, r, v, s);
+        if (sn <= k->target) {
+            if (!pst_ksp_update(k, x, alpha, ph, 0, NULL))
+                *b = (pst_ksp_break){"non-finite iterate: stopped at the last finite iterate",
+                                  PST_STOP_NON_FINITE, 0};
+            k->iterations++;
+            pst_ksp_record(k, sn);
+            return;
+        }
+        pst_ksp_prec(k, s, sh);
+        pst_ksp_apply(k, sh, t);
+        double tt = pst_ksp_dot(k, t, t), ts = pst_ksp_dot(k, t, s);
+        omega = ts / tt;
+        if ((!(fabs(omega) > 0) || !isfinite(omega) || !(fabs(ts) > TINY * sqrt(tt) * sn)) &&
+            pst_ksp_broke(b, isfinite(tt) && isfinite(ts), omega, "breakdown: omega ~ 0",
+                  "non-finite omega: stopped at the last finite iterate"))
+            return;
+        if (!pst_ksp_update(k, x, alpha, ph, omega, sh)) {
+            *b = (pst_ksp_break){"non-finite iterate: stopped at the last finite iterate",
+                              PST_STOP_NON_FINITE, 0};
+            return;
+        }
+#pragma omp parallel for schedule(static)
+        for (size_t i = 0; i < n; ++i)
+            r[i] = s[i] - omega * t[i];
+        k->iterations++;
+        double est = sqrt(pst_ksp_dot(k, r, r));
+        if (!isfinite(est)) {
+            *b = (pst_ksp_break){"non-finite residual: stopped at the last finite iterate",
+                              PST_STOP_NON_FINITE, 0};
+            return;
+        }
+        pst_ksp_record(k, est);
+        rn = est;
+        rho_old = rho;
+        if (est <= k->target)
+            return;
+    }
+}
 
 int pst_ksp_bicgstab(pst_ksp *k)
 {
-    size_t n = k->n;
-    double *vec[NVEC] = {0};
-    int ok = 1;
-    for (int v = 0; v < NVEC; ++v)
-        ok = ok && (vec[v] = pst_alloc(n * sizeof **vec)) != NULL;
-    if (!ok) {
-        for (int v = 0; v < NVEC; ++v)
-            pst_free(vec[v]);
-        pst_set_err(k->message, "cannot allocate the BiCGSTAB vectors of %zu rows", n);
-        return PST_ENOMEM;
-    }
-    double *r = vec[0], *rh = vec[1], *p = vec[2], *v = vec[3], *ph = vec[4], *s = vec[5],
-           *sh = vec[6], *t = vec[7];
-    double *x = k->x;
-    const char *broke = NULL;
-    double bad = 0;
-    double rn = pst_ksp_residual(k, x, r);
+    double *r = k->vec[0], *rh = k->vec[1];
+    pst_ksp_break b = {0};
+    double rn = pst_ksp_residual(k, k->x, r);
     pst_ksp_record(k, rn);
     double rn_pass = rn; /* true residual at the start of the pass */
     while (rn > k->target && k->iterations < k->max_iter) {
-        memcpy(rh, r, n * sizeof *r);
-        double rhn = rn, rho_old = 1, alpha = 1, omega = 1;
-        int first = 1;
-        broke = NULL;
-        while (k->iterations < k->max_iter) {
-            double rho = pst_ksp_dot(k, rh, r);
-            if (!(fabs(rho) > TINY * rhn * rn)) {
-                broke = "breakdown: rho = (r^, r) ~ 0";
-                bad = rho;
-                break;
-            }
-            if (first) {
-                memcpy(p, r, n * sizeof *r);
-            } else {
-                double beta = rho / rho_old * (alpha / omega);
-#pragma omp parallel for schedule(static)
-                for (size_t i = 0; i < n; ++i)
-                    p[i] = r[i] + beta * (p[i] - omega * v[i]);
-            }
-            first = 0;
-            pst_ksp_prec(k, p, ph);
-            pst_ksp_apply(k, ph, v);
-            double rv = pst_ksp_dot(k, rh, v), vn = sqrt(pst_ksp_dot(k, v, v));
-            if (!(fabs(rv) > TINY * rhn * vn) || !isfinite(rv)) {
-                broke = "breakdown: (r^, A p) ~ 0";
-                bad = rv;
-                break;
-            }
-            alpha = rho / rv;
-#pragma omp parallel for schedule(static)
-            for (size_t i = 0; i < n; ++i)
-                s[i] = r[i] - alpha * v[i];
-            double sn = sqrt(pst_ksp_dot(k, s, s));
-            if (sn <= k->target) {
-                if (!pst_ksp_update(k, x, alpha, ph, 0, NULL))
-                    broke = "non-finite iterate: stopped at the last finite iterate";
-                k->iterations++;
-                pst_ksp_record(k, sn);
-                break;
-            }
-            pst_ksp_prec(k, s, sh);
-            pst_ksp_apply(k, sh, t);
-            double tt = pst_ksp_dot(k, t, t), ts = pst_ksp_dot(k, t, s);
-            omega = ts / tt;
-            if (!(fabs(omega) > 0) || !isfinite(omega) ||
-                !(fabs(ts) > TINY * sqrt(tt) * sn)) {
-                broke = "breakdown: omega ~ 0";
-                bad = omega;
-                break;
-            }
-            if (!pst_ksp_update(k, x, alpha, ph, omega, sh)) {
-                broke = "non-finite iterate: stopped at the last finite iterate";
-                break;
-            }
-#pragma omp parallel for schedule(static)
-            for (size_t i = 0; i < n; ++i)
-                r[i] = s[i] - omega * t[i];
-            k->iterations++;
-            double est = sqrt(pst_ksp_dot(k, r, r));
-            if (!isfinite(est)) {
-                broke = "non-finite residual: stopped at the last finite iterate";
-                break;
-            }
-            pst_ksp_record(k, est);
-            rn = est;
-            rho_old = rho;
-            if (est <= k->target)
-                break;
-        }
-        rn = pst_ksp_residual(k, x, r);
+        memcpy(rh, r, k->n * sizeof *r);
+        b = (pst_ksp_break){0};
+        bicg_pass(k, rn, &b);
+        rn = pst_ksp_residual(k, k->x, r);
         /* a pass that ended in a breakdown without lowering the true residual is final */
-        if (broke && !(rn < rn_pass))
+        if (b.what && !(rn < rn_pass))
             break;
-        broke = NULL;
+        b = (pst_ksp_break){0};
         rn_pass = rn;
     }
-    if (broke && rn > k->target)
-        pst_ksp_fail(k, rn, "%s (value %.3e)", broke, bad);
+    if (b.what && !(rn <= k->target)) /* also a non-finite rn */
+        pst_ksp_fail(k, b.stop, rn, "%s (value %.3e)", b.what, b.value);
     else
         pst_ksp_finish(k, "BiCGSTAB", rn);
-    for (int i = 0; i < NVEC; ++i)
-        pst_free(vec[i]);
     return k->converged ? PST_OK : PST_ENUMERIC;
 }

@@ -1,0 +1,265 @@
+/* The reusable solver's set-up (docs/solving.md, "A reusable solver"): the checks of a
+ * request, the choice of method, CG's symmetric scaling, the preconditioner and the Krylov
+ * workspace, built once per handle. */
+#include "solve.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+const char *pst_solver_label(int s)
+{
+    static const char *const names[] = {"auto", "CG", "GMRES", "BiCGSTAB"};
+    return s >= 0 && s <= PST_SOLVER_BICGSTAB ? names[s] : "unknown";
+}
+
+int pst_solve_check_opts(const pst_solve_opts *o, const pst_op *op, char *err)
+{
+    PST_CHECK(o->solver < PST_SOLVER_AUTO || o->solver > PST_SOLVER_BICGSTAB, PST_EINVAL, err,
+              "unknown solver %d (AUTO, CG, GMRES or BICGSTAB)", o->solver);
+    PST_CHECK(o->precond < PST_PREC_NONE || o->precond > PST_PREC_AMG, PST_EINVAL, err,
+              "unknown preconditioner %d (NONE, JACOBI or AMG)", o->precond);
+    PST_CHECK(o->amg_source != PST_AMG_BROOKSHAW && o->amg_source != PST_AMG_OWN, PST_EINVAL,
+              err, "unknown AMG source %d (BROOKSHAW or OWN)", o->amg_source);
+    PST_CHECK(o->restart < 1 || o->restart > 100000 || o->max_iter < 0, PST_EINVAL, err,
+              "restart must be in [1, 100000] and max_iter >= 0 (got %d, %d)", o->restart,
+              o->max_iter);
+    PST_CHECK(!(o->rtol > 0 && o->rtol < 1), PST_EINVAL, err, "rtol must be in (0, 1) (got %g)",
+              o->rtol);
+    PST_CHECK(op && o->stored && !op->w, PST_EINVAL, err,
+              "stored = 1 needs the weights: call pst_op_store(op) first");
+    return PST_OK;
+}
+
+int pst_solve_check_finite(const pst_op *op, size_t n, const double *b, const double *u,
+                           char *err)
+{
+    const uint8_t *kind = op ? op->kind : NULL;
+    for (size_t i = 0; i < n; ++i) {
+        int unknown = !kind || kind[i] != PST_DIRICHLET;
+        PST_CHECK(!isfinite(b[i]) || (unknown && !isfinite(u[i])), PST_EINPUT, err,
+                  "%s[%zu] is not finite", isfinite(b[i]) ? "u" : "b", i);
+    }
+    return PST_OK;
+}
+
+/* ---- the handle ----------------------------------------------------------------------------- */
+
+/* A handle with its options and operator, the rest empty. */
+static int handle_new(pst_krylov **out, const pst_linop *A, const pst_solve_opts *o, char *err)
+{
+    pst_krylov *s = calloc(1, sizeof *s);
+    PST_CHECK_ALLOC(s, err, "cannot allocate a solver handle");
+    s->o = *o;
+    s->A = *A;
+    s->k.n = A->n;
+    s->k.max_iter = o->max_iter;
+    s->k.restart = o->restart;
+    s->k.monitor = o->monitor;
+    s->k.monitor_ctx = o->monitor_ctx;
+    *out = s;
+    return PST_OK;
+}
+
+void pst_krylov_destroy(pst_krylov *s)
+{
+    if (!s)
+        return;
+    pst_prec_free(&s->prec);
+    pst_ksp_free(&s->k);
+    pst_free(s->S);
+    pst_free(s->bp);
+    pst_free(s->x);
+    free(s);
+}
+
+/* The method's workspace, and for an engine operator b' and the iterate. */
+static int handle_workspace(pst_krylov *s, char *err)
+{
+    s->k.A = &s->A;
+    PST_TRY(pst_ksp_alloc(&s->k, s->solver, err));
+    if (!s->op)
+        return PST_OK;
+    size_t n = s->A.n;
+    s->bp = pst_alloc(n * sizeof *s->bp);
+    s->x = pst_alloc(n * sizeof *s->x);
+    PST_CHECK_ALLOC(s->bp && s->x, err, "cannot allocate the solver's vectors for %zu particles",
+                    n);
+    return PST_OK;
+}
+
+/* ---- engine operators ----------------------------------------------------------------------- */
+
+/* The symmetric scaling of spec lukyanov_vuik §4.5 exists for Brookshaw and corrected
+ * Brookshaw with the radial G1 gradient (F_IJ symmetric) and no Neumann (flux) rows. */
+static int symmetrisable(const pst_op *op, size_t neumann)
+{
+    return pst_scheme_symmetrisable(op->scheme) && op->opts.gradient == PST_GRAD_G1 &&
+           neumann == 0;
+}
+
+/* The method for op: AUTO resolved, CG refused where the scaling does not exist, and no
+ * Dirichlet row refused (the constants would be in L's nullspace). */
+static int choose_method(const pst_op *op, int asked, int *solver, char *err)
+{
+    size_t ndir = 0, nneu = 0;
+    for (size_t i = 0; i < op->n; ++i) {
+        ndir += op->kind[i] == PST_DIRICHLET;
+        nneu += op->kind[i] == PST_NEUMANN;
+    }
+    PST_CHECK(ndir == 0, PST_EINVAL, err,
+              "no Dirichlet particle: with only interior and Neumann rows L u = b determines u "
+              "only up to a constant (L has the constants in its nullspace); mark at least one "
+              "particle Dirichlet");
+    PST_CHECK(asked == PST_SOLVER_CG && !symmetrisable(op, nneu), PST_EINVAL, err,
+              "CG needs a symmetrisable operator (brookshaw or cb, gradient G1, no Neumann "
+              "rows); %s%s is not: use GMRES or BiCGSTAB",
+              op->scheme->name, nneu ? " with Neumann rows" : "");
+    *solver = asked != PST_SOLVER_AUTO ? asked
+              : symmetrisable(op, nneu) ? PST_SOLVER_CG
+                                        : PST_SOLVER_GMRES;
+    return PST_OK;
+}
+
+/* S = -V/s on non-Dirichlet rows (V/s > 0 checked), 1 on Dirichlet rows. */
+static int cg_scaling(const pst_op *op, double *S, char *err)
+{
+    const double *V = pst_cloud_volume_const(op->cloud);
+    const uint8_t *kind = op->kind;
+    pst_op_scale(op, S);
+    for (size_t i = 0; i < op->n; ++i) {
+        if (kind[i] == PST_DIRICHLET) {
+            S[i] = 1.0;
+            continue;
+        }
+        double v = V[i] / S[i];
+        PST_CHECK(!(v > 0) || !isfinite(v), PST_EINVAL, err,
+                  "CG needs V_I / s_I > 0 for the symmetric scaling, but particle %zu has "
+                  "V = %g, s = %g: use GMRES",
+                  i, V[i], S[i]);
+        S[i] = -v;
+    }
+    return PST_OK;
+}
+
+/* Workspace, CG's scaling, then the preconditioner of o->precond (*stop set when it fails). */
+static int op_setup(pst_krylov *s, int *stop, char *err)
+{
+    PST_TRY(handle_workspace(s, err));
+    if (s->solver == PST_SOLVER_CG) {
+        s->S = pst_alloc(s->A.n * sizeof *s->S);
+        PST_CHECK_ALLOC(s->S, err, "cannot allocate the solver's vectors for %zu particles",
+                        s->A.n);
+        PST_TRY(cg_scaling(s->op, s->S, err));
+    }
+    if (s->o.precond == PST_PREC_NONE)
+        return PST_OK;
+    s->precond_setups++;
+    int st = s->o.precond == PST_PREC_JACOBI ? pst_prec_jacobi(&s->prec, &s->A, err)
+                                             : pst_prec_amg(&s->prec, s->op, s->o.amg_source, err);
+    if (st != PST_OK)
+        *stop = PST_STOP_PRECOND_SETUP;
+    s->k.M = st == PST_OK ? &s->prec.lin : NULL;
+    return st;
+}
+
+int pst_krylov_build(pst_krylov **out, const pst_op *op, const pst_solve_opts *o, int *solver,
+                     int *stop, char *err)
+{
+    pst_solve_opts defaults;
+    if (!o) {
+        pst_solve_defaults(&defaults);
+        o = &defaults;
+    }
+    *solver = o->solver;
+    *stop = PST_STOP_NONE;
+    if (out)
+        *out = NULL;
+    PST_CHECK(!out || !op, PST_EINVAL, err, "pst_krylov_create needs an operator and a handle");
+    PST_TRY(pst_solve_check_opts(o, op, err));
+    pst_linop A;
+    PST_TRY(pst_op_linop(op, o->stored, &A, err));
+    PST_TRY(choose_method(op, o->solver, solver, err));
+    pst_krylov *s;
+    PST_TRY(handle_new(&s, &A, o, err));
+    s->op = op;
+    s->solver = *solver;
+    int st = op_setup(s, stop, err);
+    if (st != PST_OK) {
+        pst_krylov_destroy(s);
+        return st;
+    }
+    *out = s;
+    return PST_OK;
+}
+
+int pst_krylov_create(pst_krylov **out, const pst_op *op, const pst_solve_opts *o, char *err)
+{
+    int solver, stop;
+    return pst_krylov_build(out, op, o, &solver, &stop, err);
+}
+
+/* ---- user operators ------------------------------------------------------------------------- */
+
+/* A user linop is usable: rows and an apply. */
+static int check_linop(const pst_linop *A, const char *what, char *err)
+{
+    PST_CHECK(!A, PST_EINVAL, err, "no %s: pass a pst_linop", what);
+    PST_CHECK(A->n == 0, PST_EINVAL, err, "the %s has n = 0 rows", what);
+    PST_CHECK(!A->apply, PST_EINVAL, err, "the %s has no apply function (apply is NULL)", what);
+    return PST_OK;
+}
+
+int pst_krylov_create_linop(pst_krylov **out, const pst_linop *A, const pst_linop *M,
+                            const pst_solve_opts *o, char *err)
+{
+    pst_solve_opts defaults;
+    if (!o) {
+        pst_solve_defaults(&defaults);
+        o = &defaults;
+    }
+    PST_CHECK(!out, PST_EINVAL, err, "pst_krylov_create_linop needs a place for the handle");
+    *out = NULL;
+    PST_TRY(check_linop(A, "operator", err));
+    if (M) {
+        PST_TRY(check_linop(M, "preconditioner", err));
+        PST_CHECK(M->n != A->n, PST_EINVAL, err,
+                  "the preconditioner has %zu rows and the operator %zu: they must match",
+                  M->n, A->n);
+    }
+    PST_TRY(pst_solve_check_opts(o, NULL, err));
+    PST_CHECK(!M && o->precond == PST_PREC_AMG, PST_EINVAL, err,
+              "the AMG preconditioner needs an engine operator (pst_krylov_create); for a user "
+              "operator give a preconditioner, or use JACOBI (from its diagonal) or NONE");
+    pst_krylov *s;
+    PST_TRY(handle_new(&s, A, o, err));
+    s->solver = o->solver == PST_SOLVER_AUTO ? PST_SOLVER_GMRES : o->solver;
+    int st = handle_workspace(s, err);
+    if (st == PST_OK && M) {
+        s->user_M = *M;
+        s->k.M = &s->user_M;
+        s->user_precond = 1;
+    } else if (st == PST_OK && o->precond == PST_PREC_JACOBI) {
+        s->precond_setups++;
+        st = pst_prec_jacobi(&s->prec, &s->A, err);
+        s->k.M = &s->prec.lin;
+    }
+    if (st != PST_OK) {
+        pst_krylov_destroy(s);
+        return st;
+    }
+    *out = s;
+    return PST_OK;
+}
+
+void pst_krylov_get_stats(const pst_krylov *s, pst_krylov_stats *st)
+{
+    *st = (pst_krylov_stats){0};
+    if (!s)
+        return;
+    st->n = s->A.n;
+    st->solver = s->solver;
+    st->precond = s->user_precond ? PST_PREC_NONE : s->o.precond;
+    st->user_precond = s->user_precond;
+    st->precond_setups = s->precond_setups;
+    st->solves = s->solves;
+}
