@@ -160,7 +160,7 @@ static void test_errors(void)
     pst_cloud *c = test_lattice(2, 0.0, 1.0, 1.0 / 16, 1.2, 0.0, 3, 1);
     size_t n = pst_cloud_size(c);
     pst_cloud *c2 = NULL;
-    CHECK_INT(pst_cloud_create(&c2, 2, n + 1), PST_OK);
+    CHECK_INT(pst_cloud_create(&c2, 2, n + 1, NULL), PST_OK);
     for (int a = 0; a < 2; ++a) {
         memcpy(pst_cloud_coord(c2, a), pst_cloud_coord(c, a), n * sizeof(double));
         pst_cloud_coord(c2, a)[n] = 5.0;

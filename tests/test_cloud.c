@@ -484,7 +484,7 @@ static void test_validate(void)
 static void test_fields_and_mobility(void)
 {
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, 3, 10), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 3, 10, NULL), PST_OK);
     double *a, *b;
     CHECK_INT(pst_cloud_add_field(c, "u_exact", &a, NULL), PST_OK);
     CHECK_INT(pst_cloud_add_field(c, "rhs2", &b, NULL), PST_OK);
@@ -531,8 +531,14 @@ static void test_fields_and_mobility(void)
     pst_cloud_destroy(c);
 
     pst_cloud *bad_dim = (pst_cloud *)&bad_dim;
-    CHECK_INT(pst_cloud_create(&bad_dim, 1, 5), PST_EINVAL);
+    char err[PST_ERRLEN] = "";
+    CHECK_INT(pst_cloud_create(&bad_dim, 1, 5, err), PST_EINVAL);
     CHECK(bad_dim == NULL);
+    CHECK(strstr(err, "dim must be 2 or 3 (got 1)") != NULL);
+    if (sizeof(size_t) > 4) { /* more particles than 32-bit neighbour indices can name */
+        CHECK_INT(pst_cloud_create(&bad_dim, 2, (size_t)UINT32_MAX + 1, err), PST_EINVAL);
+        CHECK(bad_dim == NULL && strstr(err, "32-bit index limit") != NULL);
+    }
     pst_cloud_destroy(NULL);
 }
 

@@ -77,7 +77,7 @@ static pst_cloud *make_cloud(int dim, int side, uint64_t seed)
     for (int d = 0; d < dim; ++d)
         n *= (size_t)side;
     pst_cloud *c;
-    pst_cloud_create(&c, dim, n);
+    pst_cloud_create(&c, dim, n, NULL);
     for (size_t i = 0; i < n; ++i) {
         size_t s = (size_t)(rnd() * (double)n); /* random lattice slots: duplicates allowed */
         for (int d = 0; d < dim; ++d) {
@@ -208,10 +208,10 @@ static void test_threads_and_limits(void)
     omp_set_num_threads(saved);
 
     pst_cloud *c;
-    pst_cloud_create(&c, 3, 0);
+    pst_cloud_create(&c, 3, 0, NULL);
     CHECK_INT(pst_cloud_morton_sort(c, 1.0, NULL), PST_OK);
     pst_cloud_destroy(c);
-    pst_cloud_create(&c, 2, 1);
+    pst_cloud_create(&c, 2, 1, NULL);
     CHECK_INT(pst_cloud_morton_sort(c, 1.0, NULL), PST_OK);
     CHECK_INT(pst_cloud_morton_sort(c, 0.0, NULL), PST_EINVAL);
     CHECK_INT(pst_cloud_morton_sort(c, -1.0, NULL), PST_EINVAL);

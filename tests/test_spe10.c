@@ -284,7 +284,7 @@ static void test_grid_3d(void)
     const int cell[][3] = {{0, 0, 0}, {1, 2, 1}, {1, 1, 1}, {1, 2, 1}, {0, 0, 0}, {0, 2, 0}};
     enum { NP = 6 };
     pst_cloud *c = NULL;
-    CHECK_INT(pst_cloud_create(&c, 3, NP), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 3, NP, NULL), PST_OK);
     if (!c)
         return;
     for (int p = 0; p < NP; ++p)

@@ -1038,7 +1038,7 @@ static int build(reader *r, pst_cloud **out)
         free(pts);
         goto done;
     }
-    if ((st = pst_cloud_create(&c, dim, n)) != PST_OK) {
+    if ((st = pst_cloud_create(&c, dim, n, NULL)) != PST_OK) {
         free(pts);
         st = st == PST_ENOMEM ? oom(r) : fail(r, "cannot create a cloud of %zu points", n);
         goto done;
