@@ -468,7 +468,8 @@ static node *gen(int depth)
     int leaf = depth <= 0 || test_rndi(4) == 0 || pool_used > 4000;
     if (leaf) {
         n->kind = test_rndi(2) ? N_VAR : N_NUM;
-        n->which = n->kind == N_VAR ? test_rndi(3) : test_rndi((int)(sizeof literals / sizeof *literals));
+        n->which = n->kind == N_VAR ? test_rndi(3)
+                                    : test_rndi((int)(sizeof literals / sizeof *literals));
         return n;
     }
     n->kind = N_NEG + test_rndi(N_F2 - N_NEG + 1);
@@ -655,7 +656,8 @@ static void test_fuzz_strings(void)
     for (int t = 0; t < 20000; ++t) {
         int len = test_rndi(40);
         for (int i = 0; i < len; ++i)
-            s[i] = test_rndi(16) ? alphabet[test_rndi((int)sizeof alphabet - 1)] : (char)(1 + test_rndi(255));
+            s[i] = test_rndi(16) ? alphabet[test_rndi((int)sizeof alphabet - 1)]
+                                 : (char)(1 + test_rndi(255));
         s[len] = '\0';
         parsed += parse_or_fail_cleanly(s, &bad);
     }
