@@ -10,6 +10,7 @@
  * usage: bench_compare [--n N] [--dims 2,3] [--ratios 0.75,0.9,1.2] [--reps R] [--json FILE]
  *   --n    particles per cloud (default 1000000; the lattice side is rounded)
  */
+#include "bench_common.h"
 #include "machine.h"
 #include "pstencil.h"
 
@@ -59,22 +60,10 @@ static int parse_list(const char *s, double *out, int max)
 /* One jittered lattice on the unit box with about n particles, Morton-sorted, and its list. */
 static int make_cloud(int dim, size_t n, double ratio, pst_cloud **c, pst_nlist **nl)
 {
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    int side = (int)lround(pow((double)n, 1.0 / dim)) - 1;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = 0;
-        o.hi[d] = side;
-    }
-    o.s0 = 1.0;
-    o.jitter = 0.4;
-    o.h_ratio = ratio;
-    char err[PST_ERRLEN];
-    if (pst_cloud_lattice(c, &o, err) != PST_OK) {
-        fprintf(stderr, "bench_compare: %s\n", err);
+    pst_lattice_opts o = bench_box(dim, bench_side(n, dim), 1.0, 0.4, ratio);
+    if (!(*c = bench_lattice("bench_compare", &o)))
         return -1;
-    }
+    char err[PST_ERRLEN];
     if (pst_cloud_morton_sort(*c, 3.0 * ratio, NULL) != PST_OK ||
         pst_nlist_build(nl, *c, 3.0, err) != PST_OK) {
         fprintf(stderr, "bench_compare: %s\n", err);

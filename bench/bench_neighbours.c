@@ -1,6 +1,7 @@
 /* Benchmarks of the Morton sort and the neighbour-list build on 10^6-particle jittered lattices
  * (K = 0.5, h = 1.2 s0, quintic support 3h), with 1 and 2 OpenMP threads (the argument). The
  * run's context records the machine, the flags and the triad / FP64 peak probes (peak.h). */
+#include "bench_common.h"
 #include "bench_shim.h"
 #include "peak.h"
 #include "pstencil.h"
@@ -10,36 +11,15 @@
 #include <string.h>
 
 #define SUPPORT 3.0 /* quintic spline: R = 3h, ~195 neighbours in 3D, ~40 in 2D */
-#define H_RATIO 1.2
-#define JITTER 0.5
-
-/* 10^6 particles (1000^2 or 100^3) on the library's own jittered lattice: s0 = 1, V = 1 (the
- * lattice cell), all interior, h = H_RATIO, lattice (input) order. */
-static pst_cloud *lattice(int dim)
-{
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = 0;
-        o.hi[d] = dim == 2 ? 999 : 99;
-    }
-    o.s0 = 1.0;
-    o.jitter = JITTER;
-    o.seed = 2024;
-    o.h_ratio = H_RATIO;
-    pst_cloud *c = NULL;
-    return pst_cloud_lattice(&c, &o, NULL) == PST_OK ? c : NULL;
-}
 
 /* The Morton-sorted clouds of the neighbour benchmarks, built once. */
 static pst_cloud *sorted[4];
 static pst_cloud *sorted_cloud(int dim)
 {
     if (!sorted[dim]) {
-        sorted[dim] = lattice(dim);
+        sorted[dim] = bench_million("bench_neighbours", dim);
         if (sorted[dim])
-            pst_cloud_morton_sort(sorted[dim], SUPPORT * H_RATIO, NULL);
+            pst_cloud_morton_sort(sorted[dim], SUPPORT * BENCH_H_RATIO, NULL);
     }
     return sorted[dim];
 }
@@ -48,7 +28,7 @@ static void morton_sort(pstb_state *s)
 {
     int saved = omp_get_max_threads();
     omp_set_num_threads((int)pstb_arg(s));
-    pst_cloud *c = lattice(3);
+    pst_cloud *c = bench_million("bench_neighbours", 3);
     size_t n = c ? pst_cloud_size(c) : 0;
     double *x0 = malloc(3 * n * sizeof *x0);
     if (!c || !x0) {
@@ -63,7 +43,7 @@ static void morton_sort(pstb_state *s)
             for (size_t i = 0; i < n; ++i)
                 pst_cloud_ids(c)[i] = (int64_t)i;
             pstb_resume(s);
-            pst_cloud_morton_sort(c, SUPPORT * H_RATIO, NULL);
+            pst_cloud_morton_sort(c, SUPPORT * BENCH_H_RATIO, NULL);
         }
         pstb_counter(s, "particles/s", (double)n, 1);
     }

@@ -12,6 +12,7 @@
  * records the machine, the flags and in-process triad and FP64 peak probes (peak.h); the stored
  * applies report triad_fraction, the matrix-free applies peak_fraction (flop model below).
  * bench/README.md explains the counters and the byte and flop models. */
+#include "bench_common.h"
 #include "bench_shim.h"
 #include "markers.h"
 #include "peak.h"
@@ -23,8 +24,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define H_RATIO 1.2
-#define JITTER 0.5
 #define NSUPP 2 /* neighbour-list supports: 2h (cubic) and 3h (quintic) */
 static const double supports[NSUPP] = {2.0, 3.0};
 
@@ -45,25 +44,6 @@ static const double supports[NSUPP] = {2.0, 3.0};
 
 /* ---- clouds and lists, built once per process ------------------------------------------- */
 
-/* 10^6 particles (1000^2 or 100^3) on the library's own jittered lattice: s0 = 1, V = 1 (the
- * lattice cell), all interior, h = H_RATIO, lattice (input) order. */
-static pst_cloud *lattice(int dim)
-{
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = 0;
-        o.hi[d] = dim == 2 ? 999 : 99;
-    }
-    o.s0 = 1.0;
-    o.jitter = JITTER;
-    o.seed = 2024;
-    o.h_ratio = H_RATIO;
-    pst_cloud *c = NULL;
-    return pst_cloud_lattice(&c, &o, NULL) == PST_OK ? c : NULL;
-}
-
 typedef struct {
     pst_cloud *cloud;
     pst_nlist *nl;
@@ -81,10 +61,10 @@ static setup *get_setup(int dim, int si)
     if (s->nl)
         return s;
     char err[PST_ERRLEN] = "";
-    s->cloud = lattice(dim);
+    s->cloud = bench_million("bench_operators", dim);
     if (!s->cloud)
         return NULL;
-    pst_cloud_morton_sort(s->cloud, supports[si] * H_RATIO, NULL);
+    pst_cloud_morton_sort(s->cloud, supports[si] * BENCH_H_RATIO, NULL);
     if (pst_nlist_build(&s->nl, s->cloud, supports[si], err) != PST_OK) {
         fprintf(stderr, "bench_operators: neighbour list: %s\n", err);
         return NULL;

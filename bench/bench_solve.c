@@ -12,6 +12,7 @@
  * --header prints "# machine: <cpu, topology, caches>; flags: <compiler flags>; triad ...,
  * FP64 peak ..." (src/machine.h, peak.h: probes run in this process) and the table header.
  */
+#include "bench_common.h"
 #include "pstencil.h"
 #include "peak.h"
 #include "stream.h"
@@ -105,23 +106,11 @@ int main(int argc, char **argv)
     char err[PST_ERRLEN];
     /* 3 x 80 MB: far beyond the caches, small beside the solve's memory. */
     double triad = pstb_triad_gbs(10000000, 10);
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.dim = dim;
-    int side = (int)lround(pow((double)n, 1.0 / dim)) - 1;
-    for (int d = 0; d < 3; ++d) {
-        o.lo[d] = 0;
-        o.hi[d] = 1;
-    }
-    o.s0 = 1.0 / side;
-    o.jitter = 0.3;
+    pst_lattice_opts o = bench_box(dim, 1, 1.0 / bench_side(n, dim), 0.3, ratio);
     o.boundary_layer = 1;
-    o.h_ratio = ratio;
-    pst_cloud *c = NULL;
-    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
-        fprintf(stderr, "bench_solve: %s\n", err);
+    pst_cloud *c = bench_lattice("bench_solve", &o);
+    if (!c)
         return 1;
-    }
     double support = pst_kernel_support(pst_scheme_default_kernel(scheme));
     pst_cloud_morton_sort(c, support * ratio * o.s0, NULL);
     double t1 = omp_get_wtime();

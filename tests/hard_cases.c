@@ -169,7 +169,7 @@ static pst_cloud *grow(const pst_cloud *c, size_t extra)
     size_t n = pst_cloud_size(c);
     int dim = pst_cloud_dim(c);
     pst_cloud *g = NULL;
-    must(pst_cloud_create(&g, dim, n + extra), "cloud", NULL);
+    must(pst_cloud_create(&g, dim, n + extra, NULL), "cloud", NULL);
     for (int d = 0; d < dim; ++d)
         memcpy(pst_cloud_coord(g, d), pst_cloud_coord_const(c, d), n * sizeof(double));
     memcpy(pst_cloud_volume(g), pst_cloud_volume_const(c), n * sizeof(double));
@@ -741,7 +741,7 @@ static void case_line(void)
     const size_t m = 15;
     const double s0 = 1.0 / (double)(m - 1);
     pst_cloud *c = NULL;
-    must(pst_cloud_create(&c, 2, m), "cloud", NULL);
+    must(pst_cloud_create(&c, 2, m, NULL), "cloud", NULL);
     for (size_t i = 0; i < m; ++i) {
         pst_cloud_coord(c, 0)[i] = (double)i * s0;
         pst_cloud_volume(c)[i] = s0 * s0;
@@ -892,7 +892,7 @@ static void case_thin_layer(void)
     const size_t m = 16;
     const double s0 = 1.0 / (double)(m - 1);
     pst_cloud *c = NULL;
-    must(pst_cloud_create(&c, 3, m * m), "cloud", NULL);
+    must(pst_cloud_create(&c, 3, m * m, NULL), "cloud", NULL);
     for (size_t j = 0; j < m; ++j)
         for (size_t i = 0; i < m; ++i) {
             size_t p = i + m * j;
@@ -1093,7 +1093,7 @@ static void case_hole(void)
         n += x * x + y * y >= R * R;
     }
     pst_cloud *c = NULL;
-    must(pst_cloud_create(&c, 2, n), "cloud", NULL);
+    must(pst_cloud_create(&c, 2, n, NULL), "cloud", NULL);
     size_t k = 0;
     for (size_t i = 0; i < nf; ++i) {
         double x = pst_cloud_coord_const(full, 0)[i], y = pst_cloud_coord_const(full, 1)[i];

@@ -1,15 +1,18 @@
-/* Fixtures shared by the operator tests; see support.h. */
-#define _POSIX_C_SOURCE 200809L /* mkdtemp, opendir */
+/* Fixtures shared by the tests; see support.h. */
+#define _POSIX_C_SOURCE 200809L /* mkdtemp, opendir, setrlimit */
 
 #include "support.h"
 
 #include <dirent.h>
+#include <limits.h>
 #include <math.h>
 #include <mpi.h>
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <signal.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 pst_cloud *test_lattice(int dim, double lo, double hi, double s0, double h_ratio, double K,
@@ -34,9 +37,14 @@ pst_cloud *test_lattice_rotated(int dim, double lo, double hi, double s0, double
     o.seed = seed;
     o.boundary_layer = boundary_layer;
     o.angle = angle;
+    return test_lattice_of(&o);
+}
+
+pst_cloud *test_lattice_of(const pst_lattice_opts *o)
+{
     pst_cloud *c = NULL;
     char err[PST_ERRLEN];
-    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
+    if (pst_cloud_lattice(&c, o, err) != PST_OK) {
         fprintf(stderr, "lattice: %s\n", err);
         exit(1);
     }
@@ -62,10 +70,16 @@ pst_op *test_op(const pst_cloud *c, const pst_nlist *nl, const char *scheme, int
     o.scheme = scheme;
     o.gradient = gradient;
     o.variant = variant;
+    return test_op_of(c, nl, &o);
+}
+
+pst_op *test_op_of(const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o)
+{
     pst_op *op = NULL;
     char err[PST_ERRLEN];
-    if (pst_op_create(&op, c, nl, &o, err) != PST_OK) {
-        fprintf(stderr, "op %s (gradient %d, variant %d): %s\n", scheme, gradient, variant, err);
+    if (pst_op_create(&op, c, nl, o, err) != PST_OK) {
+        fprintf(stderr, "op %s (gradient %d, variant %d): %s\n", o->scheme, o->gradient,
+                o->variant, err);
         exit(1);
     }
     return op;
@@ -279,3 +293,74 @@ void test_mpi_init(void)
         exit(1);
     }
 }
+
+const char *test_path_in(const char *dir, const char *name)
+{
+    static char buf[1024];
+    snprintf(buf, sizeof buf, "%s/%s", dir, name);
+    return buf;
+}
+
+int test_count_temporaries(const char *dir)
+{
+    int k = 0;
+    DIR *d = opendir(dir);
+    for (struct dirent *e; d && (e = readdir(d));)
+        k += strstr(e->d_name, ".tmp.") != NULL;
+    if (d)
+        closedir(d);
+    return k;
+}
+
+int test_write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (!f)
+        return -1;
+    int bad = fputs(text, f) < 0;
+    return fclose(f) != 0 || bad ? -1 : 0;
+}
+
+int test_file_holds(const char *path, const char *text)
+{
+    size_t len = strlen(text);
+    char *buf = malloc(len + 2);
+    FILE *f = fopen(path, "r");
+    size_t got = f && buf ? fread(buf, 1, len + 1, f) : 0;
+    if (f)
+        fclose(f);
+    int same = buf && got == len && memcmp(buf, text, len) == 0;
+    free(buf);
+    return same;
+}
+
+int test_under_file_limit(long bytes, int (*write)(const void *job), const void *job)
+{
+    struct rlimit saved, small;
+    if (getrlimit(RLIMIT_FSIZE, &saved) != 0)
+        return INT_MIN;
+    small = saved;
+    small.rlim_cur = (rlim_t)bytes;
+    void (*prev)(int) = signal(SIGXFSZ, SIG_IGN); /* a failed write, not a killed test */
+    int st = setrlimit(RLIMIT_FSIZE, &small) == 0 ? write(job) : INT_MIN;
+    setrlimit(RLIMIT_FSIZE, &saved);
+    signal(SIGXFSZ, prev);
+    return st;
+}
+
+/* The one splitmix64 stream of a test program. */
+static uint64_t rng_state;
+
+void test_rng_seed(uint64_t seed) { rng_state = seed; }
+
+uint64_t test_rnd64(void)
+{
+    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+double test_rnd(void) { return (double)(test_rnd64() >> 11) * 0x1p-53; }
+
+int test_rndi(int n) { return (int)(test_rnd64() % (uint64_t)n); }

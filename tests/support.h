@@ -1,7 +1,7 @@
-/* Fixtures shared by the operator tests (test_lv, test_cspm, test_lsmps, test_mixed, test_qsfdi,
- * test_convergence): clouds, neighbour lists and operators that exit(1) with the library's
- * message when they cannot be built, fields sampled at the particles, the "full support"
- * predicate, and the measurements behind the apply-path and thread-independence tests.
+/* Fixtures shared by the tests: clouds, neighbour lists and operators that exit(1) with the
+ * library's message when they cannot be built, fields sampled at the particles, the "full
+ * support" predicate, the measurements behind the apply-path and thread-independence tests,
+ * scratch folders and files for the writers' tests, and a random stream for test data.
  *
  * Nothing here asserts: check.h's counters are private to each test program, so the helpers
  * return what they measured and the test's own CHECKs judge it (and report its line). */
@@ -21,6 +21,9 @@ pst_cloud *test_lattice(int dim, double lo, double hi, double s0, double h_ratio
 pst_cloud *test_lattice_rotated(int dim, double lo, double hi, double s0, double h_ratio,
                                 double K, uint64_t seed, int boundary_layer, double angle);
 
+/* The lattice of any options. Exits on failure. */
+pst_cloud *test_lattice_of(const pst_lattice_opts *o);
+
 /* The neighbour list of radius support * h. Exits on failure. */
 pst_nlist *test_nlist(const pst_cloud *c, double support);
 
@@ -29,6 +32,9 @@ pst_nlist *test_nlist(const pst_cloud *c, double support);
  * Exits on failure. */
 pst_op *test_op(const pst_cloud *c, const pst_nlist *nl, const char *scheme, int gradient,
                 int variant);
+
+/* The operator of any options. Exits on failure. */
+pst_op *test_op_of(const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o);
 
 /* Position of particle i, zero-padded to three components. */
 void test_position(const pst_cloud *c, size_t i, double x[3]);
@@ -98,6 +104,25 @@ test_paths test_compare_paths(pst_op *op, const double *u, const double *y_free,
 int test_scratch_dir(char *dir, size_t size, const char *prefix);
 /* Remove the files of a scratch folder, then the folder (it holds no subfolders). */
 void test_remove_dir(const char *dir);
+/* "dir/name" in a static buffer (overwritten by the next call). */
+const char *test_path_in(const char *dir, const char *name);
+/* The temporary files (".tmp." in the name) an atomic writer left in dir. */
+int test_count_temporaries(const char *dir);
+/* Write text to path; 0, or -1 when the file cannot be written. */
+int test_write_text(const char *path, const char *text);
+/* 1 when the file at path holds exactly text. */
+int test_file_holds(const char *path, const char *text);
+/* write(job)'s return while files may grow to at most `bytes` (RLIMIT_FSIZE; SIGXFSZ ignored,
+ * so an oversized write fails instead of killing the test); INT_MIN when the limit cannot be
+ * set. The limit is restored afterwards. */
+int test_under_file_limit(long bytes, int (*write)(const void *job), const void *job);
+
+/* Test data from one splitmix64 stream per program: test_rng_seed starts it, test_rnd64 gives
+ * its next word, test_rnd a double in [0, 1), test_rndi an int in [0, n). */
+void test_rng_seed(uint64_t seed);
+uint64_t test_rnd64(void);
+double test_rnd(void);
+int test_rndi(int n);
 
 /* Initialise MPI (MPI_THREAD_SERIALIZED) and finalise it at exit: the library leaves MPI to
  * the program, and the AMG preconditioner (hypre) needs it. For the main() of every test that

@@ -152,7 +152,7 @@ static problem make_isolated(void)
     pst_cloud *c = test_lattice(2, 0.0, 1.0, 1.0 / 16, 1.2, 0.0, 3, 1);
     size_t n = pst_cloud_size(c);
     problem p = {NULL, NULL, NULL, n + 1};
-    CHECK_INT(pst_cloud_create(&p.c, 2, n + 1), PST_OK);
+    CHECK_INT(pst_cloud_create(&p.c, 2, n + 1, NULL), PST_OK);
     for (int a = 0; a < 2; ++a) {
         memcpy(pst_cloud_coord(p.c, a), pst_cloud_coord(c, a), n * sizeof(double));
         pst_cloud_coord(p.c, a)[n] = 5.0;

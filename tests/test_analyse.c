@@ -178,7 +178,7 @@ static void test_degenerate(void)
 {
     /* 5 x 5 lattice of spacing 0.1, outer layer Dirichlet, plus one far interior particle */
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, 2, 26), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 2, 26, NULL), PST_OK);
     double *x = pst_cloud_coord(c, 0), *y = pst_cloud_coord(c, 1);
     uint8_t *kind = pst_cloud_kinds(c);
     for (size_t i = 0; i < 25; ++i) {

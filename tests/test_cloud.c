@@ -161,26 +161,29 @@ static void test_lattice_jitter(void)
     pst_cloud_destroy(c3);
 }
 
-static void test_threads(void)
+/* 1 when gen builds o with 1 and with 2 threads, and both clouds are the same bit for bit. */
+static int same_for_1_and_2_threads(int (*gen)(pst_cloud **, const pst_lattice_opts *, char *),
+                                    const pst_lattice_opts *o)
 {
     int saved = omp_get_max_threads();
+    pst_cloud *a = NULL, *b = NULL;
+    omp_set_num_threads(1);
+    int ok = gen(&a, o, NULL) == PST_OK;
+    omp_set_num_threads(2);
+    ok = gen(&b, o, NULL) == PST_OK && ok && same_cloud(a, b);
+    omp_set_num_threads(saved);
+    pst_cloud_destroy(a);
+    pst_cloud_destroy(b);
+    return ok;
+}
+
+static void test_threads(void)
+{
     pst_lattice_opts o = opts3(0.05, 0.3);
     o.boundary_layer = 1;
     o.angle = 0.3;
-    pst_cloud *a, *b, *ca, *cb;
-    omp_set_num_threads(1);
-    CHECK_INT(pst_cloud_lattice(&a, &o, NULL), PST_OK);
-    CHECK_INT(pst_cloud_cell_centred(&ca, &o, NULL), PST_OK);
-    omp_set_num_threads(2);
-    CHECK_INT(pst_cloud_lattice(&b, &o, NULL), PST_OK);
-    CHECK_INT(pst_cloud_cell_centred(&cb, &o, NULL), PST_OK);
-    omp_set_num_threads(saved);
-    CHECK(same_cloud(a, b));
-    CHECK(same_cloud(ca, cb));
-    pst_cloud_destroy(a);
-    pst_cloud_destroy(b);
-    pst_cloud_destroy(ca);
-    pst_cloud_destroy(cb);
+    CHECK(same_for_1_and_2_threads(pst_cloud_lattice, &o));
+    CHECK(same_for_1_and_2_threads(pst_cloud_cell_centred, &o));
 }
 
 /* Boundary layer: on the box, unjittered, Dirichlet, unit outward normals. */
@@ -484,7 +487,7 @@ static void test_validate(void)
 static void test_fields_and_mobility(void)
 {
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, 3, 10), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 3, 10, NULL), PST_OK);
     double *a, *b;
     CHECK_INT(pst_cloud_add_field(c, "u_exact", &a, NULL), PST_OK);
     CHECK_INT(pst_cloud_add_field(c, "rhs2", &b, NULL), PST_OK);
@@ -531,8 +534,14 @@ static void test_fields_and_mobility(void)
     pst_cloud_destroy(c);
 
     pst_cloud *bad_dim = (pst_cloud *)&bad_dim;
-    CHECK_INT(pst_cloud_create(&bad_dim, 1, 5), PST_EINVAL);
+    char err[PST_ERRLEN] = "";
+    CHECK_INT(pst_cloud_create(&bad_dim, 1, 5, err), PST_EINVAL);
     CHECK(bad_dim == NULL);
+    CHECK(strstr(err, "dim must be 2 or 3 (got 1)") != NULL);
+    if (sizeof(size_t) > 4) { /* more particles than 32-bit neighbour indices can name */
+        CHECK_INT(pst_cloud_create(&bad_dim, 2, (size_t)UINT32_MAX + 1, err), PST_EINVAL);
+        CHECK(bad_dim == NULL && strstr(err, "32-bit index limit") != NULL);
+    }
     pst_cloud_destroy(NULL);
 }
 

@@ -275,7 +275,7 @@ static void test_degenerate(const char *name, int dim)
 {
     size_t n = (dim == 2 ? 11 : 25) + 1;
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, dim, n), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, dim, n, NULL), PST_OK);
     size_t m = test_flat_layout(c);
     for (int a = 0; a < dim; ++a)
         pst_cloud_coord(c, a)[m] = 10.0;

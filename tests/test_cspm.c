@@ -156,7 +156,7 @@ static void test_volumes(void)
         pst_cloud_destroy(c);
     }
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, 2, 2), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 2, 2, NULL), PST_OK);
     double h = 0.5, d = 0.7;
     pst_cloud_coord(c, 0)[1] = d;
     pst_cloud_set_h_uniform(c, h, NULL);
@@ -375,7 +375,7 @@ static void test_degenerate(void)
         /* a line of 11 (2D) or a 5x5 plane (3D), plus one isolated particle */
         size_t n = (dim == 2 ? 11 : 25) + 1;
         pst_cloud *c;
-        CHECK_INT(pst_cloud_create(&c, dim, n), PST_OK);
+        CHECK_INT(pst_cloud_create(&c, dim, n, NULL), PST_OK);
         size_t m = test_flat_layout(c);
         for (int d = 0; d < dim; ++d)
             pst_cloud_coord(c, d)[m] = 10.0;
@@ -407,7 +407,7 @@ static void test_degenerate(void)
     /* 2D: a particle with 4 neighbours is too few for icspm and falls back to cspm, which
      * stays exact for linear fields */
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, 2, 5), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 2, 5, NULL), PST_OK);
     const double px[5] = {0, 0.1, -0.08, 0.02, 0.05}, py[5] = {0, 0.03, 0.05, -0.11, 0.09};
     for (int i = 0; i < 5; ++i) {
         pst_cloud_coord(c, 0)[i] = px[i];

@@ -4,6 +4,7 @@
  * minimal parentheses against a direct evaluation of the tree, and random or mutated strings
  * that must parse or fail cleanly. */
 #include "check.h"
+#include "support.h"
 #include "pstencil_expr.h"
 
 #include <float.h>
@@ -21,16 +22,6 @@ static double V(double a)
     return v;
 }
 
-static uint64_t rng_state;
-static uint64_t rnd64(void) /* splitmix64 */
-{
-    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-}
-static double rnd(void) { return (double)(rnd64() >> 11) * 0x1p-53; }
-static int rndi(int n) { return (int)(rnd64() % (uint64_t)n); }
 
 static double sq(double a) { return a * a; }
 
@@ -107,31 +98,31 @@ static void test_values(void)
               0.5 * exp(-(sq(9 * x - 7) + sq(9 * y - 3)) / 4));
     VALUE("x^2 + y^2 + z^2", x * x + y * y + z * z);
     VALUE(" \t x\n*\ry ", x * y);
-    /* every function */
-    VALUE("sin(x)", sin(x));
-    VALUE("cos(y)", cos(y));
-    VALUE("tan(z)", tan(z));
-    VALUE("asin(x)", asin(x));
-    VALUE("acos(y)", acos(y));
-    VALUE("atan(z)", atan(z));
-    VALUE("atan2(y, x)", atan2(y, x));
-    VALUE("sinh(z)", sinh(z));
-    VALUE("cosh(y)", cosh(y));
-    VALUE("tanh(x)", tanh(x));
-    VALUE("exp(z)", exp(z));
-    VALUE("log(z)", log(z));
-    VALUE("log10(z)", log10(z));
-    VALUE("sqrt(z)", sqrt(z));
-    VALUE("abs(y)", fabs(y));
-    VALUE("pow(z, y)", pow(z, y));
-    VALUE("min(x, y)", fmin(x, y));
-    VALUE("max(x, y)", fmax(x, y));
+    /* every function, against the C function of the same variables */
+    static const struct {
+        const char *text;
+        double (*c)(double);
+        int var;
+    } f1[] = {{"sin(x)", sin, 0},     {"cos(y)", cos, 1},   {"tan(z)", tan, 2},
+              {"asin(x)", asin, 0},   {"acos(y)", acos, 1}, {"atan(z)", atan, 2},
+              {"sinh(z)", sinh, 2},   {"cosh(y)", cosh, 1}, {"tanh(x)", tanh, 0},
+              {"exp(z)", exp, 2},     {"log(z)", log, 2},   {"log10(z)", log10, 2},
+              {"sqrt(z)", sqrt, 2},   {"abs(y)", fabs, 1}};
+    for (size_t k = 0; k < sizeof f1 / sizeof *f1; ++k)
+        VALUE(f1[k].text, f1[k].c(v[f1[k].var]));
+    static const struct {
+        const char *text;
+        double (*c)(double, double);
+        int a, b;
+    } f2[] = {{"atan2(y, x)", atan2, 1, 0}, {"pow(z, y)", pow, 2, 1}, {"min(x, y)", fmin, 0, 1},
+              {"max(x, y)", fmax, 0, 1},    {"hypot(x, y)", hypot, 0, 1}};
+    for (size_t k = 0; k < sizeof f2 / sizeof *f2; ++k)
+        VALUE(f2[k].text, f2[k].c(v[f2[k].a], v[f2[k].b]));
     VALUE("floor(y)", -1);
     VALUE("ceil(y)", -0.0);
     VALUE("sign(y)", -1);
     VALUE("sign(x)", 1);
     VALUE("sign(0)", 0);
-    VALUE("hypot(x, y)", hypot(x, y));
     VALUE("sin (x)", sin(x));
     VALUE("atan2(sin(x)*2, cos(y)^2+1)", atan2(sin(x) * 2, sq(cos(y)) + 1));
     /* constant arguments, folded at compile time by the same code */
@@ -407,7 +398,7 @@ static void test_many(void)
     for (int d = 0; d < 3; ++d) {
         col[d] = malloc(N * sizeof *col[d]);
         for (int k = 0; k < N; ++k)
-            col[d][k] = 2 * rnd() - 0.5;
+            col[d][k] = 2 * test_rnd() - 0.5;
     }
     for (size_t t = 0; t < sizeof texts / sizeof *texts; ++t) {
         pst_expr *e = pst_expr_parse(texts[t], xyz, 3, NULL, 0);
@@ -474,17 +465,18 @@ static node *gen(int depth)
 {
     node *n = &pool[pool_used++];
     *n = (node){0, 0, NULL, NULL};
-    int leaf = depth <= 0 || rndi(4) == 0 || pool_used > 4000;
+    int leaf = depth <= 0 || test_rndi(4) == 0 || pool_used > 4000;
     if (leaf) {
-        n->kind = rndi(2) ? N_VAR : N_NUM;
-        n->which = n->kind == N_VAR ? rndi(3) : rndi((int)(sizeof literals / sizeof *literals));
+        n->kind = test_rndi(2) ? N_VAR : N_NUM;
+        n->which = n->kind == N_VAR ? test_rndi(3)
+                                    : test_rndi((int)(sizeof literals / sizeof *literals));
         return n;
     }
-    n->kind = N_NEG + rndi(N_F2 - N_NEG + 1);
+    n->kind = N_NEG + test_rndi(N_F2 - N_NEG + 1);
     if (n->kind == N_F1)
-        n->which = rndi((int)(sizeof f1 / sizeof *f1));
+        n->which = test_rndi((int)(sizeof f1 / sizeof *f1));
     if (n->kind == N_F2)
-        n->which = rndi((int)(sizeof f2 / sizeof *f2));
+        n->which = test_rndi((int)(sizeof f2 / sizeof *f2));
     n->a = gen(depth - 1);
     if (n->kind != N_NEG && n->kind != N_F1)
         n->b = gen(depth - 1);
@@ -526,7 +518,7 @@ typedef struct {
 
 static void put(buf *b, const char *t)
 {
-    if (rndi(5) == 0)
+    if (test_rndi(5) == 0)
         b->s[b->len++] = ' ';
     size_t l = strlen(t);
     memcpy(b->s + b->len, t, l);
@@ -543,7 +535,7 @@ static void child(buf *b, const node *c, int min_prec)
 /* Print with the fewest parentheses the grammar needs, plus some redundant ones. */
 static void print(buf *b, const node *n, int need_parens)
 {
-    int parens = need_parens || rndi(12) == 0;
+    int parens = need_parens || test_rndi(12) == 0;
     static const char *const ops[] = {"", "", "-", "+", "-", "*", "/", "^"};
     if (parens)
         put(b, "(");
@@ -599,11 +591,11 @@ static buf text;
 
 static void test_fuzz_trees(void)
 {
-    rng_state = 2024;
+    test_rng_seed(2024);
     int bad = 0, failed_parse = 0, exact = 0, total = 0;
     for (int t = 0; t < 6000; ++t) {
         pool_used = 0;
-        node *root = gen(1 + rndi(7));
+        node *root = gen(1 + test_rndi(7));
         text.len = 0;
         print(&text, root, 0);
         char err[256];
@@ -614,7 +606,7 @@ static void test_fuzz_trees(void)
             continue;
         }
         for (int p = 0; p < 3; ++p) {
-            double v[3] = {4 * rnd() - 2, 4 * rnd() - 2, 4 * rnd() - 2};
+            double v[3] = {4 * test_rnd() - 2, 4 * test_rnd() - 2, 4 * test_rnd() - 2};
             double want = ref(root, v), got = pst_expr_eval(e, v);
             ++total;
             exact += same(want, got);
@@ -657,24 +649,25 @@ static int parse_or_fail_cleanly(const char *s, int *bad)
 
 static void test_fuzz_strings(void)
 {
-    rng_state = 77;
+    test_rng_seed(77);
     static const char alphabet[] = "0123456789.eE+-*/^(),xyzpi sincoqrtlgabmhfdp_ \t#";
     int bad = 0, parsed = 0;
     char s[128];
     for (int t = 0; t < 20000; ++t) {
-        int len = rndi(40);
+        int len = test_rndi(40);
         for (int i = 0; i < len; ++i)
-            s[i] = rndi(16) ? alphabet[rndi((int)sizeof alphabet - 1)] : (char)(1 + rndi(255));
+            s[i] = test_rndi(16) ? alphabet[test_rndi((int)sizeof alphabet - 1)]
+                                 : (char)(1 + test_rndi(255));
         s[len] = '\0';
         parsed += parse_or_fail_cleanly(s, &bad);
     }
     for (int t = 0; t < 6000; ++t) {
         pool_used = 0;
         text.len = 0;
-        print(&text, gen(1 + rndi(5)), 0);
-        for (int m = 1 + rndi(3); m > 0; --m) {
-            size_t len = text.len, at = len ? (size_t)rndi((int)len) : 0;
-            switch (rndi(5)) {
+        print(&text, gen(1 + test_rndi(5)), 0);
+        for (int m = 1 + test_rndi(3); m > 0; --m) {
+            size_t len = text.len, at = len ? (size_t)test_rndi((int)len) : 0;
+            switch (test_rndi(5)) {
             case 0: /* delete */
                 if (len)
                     memmove(text.s + at, text.s + at + 1, len - at);
@@ -682,12 +675,12 @@ static void test_fuzz_strings(void)
                 break;
             case 1: /* insert */
                 memmove(text.s + at + 1, text.s + at, len - at + 1);
-                text.s[at] = alphabet[rndi((int)sizeof alphabet - 1)];
+                text.s[at] = alphabet[test_rndi((int)sizeof alphabet - 1)];
                 ++text.len;
                 break;
             case 2: /* replace with any byte */
                 if (len)
-                    text.s[at] = (char)(1 + rndi(255));
+                    text.s[at] = (char)(1 + test_rndi(255));
                 break;
             case 3: /* truncate */
                 text.len = at;
@@ -695,7 +688,7 @@ static void test_fuzz_strings(void)
                 break;
             default: /* duplicate a piece */
                 if (len && len < 8000) {
-                    size_t l = (size_t)rndi((int)(len - at)) + 1;
+                    size_t l = (size_t)test_rndi((int)(len - at)) + 1;
                     memmove(text.s + at + l, text.s + at, len - at + 1);
                     text.len += l;
                 }

@@ -241,7 +241,7 @@ static void test_neumann(void)
 static pst_cloud *cloud_of(int dim, size_t n, const double *xyz, double h)
 {
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, dim, n), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, dim, n, NULL), PST_OK);
     for (size_t i = 0; i < n; ++i)
         for (int d = 0; d < dim; ++d)
             pst_cloud_coord(c, d)[i] = xyz[3 * i + (size_t)d];

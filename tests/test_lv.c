@@ -374,7 +374,7 @@ static void test_degenerate(void)
 {
     /* 2D: particles on a line (collinear: C singular) plus one far away (isolated) */
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, 2, 12), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 2, 12, NULL), PST_OK);
     test_flat_layout(c);
     pst_cloud_coord(c, 0)[11] = 10.0;
     pst_cloud_coord(c, 1)[11] = 10.0;

@@ -289,7 +289,7 @@ static void test_degenerate(void)
     for (int dim = 2; dim <= 3; ++dim) {
         size_t n = (dim == 2 ? 11 : 25) + 1;
         pst_cloud *c;
-        CHECK_INT(pst_cloud_create(&c, dim, n), PST_OK);
+        CHECK_INT(pst_cloud_create(&c, dim, n, NULL), PST_OK);
         size_t nflat = test_flat_layout(c);
         for (int d = 0; d < dim; ++d)
             pst_cloud_coord(c, d)[nflat] = 10.0;
@@ -350,7 +350,7 @@ static void test_degenerate(void)
 
     /* particle 0 at the origin with 3 neighbours around it */
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, 2, 4), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 2, 4, NULL), PST_OK);
     const double px[4] = {0.0, 0.1, -0.05, 0.02}, py[4] = {0.0, 0.01, 0.08, -0.09};
     for (int i = 0; i < 4; ++i) {
         pst_cloud_coord(c, 0)[i] = px[i];

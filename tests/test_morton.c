@@ -2,20 +2,12 @@
  * permutation applied to every field, input-order round trip, thread-count independence. */
 #include "cells.h"
 #include "check.h"
+#include "support.h"
 
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
-static uint64_t rng_state;
-static uint64_t rnd64(void) /* splitmix64 */
-{
-    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-}
-static double rnd(void) { return (double)(rnd64() >> 11) * 0x1p-53; }
 
 /* Bit-by-bit reference interleave. */
 static uint64_t ref_key(int dim, uint32_t ix, uint32_t iy, uint32_t iz)
@@ -43,10 +35,10 @@ static void test_keys(void)
     CHECK(pst_morton_key(2, 3, 3, 0) == 15);
     CHECK(pst_morton_key(2, 0xffffffffu, 0, 0) == 0x5555555555555555ULL);
     CHECK(pst_morton_key(2, 0xffffffffu, 0xffffffffu, 0) == UINT64_MAX);
-    rng_state = 1;
+    test_rng_seed(1);
     int bad = 0;
     for (int t = 0; t < 10000; ++t) {
-        uint32_t a = (uint32_t)rnd64(), b = (uint32_t)rnd64(), c = (uint32_t)rnd64();
+        uint32_t a = (uint32_t)test_rnd64(), b = (uint32_t)test_rnd64(), c = (uint32_t)test_rnd64();
         bad |= pst_morton_key(2, a, b, 0) != ref_key(2, a, b, 0);
         a &= 0x1fffff, b &= 0x1fffff, c &= 0x1fffff;
         bad |= pst_morton_key(3, a, b, c) != ref_key(3, a, b, c);
@@ -55,8 +47,8 @@ static void test_keys(void)
     /* strictly increasing along each axis with the other coordinates fixed */
     for (int dim = 2; dim <= 3; ++dim)
         for (int axis = 0; axis < dim; ++axis) {
-            uint32_t v[3] = {(uint32_t)rnd64() & 0xfffff, (uint32_t)rnd64() & 0xfffff,
-                             (uint32_t)rnd64() & 0xfffff};
+            uint32_t v[3] = {(uint32_t)test_rnd64() & 0xfffff, (uint32_t)test_rnd64() & 0xfffff,
+                             (uint32_t)test_rnd64() & 0xfffff};
             uint64_t prev = 0;
             int mono = 1;
             for (uint32_t s = 0; s < 5000; ++s) {
@@ -72,16 +64,16 @@ static void test_keys(void)
 /* A shuffled jittered lattice with every field set to a function of the input index. */
 static pst_cloud *make_cloud(int dim, int side, uint64_t seed)
 {
-    rng_state = seed;
+    test_rng_seed(seed);
     size_t n = 1;
     for (int d = 0; d < dim; ++d)
         n *= (size_t)side;
     pst_cloud *c;
-    pst_cloud_create(&c, dim, n);
+    pst_cloud_create(&c, dim, n, NULL);
     for (size_t i = 0; i < n; ++i) {
-        size_t s = (size_t)(rnd() * (double)n); /* random lattice slots: duplicates allowed */
+        size_t s = (size_t)(test_rnd() * (double)n); /* random lattice slots: duplicates allowed */
         for (int d = 0; d < dim; ++d) {
-            pst_cloud_coord(c, d)[i] = (double)(s % (size_t)side) + 0.4 * (2 * rnd() - 1);
+            pst_cloud_coord(c, d)[i] = (double)(s % (size_t)side) + 0.4 * (2 * test_rnd() - 1);
             pst_cloud_normal(c, d)[i] = (double)i + 0.25 * d;
             s /= (size_t)side;
         }
@@ -208,10 +200,10 @@ static void test_threads_and_limits(void)
     omp_set_num_threads(saved);
 
     pst_cloud *c;
-    pst_cloud_create(&c, 3, 0);
+    pst_cloud_create(&c, 3, 0, NULL);
     CHECK_INT(pst_cloud_morton_sort(c, 1.0, NULL), PST_OK);
     pst_cloud_destroy(c);
-    pst_cloud_create(&c, 2, 1);
+    pst_cloud_create(&c, 2, 1, NULL);
     CHECK_INT(pst_cloud_morton_sort(c, 1.0, NULL), PST_OK);
     CHECK_INT(pst_cloud_morton_sort(c, 0.0, NULL), PST_EINVAL);
     CHECK_INT(pst_cloud_morton_sort(c, -1.0, NULL), PST_EINVAL);

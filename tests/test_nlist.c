@@ -28,7 +28,7 @@ static pst_cloud *lattice(int dim, int side, double s0, double K, int shuffle, d
     for (int d = 0; d < dim; ++d)
         n *= (size_t)side;
     pst_cloud *c;
-    if (pst_cloud_create(&c, dim, n) != PST_OK)
+    if (pst_cloud_create(&c, dim, n, NULL) != PST_OK)
         return NULL;
     size_t *slot = malloc(n * sizeof *slot);
     for (size_t i = 0; i < n; ++i)
@@ -163,7 +163,7 @@ static void test_uniform_random(void)
     for (int dim = 2; dim <= 3; ++dim) {
         size_t n = 3000;
         pst_cloud *c;
-        pst_cloud_create(&c, dim, n);
+        pst_cloud_create(&c, dim, n, NULL);
         rng_state = 77 + (uint64_t)dim;
         for (int d = 0; d < dim; ++d)
             for (size_t i = 0; i < n; ++i)
@@ -240,7 +240,7 @@ static void test_tiny_clouds(void)
     for (int dim = 2; dim <= 3; ++dim) {
         for (size_t n = 0; n <= 2; ++n) {
             pst_cloud *c;
-            pst_cloud_create(&c, dim, n);
+            pst_cloud_create(&c, dim, n, NULL);
             if (n == 2)
                 pst_cloud_coord(c, 0)[1] = 0.5; /* h = 1, support 1: neighbours */
             pst_nlist *nl = NULL;

@@ -339,7 +339,7 @@ static void test_degenerate(void)
     for (int dim = 2; dim <= 3; ++dim) {
         /* a line (2D) or a 5x5 plane (3D), plus one isolated particle and a cluster of 3 */
         size_t nn = (dim == 2 ? 11 : 25) + 4;
-        CHECK_INT(pst_cloud_create(&c, dim, nn), PST_OK);
+        CHECK_INT(pst_cloud_create(&c, dim, nn, NULL), PST_OK);
         size_t m = test_flat_layout(c);
         double far[4][2] = {{10, 10}, {20, 20}, {20.05, 20}, {20, 20.05}};
         for (size_t i = 0; i < 4; ++i)

@@ -75,13 +75,7 @@ static pst_cloud *slit_cloud(void)
     o.h_ratio = F_RATIO;
     o.jitter = 0;
     o.boundary_layer = 1;
-    pst_cloud *c = NULL;
-    char err[PST_ERRLEN];
-    if (pst_cloud_lattice(&c, &o, err) != PST_OK) {
-        fprintf(stderr, "lattice: %s\n", err);
-        exit(1);
-    }
-    return c;
+    return test_lattice_of(&o);
 }
 
 /* lambda_max of the interior block of A by power iteration, signed by its Rayleigh quotient. */

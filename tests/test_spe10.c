@@ -1,9 +1,10 @@
 /* SPE10 reader and grid-to-cloud mobility: the real data files of shared/data/spe10 (their
  * README statistics, the index layout checked against an independent read), the mapping onto
  * a cell-centred cloud, and the error paths on corrupted copies. */
-#define _POSIX_C_SOURCE 200809L /* mkdtemp */
+#define _POSIX_C_SOURCE 200809L /* access */
 
 #include "check.h"
+#include "support.h"
 #include "pstencil.h"
 
 #include <math.h>
@@ -195,14 +196,16 @@ static void test_subblock(void)
 static long clampi(long v, long n) { return v < 0 ? 0 : v >= n ? n - 1 : v; }
 
 /* LV §5.3 set-up: the 60x60 block of layer 85 on a cell-centred unit-square cloud. */
-static void test_cloud_mapping(void)
+/* The 60x60 block of layer 85 into g and a cell-centred cloud of the unit square on it, one
+ * particle per cell, h = h_ratio s0, with the diagonal mobility (Kx, Ky) of the cell under each
+ * particle. NULL after a failed check (g is then empty). */
+static pst_cloud *block85_cloud(pst_perm_grid *g, double h_ratio)
 {
     char err[PST_ERRLEN] = "";
-    pst_perm_grid g;
-    if (pst_spe10_read(&g, GEOS_X, 85, 0, 0, 60, 60, err) != PST_OK) {
+    if (pst_spe10_read(g, GEOS_X, 85, 0, 0, 60, 60, err) != PST_OK) {
         fprintf(stderr, "test_spe10: %s\n", err);
         CHECK(0);
-        return;
+        return NULL;
     }
     pst_lattice_opts o;
     pst_lattice_defaults(&o);
@@ -210,18 +213,29 @@ static void test_cloud_mapping(void)
     o.lo[0] = o.lo[1] = 0;
     o.hi[0] = o.hi[1] = 1;
     o.s0 = 1.0 / 60;
+    o.h_ratio = h_ratio;
     pst_cloud *c = NULL;
     CHECK_INT(pst_cloud_cell_centred(&c, &o, err), PST_OK);
-    if (!c) {
-        pst_perm_grid_free(&g);
+    const double scale[3] = {1 / (60 * g->dx), 1 / (60 * g->dy), 1};
+    if (c)
+        CHECK_INT(pst_cloud_mobility_from_grid(c, g, NULL, scale, 1, err), PST_OK);
+    else
+        pst_perm_grid_free(g);
+    return c;
+}
+
+static void test_cloud_mapping(void)
+{
+    char err[PST_ERRLEN] = "";
+    pst_perm_grid g;
+    pst_cloud *c = block85_cloud(&g, 1.2);
+    if (!c)
         return;
-    }
+    const double scale[3] = {1 / (60 * g.dx), 1 / (60 * g.dy), 1};
     double lo, hi;
     minmax(g.k[0], 3600, &lo, &hi); /* the block's contrast, docs/spe10.md */
     CHECK(lo == 0.004519);
     CHECK(hi == 20000);
-    const double scale[3] = {1 / (60 * g.dx), 1 / (60 * g.dy), 1};
-    CHECK_INT(pst_cloud_mobility_from_grid(c, &g, NULL, scale, 1, err), PST_OK);
     CHECK_INT(pst_cloud_mobility_ncomp(c), 2);
     size_t n = pst_cloud_size(c), interior = 0;
     const double *x = pst_cloud_coord_const(c, 0), *y = pst_cloud_coord_const(c, 1);
@@ -284,7 +298,7 @@ static void test_grid_3d(void)
     const int cell[][3] = {{0, 0, 0}, {1, 2, 1}, {1, 1, 1}, {1, 2, 1}, {0, 0, 0}, {0, 2, 0}};
     enum { NP = 6 };
     pst_cloud *c = NULL;
-    CHECK_INT(pst_cloud_create(&c, 3, NP), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 3, NP, NULL), PST_OK);
     if (!c)
         return;
     for (int p = 0; p < NP; ++p)
@@ -332,16 +346,11 @@ static int corrupt_copy(const char *src, const char *dst, size_t keep, size_t li
     return ok;
 }
 
-static void tmp_path(char *buf, const char *name)
-{
-    snprintf(buf, 256, "%s/%s", tmpdir, name);
-}
-
 /* Read the GEOS copy in tmpdir; expect `status` and `needle` in the message. */
 static void expect_geos(int status, const char *needle)
 {
     char err[PST_ERRLEN] = "", px[256];
-    tmp_path(px, "permx.geos");
+    snprintf(px, sizeof px, "%s", test_path_in(tmpdir, "permx.geos"));
     pst_perm_grid g;
     int st = pst_spe10_read(&g, px, 85, 0, 0, 60, 60, err);
     CHECK_INT(st, status);
@@ -376,17 +385,15 @@ static void test_errors(void)
     CHECK(strstr(err, "no/such/dir/permx.geos: cannot open") != NULL);
 
     /* Corrupted copies: each case rewrites one file and restores it afterwards. */
-    strcpy(tmpdir, "/tmp/pst_spe10_XXXXXX");
-    if (!mkdtemp(tmpdir)) {
-        fprintf(stderr, "test_spe10: mkdtemp failed\n");
+    if (test_scratch_dir(tmpdir, sizeof tmpdir, "pst_spe10") != 0) {
         CHECK(0);
         return;
     }
     char px[256], py[256], pz[256], pt[256];
-    tmp_path(px, "permx.geos");
-    tmp_path(py, "permy.geos");
-    tmp_path(pz, "permz.geos");
-    tmp_path(pt, "perm.txt");
+    snprintf(px, sizeof px, "%s", test_path_in(tmpdir, "permx.geos"));
+    snprintf(py, sizeof py, "%s", test_path_in(tmpdir, "permy.geos"));
+    snprintf(pz, sizeof pz, "%s", test_path_in(tmpdir, "permz.geos"));
+    snprintf(pt, sizeof pt, "%s", test_path_in(tmpdir, "perm.txt"));
     CHECK(corrupt_copy(GEOS_X, px, 0, 0, NULL, NULL));
     expect_geos(PST_EIO, "permy.geos: cannot open"); /* permy missing */
     CHECK(corrupt_copy(GEOS_DIR "/permy.geos", py, 0, 0, NULL, NULL));
@@ -422,11 +429,8 @@ static void test_errors(void)
     CHECK(strstr(err, "perm.txt:6600: too few values: expected 39600, found 39599") != NULL);
     CHECK(g.k[0] == NULL);
 
-    remove(px);
-    remove(py);
-    remove(pz);
-    remove(pt);
-    CHECK(rmdir(tmpdir) == 0);
+    test_remove_dir(tmpdir);
+    CHECK(access(tmpdir, F_OK) != 0);
 }
 
 /* The Lukyanov–Vuik operators on real heterogeneous data (LV §7.9 set-up): layer 85, 60x60,
@@ -436,20 +440,9 @@ static void test_operators(void)
 {
     char err[PST_ERRLEN] = "";
     pst_perm_grid g;
-    if (pst_spe10_read(&g, GEOS_X, 85, 0, 0, 60, 60, err) != PST_OK) {
-        fprintf(stderr, "test_spe10: %s\n", err);
-        CHECK(0);
+    pst_cloud *c = block85_cloud(&g, 1.2012);
+    if (!c)
         return;
-    }
-    pst_lattice_opts o;
-    pst_lattice_defaults(&o);
-    o.hi[0] = o.hi[1] = 1;
-    o.s0 = 1.0 / 60;
-    o.h_ratio = 1.2012;
-    pst_cloud *c = NULL;
-    CHECK_INT(pst_cloud_cell_centred(&c, &o, err), PST_OK);
-    const double scale[3] = {1 / (60 * g.dx), 1 / (60 * g.dy), 1};
-    CHECK_INT(pst_cloud_mobility_from_grid(c, &g, NULL, scale, 1, err), PST_OK);
     pst_nlist *nl = NULL;
     CHECK_INT(pst_nlist_build(&nl, c, pst_kernel_support(PST_KERNEL_CUBIC), err), PST_OK);
     size_t n = pst_cloud_size(c);

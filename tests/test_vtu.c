@@ -389,7 +389,7 @@ static void test_exact_bytes(void)
 {
     char err[PST_ERRLEN] = "";
     pst_cloud *c;
-    CHECK_INT(pst_cloud_create(&c, 2, 1), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 2, 1, NULL), PST_OK);
     pst_cloud_coord(c, 0)[0] = 1.5;
     pst_cloud_coord(c, 1)[0] = -2.0;
     pst_cloud_set_h_uniform(c, 0.25, NULL);
@@ -418,7 +418,7 @@ static void test_exact_bytes(void)
     pst_cloud_destroy(c);
 
     /* an empty cloud: every array is a bare zero byte count */
-    CHECK_INT(pst_cloud_create(&c, 3, 0), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 3, 0, NULL), PST_OK);
     CHECK_INT(pst_cloud_write_vtu(c, path_of("empty.vtu"), NULL, err), PST_OK);
     CHECK(parse(&v, path_of("empty.vtu")));
     CHECK_INT(v.npoints, 0);
@@ -586,7 +586,7 @@ static void test_read_roundtrip(void)
     }
     /* no optional array at all: kind interior, normals 0, no mobility, no fields */
     pst_cloud *c, *r = NULL;
-    CHECK_INT(pst_cloud_create(&c, 3, 4), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 3, 4, NULL), PST_OK);
     for (size_t i = 0; i < 4; ++i)
         for (int d = 0; d < 3; ++d)
             pst_cloud_coord(c, d)[i] = (double)((i >> d) & 1) + 0.5 * (double)d;
@@ -597,7 +597,7 @@ static void test_read_roundtrip(void)
     pst_cloud_destroy(c);
 
     /* an empty cloud reads back empty (2D: no z differs from 0) */
-    CHECK_INT(pst_cloud_create(&c, 3, 0), PST_OK);
+    CHECK_INT(pst_cloud_create(&c, 3, 0, NULL), PST_OK);
     CHECK_INT(pst_cloud_write_vtu(c, path_of("empty.vtu"), NULL, err), PST_OK);
     CHECK_INT(pst_cloud_read_vtu(&r, path_of("empty.vtu"), err), PST_OK);
     CHECK(r && pst_cloud_size(r) == 0 && pst_cloud_dim(r) == 2);

@@ -37,6 +37,17 @@ static double half_t(const tpfa_problem *p, size_t c, int axis)
     return face_area(p, axis) * p->k[axis][c] / (0.5 * p->d[axis]);
 }
 
+/* Cell c's index and centre (cell_coords) and its row in the banded order of strides bstride. */
+static size_t band_row(const tpfa_problem *p, size_t c, const size_t bstride[3], int idx[3],
+                       double x[3])
+{
+    cell_coords(p, c, idx, x);
+    size_t row = 0;
+    for (int d = 0; d < p->dim; ++d)
+        row += (size_t)idx[d] * bstride[d];
+    return row;
+}
+
 int tpfa_solve(const tpfa_problem *p, double *u, char *err, size_t errlen)
 {
     int dim = p->dim;
@@ -85,10 +96,7 @@ int tpfa_solve(const tpfa_problem *p, double *u, char *err, size_t errlen)
     for (size_t c = 0; c < n; ++c) {
         int idx[3];
         double x[3];
-        cell_coords(p, c, idx, x);
-        size_t row = 0;
-        for (int d = 0; d < dim; ++d)
-            row += (size_t)idx[d] * bstride[d];
+        size_t row = band_row(p, c, bstride, idx, x);
         for (int d = 0; d < dim; ++d) {
             /* upper neighbour: harmonic transmissibility, entered once (row < its row) */
             if (idx[d] + 1 < p->n[d]) {
@@ -127,11 +135,7 @@ int tpfa_solve(const tpfa_problem *p, double *u, char *err, size_t errlen)
     for (size_t c = 0; c < n; ++c) {
         int idx[3];
         double x[3];
-        cell_coords(p, c, idx, x);
-        size_t row = 0;
-        for (int d = 0; d < dim; ++d)
-            row += (size_t)idx[d] * bstride[d];
-        u[c] = rhs[row];
+        u[c] = rhs[band_row(p, c, bstride, idx, x)];
     }
     free(rhs);
     return 0;

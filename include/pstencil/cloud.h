@@ -26,8 +26,9 @@ typedef struct pst_cloud pst_cloud;
 
 /* Create a cloud of `n` particles in `dim` (2 or 3) dimensions. Positions and normals start at
  * 0, V at 1, h uniform at 1, every particle interior, mobility absent (meaning m = 1), ids
- * 0..n-1. Returns PST_EINVAL for a bad dim, PST_ENOMEM when allocation fails. */
-int pst_cloud_create(pst_cloud **out, int dim, size_t n);
+ * 0..n-1. Returns PST_EINVAL for a bad dim or more than 2^32 - 1 particles, PST_ENOMEM when
+ * allocation fails (the reason in err). */
+int pst_cloud_create(pst_cloud **out, int dim, size_t n, char *err);
 
 /* Free a cloud and everything it owns. NULL is allowed. */
 void pst_cloud_destroy(pst_cloud *c);

@@ -157,7 +157,7 @@ static int select_fields(const pst_cloud *c, char *const *names, int nnames, pst
     const int dim = pst_cloud_dim(c);
     size_t n = pst_cloud_size(c);
     pst_cloud *o = NULL;
-    if (pst_cloud_create(&o, dim, n) != PST_OK) {
+    if (pst_cloud_create(&o, dim, n, NULL) != PST_OK) {
         snprintf(err, errlen, "out of memory for the output selection");
         return PST_ENOMEM;
     }

@@ -1,5 +1,5 @@
 /* The particle cloud: structure-of-arrays storage, accessors, validation and permutation. */
-#include "internal.h"
+#include "check.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -15,16 +15,13 @@ static double *alloc_filled(size_t n, double value)
     return a;
 }
 
-int pst_cloud_create(pst_cloud **out, int dim, size_t n)
+/* A cloud with every array allocated and at its default (see pst_cloud_create); NULL when an
+ * allocation fails. */
+static pst_cloud *new_cloud(int dim, size_t n)
 {
-    *out = NULL;
-    if (dim != 2 && dim != 3)
-        return PST_EINVAL;
-    if (n > (size_t)UINT32_MAX) /* neighbour indices are 32-bit */
-        return PST_EINVAL;
     pst_cloud *c = calloc(1, sizeof *c);
     if (!c)
-        return PST_ENOMEM;
+        return NULL;
     c->dim = dim;
     c->n = n;
     c->h_uniform = 1.0;
@@ -39,11 +36,21 @@ int pst_cloud_create(pst_cloud **out, int dim, size_t n)
     c->id = pst_alloc(n * sizeof(int64_t));
     if (!ok || !c->V || !c->kind || !c->id) {
         pst_cloud_destroy(c);
-        return PST_ENOMEM;
+        return NULL;
     }
     for (size_t i = 0; i < n; ++i)
         c->id[i] = (int64_t)i;
-    *out = c;
+    return c;
+}
+
+int pst_cloud_create(pst_cloud **out, int dim, size_t n, char *err)
+{
+    *out = NULL;
+    PST_CHECK(dim != 2 && dim != 3, PST_EINVAL, err, "cloud: dim must be 2 or 3 (got %d)", dim);
+    PST_CHECK(n > (size_t)UINT32_MAX, PST_EINVAL, err, /* neighbour indices are 32-bit */
+              "cloud: %zu particles exceed the 32-bit index limit", n);
+    *out = new_cloud(dim, n);
+    PST_CHECK_ALLOC(*out, err, "cloud: out of memory for %zu particles", n);
     return PST_OK;
 }
 
@@ -95,10 +102,8 @@ const int64_t *pst_cloud_ids_const(const pst_cloud *c) { return c->id; }
 
 int pst_cloud_set_h_uniform(pst_cloud *c, double h, char *err)
 {
-    if (!(h > 0) || !isfinite(h)) {
-        pst_set_err(err, "smoothing length must be finite and > 0 (got %g)", h);
-        return PST_EINVAL;
-    }
+    PST_CHECK(!(h > 0) || !isfinite(h), PST_EINVAL, err,
+              "smoothing length must be finite and > 0 (got %g)", h);
     pst_free(c->h);
     c->h = NULL;
     c->h_uniform = h;
@@ -132,19 +137,17 @@ double pst_cloud_h_max(const pst_cloud *c)
 
 int pst_cloud_set_mobility(pst_cloud *c, int ncomp, char *err)
 {
-    if (ncomp != 0 && ncomp != 1 && ncomp != c->dim) {
-        pst_set_err(err, "mobility has 0, 1 or %d components (got %d)", c->dim, ncomp);
-        return PST_EINVAL;
-    }
+    PST_CHECK(ncomp != 0 && ncomp != 1 && ncomp != c->dim, PST_EINVAL, err,
+              "mobility has 0, 1 or %d components (got %d)", c->dim, ncomp);
     double *m[3] = {NULL, NULL, NULL};
-    for (int k = 0; k < ncomp; ++k) {
-        m[k] = alloc_filled(c->n, 1.0);
-        if (!m[k]) {
-            for (int j = 0; j < k; ++j)
-                pst_free(m[j]);
-            return PST_ENOMEM;
-        }
-    }
+    int ok = 1;
+    for (int k = 0; k < ncomp; ++k)
+        ok = ok && (m[k] = alloc_filled(c->n, 1.0)) != NULL;
+    if (!ok)
+        for (int k = 0; k < ncomp; ++k)
+            pst_free(m[k]);
+    PST_CHECK(!ok, PST_ENOMEM, err, "mobility: out of memory for %d components of %zu values",
+              ncomp, c->n);
     for (int k = 0; k < 3; ++k) {
         pst_free(c->mob[k]);
         c->mob[k] = m[k];
@@ -186,15 +189,11 @@ int pst_cloud_add_field(pst_cloud *c, const char *name, double **data, char *err
 {
     if (data)
         *data = NULL;
-    if (!name || !pst_is_identifier(name) || pst_is_reserved_column(name)) {
-        pst_set_err(err, "invalid field name '%s' (a C identifier, not a reserved column)",
-                    name ? name : "(null)");
-        return PST_EINVAL;
-    }
-    if (pst_cloud_field_by_name(c, name)) {
-        pst_set_err(err, "field '%s' already exists", name);
-        return PST_EINVAL;
-    }
+    PST_CHECK(!name || !pst_is_identifier(name) || pst_is_reserved_column(name), PST_EINVAL, err,
+              "invalid field name '%s' (a C identifier, not a reserved column)",
+              name ? name : "(null)");
+    PST_CHECK(pst_cloud_field_by_name(c, name), PST_EINVAL, err, "field '%s' already exists",
+              name);
     double *a = pst_calloc(c->n, sizeof(double));
     char(*names)[PST_MAX_NAME] = realloc(c->field_name, (c->nfields + 1) * sizeof *names);
     if (names)
@@ -202,10 +201,10 @@ int pst_cloud_add_field(pst_cloud *c, const char *name, double **data, char *err
     double **fields = realloc(c->field, (c->nfields + 1) * sizeof *fields);
     if (fields)
         c->field = fields;
-    if (!a || !names || !fields) {
+    if (!names || !fields)
         pst_free(a);
-        return PST_ENOMEM;
-    }
+    PST_CHECK(!a || !names || !fields, PST_ENOMEM, err, "field '%s': out of memory for %zu values",
+              name, c->n);
     snprintf(c->field_name[c->nfields], PST_MAX_NAME, "%s", name);
     c->field[c->nfields++] = a;
     if (data)
@@ -292,54 +291,39 @@ int pst_cloud_find_duplicate(const pst_cloud *c, size_t *a, size_t *b)
     return found;
 }
 
-int pst_cloud_validate(pst_cloud *c, char *err)
+/* The per-particle checks of pst_cloud_validate for particle i. */
+static int validate_particle(const pst_cloud *c, size_t i, char *err)
 {
     static const char *const axis = "xyz";
-    for (size_t i = 0; i < c->n; ++i) {
-        for (int d = 0; d < c->dim; ++d) {
-            if (!isfinite(c->x[d][i])) {
-                pst_set_err(err, "particle %lld: coordinate %c is not finite",
-                            (long long)c->id[i], axis[d]);
-                return PST_EINPUT;
-            }
-            if (!isfinite(c->normal[d][i])) {
-                pst_set_err(err, "particle %lld: normal component n%c is not finite",
-                            (long long)c->id[i], axis[d]);
-                return PST_EINPUT;
-            }
-        }
-        if (!(c->V[i] > 0) || !isfinite(c->V[i])) {
-            pst_set_err(err, "particle %lld: volume V = %g must be finite and > 0",
-                        (long long)c->id[i], c->V[i]);
-            return PST_EINPUT;
-        }
-        double h = pst_cloud_h_at(c, i);
-        if (!(h > 0) || !isfinite(h)) {
-            pst_set_err(err, "particle %lld: smoothing length h = %g must be finite and > 0",
-                        (long long)c->id[i], h);
-            return PST_EINPUT;
-        }
-        if (c->kind[i] > PST_NEUMANN) {
-            pst_set_err(err, "particle %lld: unknown kind %d", (long long)c->id[i],
-                        c->kind[i]);
-            return PST_EINPUT;
-        }
-        for (int k = 0; k < c->mob_ncomp; ++k)
-            if (!(c->mob[k][i] > 0) || !isfinite(c->mob[k][i])) {
-                pst_set_err(err, "particle %lld: mobility component %d = %g must be > 0",
-                            (long long)c->id[i], k, c->mob[k][i]);
-                return PST_EINPUT;
-            }
+    long long id = (long long)c->id[i];
+    for (int d = 0; d < c->dim; ++d) {
+        PST_CHECK(!isfinite(c->x[d][i]), PST_EINPUT, err,
+                  "particle %lld: coordinate %c is not finite", id, axis[d]);
+        PST_CHECK(!isfinite(c->normal[d][i]), PST_EINPUT, err,
+                  "particle %lld: normal component n%c is not finite", id, axis[d]);
     }
+    PST_CHECK(!(c->V[i] > 0) || !isfinite(c->V[i]), PST_EINPUT, err,
+              "particle %lld: volume V = %g must be finite and > 0", id, c->V[i]);
+    double h = pst_cloud_h_at(c, i);
+    PST_CHECK(!(h > 0) || !isfinite(h), PST_EINPUT, err,
+              "particle %lld: smoothing length h = %g must be finite and > 0", id, h);
+    PST_CHECK(c->kind[i] > PST_NEUMANN, PST_EINPUT, err, "particle %lld: unknown kind %d", id,
+              c->kind[i]);
+    for (int k = 0; k < c->mob_ncomp; ++k)
+        PST_CHECK(!(c->mob[k][i] > 0) || !isfinite(c->mob[k][i]), PST_EINPUT, err,
+                  "particle %lld: mobility component %d = %g must be > 0", id, k, c->mob[k][i]);
+    return PST_OK;
+}
+
+int pst_cloud_validate(pst_cloud *c, char *err)
+{
+    for (size_t i = 0; i < c->n; ++i)
+        PST_TRY(validate_particle(c, i, err));
     size_t a, b;
     int dup = pst_cloud_find_duplicate(c, &a, &b);
-    if (dup < 0)
-        return dup;
-    if (dup) {
-        pst_set_err(err, "particles %lld and %lld are at the same coordinates",
-                    (long long)c->id[a], (long long)c->id[b]);
-        return PST_EINPUT;
-    }
+    PST_CHECK(dup < 0, dup, err, "out of memory for the duplicate check of %zu particles", c->n);
+    PST_CHECK(dup, PST_EINPUT, err, "particles %lld and %lld are at the same coordinates",
+              (long long)c->id[a], (long long)c->id[b]);
     return PST_OK;
 }
 
@@ -353,25 +337,21 @@ static void permute_doubles(double *a, const uint32_t *perm, size_t n, double *s
     memcpy(a, scratch, n * sizeof *a);
 }
 
-int pst_cloud_permute(pst_cloud *c, const uint32_t *perm, char *err)
+/* PST_EINVAL (message in err) unless perm is a permutation of 0..n-1; seen: n zero bytes. */
+static int check_permutation(const uint32_t *perm, size_t n, uint8_t *seen, char *err)
 {
-    size_t n = c->n;
-    uint8_t *seen = pst_calloc(n, 1);
-    double *scratch = pst_alloc(n * sizeof(double));
-    if (!seen || !scratch) {
-        pst_free(seen);
-        pst_free(scratch);
-        return PST_ENOMEM;
-    }
     for (size_t i = 0; i < n; ++i) {
-        if (perm[i] >= n || seen[perm[i]]) {
-            pst_set_err(err, "not a permutation: entry %zu is %u", i, perm[i]);
-            pst_free(seen);
-            pst_free(scratch);
-            return PST_EINVAL;
-        }
+        PST_CHECK(perm[i] >= n || seen[perm[i]], PST_EINVAL, err,
+                  "not a permutation: entry %zu is %u", i, perm[i]);
         seen[perm[i]] = 1;
     }
+    return PST_OK;
+}
+
+/* Reorder every array of c by perm, through n doubles of scratch and n bytes of bytes. */
+static void permute_arrays(pst_cloud *c, const uint32_t *perm, double *scratch, uint8_t *bytes)
+{
+    size_t n = c->n;
     for (int d = 0; d < c->dim; ++d) {
         permute_doubles(c->x[d], perm, n, scratch);
         permute_doubles(c->normal[d], perm, n, scratch);
@@ -383,20 +363,29 @@ int pst_cloud_permute(pst_cloud *c, const uint32_t *perm, char *err)
         permute_doubles(c->mob[k], perm, n, scratch);
     for (size_t k = 0; k < c->nfields; ++k)
         permute_doubles(c->field[k], perm, n, scratch);
-    /* ids are 8 bytes and kinds 1 byte: reuse the scratch buffer for both */
+    /* ids are 8 bytes: they reuse the scratch buffer */
     int64_t *ids = (int64_t *)scratch;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; ++i)
         ids[i] = c->id[perm[i]];
     memcpy(c->id, ids, n * sizeof *ids);
-    uint8_t *kinds = seen;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; ++i)
-        kinds[i] = c->kind[perm[i]];
-    memcpy(c->kind, kinds, n);
+        bytes[i] = c->kind[perm[i]];
+    memcpy(c->kind, bytes, n);
+}
+
+int pst_cloud_permute(pst_cloud *c, const uint32_t *perm, char *err)
+{
+    uint8_t *seen = pst_calloc(c->n, 1);
+    double *scratch = pst_alloc(c->n * sizeof(double));
+    int st = seen && scratch ? check_permutation(perm, c->n, seen, err) : PST_ENOMEM;
+    if (st == PST_OK)
+        permute_arrays(c, perm, scratch, seen); /* the seen bytes become the kinds' scratch */
     pst_free(seen);
     pst_free(scratch);
-    return PST_OK;
+    PST_CHECK(st == PST_ENOMEM, st, err, "permute: out of memory for %zu particles", c->n);
+    return st;
 }
 
 void pst_cloud_to_input_order(const pst_cloud *c, const double *in, double *out)
@@ -404,4 +393,33 @@ void pst_cloud_to_input_order(const pst_cloud *c, const double *in, double *out)
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < c->n; ++i)
         out[c->id[i]] = in[i];
+}
+
+/* inv[id] = i over the particles, inv holding n entries; PST_EINVAL at a repeated or
+ * out-of-range id. */
+static int fill_inverse(const pst_cloud *c, size_t *inv, char *err)
+{
+    size_t n = c->n;
+    for (size_t r = 0; r < n; ++r)
+        inv[r] = SIZE_MAX;
+    for (size_t i = 0; i < n; ++i) {
+        int64_t id = c->id[i];
+        PST_CHECK(id < 0 || (uint64_t)id >= n || inv[id] != SIZE_MAX, PST_EINVAL, err,
+                  "the cloud's ids are not a permutation of 0..%zu (particle %zu has id %lld)",
+                  n ? n - 1 : 0, i, (long long)id);
+        inv[id] = i;
+    }
+    return PST_OK;
+}
+
+int pst_cloud_input_inverse(const pst_cloud *c, size_t **inv_out, char *err)
+{
+    size_t *inv = malloc((c->n ? c->n : 1) * sizeof *inv);
+    PST_CHECK_ALLOC(inv, err, "out of memory for %zu row indices", c->n);
+    int st = fill_inverse(c, inv, err);
+    if (st == PST_OK)
+        *inv_out = inv;
+    else
+        free(inv);
+    return st;
 }

@@ -2,7 +2,7 @@
  * Lukyanov–Vuik cell-centred layout with face particles (LV §5.1). Every particle is computed
  * from its own index alone (position, jitter from the counter-based RNG, kind, normal), so the
  * parallel fill gives the same bits for every thread count. Formulas: docs/clouds.md. */
-#include "internal.h"
+#include "check.h"
 
 #include <math.h>
 
@@ -22,56 +22,33 @@ static const char axis_name[] = "xyz";
 
 static int setup_grid(grid *g, const pst_lattice_opts *o, const char *who, char *err)
 {
-    if (!o) {
-        pst_set_err(err, "%s: no options given", who);
-        return PST_EINVAL;
-    }
-    if (o->dim != 2 && o->dim != 3) {
-        pst_set_err(err, "%s: dim must be 2 or 3 (got %d)", who, o->dim);
-        return PST_EINVAL;
-    }
-    if (!(o->s0 > 0) || !isfinite(o->s0)) {
-        pst_set_err(err, "%s: spacing s0 must be finite and > 0 (got %g)", who, o->s0);
-        return PST_EINVAL;
-    }
-    if (!(o->jitter >= 0) || !isfinite(o->jitter)) {
-        pst_set_err(err, "%s: jitter K must be finite and >= 0 (got %g)", who, o->jitter);
-        return PST_EINVAL;
-    }
-    if (!(o->h_ratio > 0) || !isfinite(o->h_ratio * o->s0)) {
-        pst_set_err(err, "%s: h_ratio must be > 0 with h = h_ratio*s0 finite (got %g)", who,
-                    o->h_ratio);
-        return PST_EINVAL;
-    }
-    if (!isfinite(o->angle)) {
-        pst_set_err(err, "%s: rotation angle must be finite (got %g)", who, o->angle);
-        return PST_EINVAL;
-    }
-    if (o->boundary_layer != 0 && o->boundary_layer != 1) {
-        pst_set_err(err, "%s: boundary_layer must be 0 or 1 (got %d)", who, o->boundary_layer);
-        return PST_EINVAL;
-    }
+    PST_CHECK(!o, PST_EINVAL, err, "%s: no options given", who);
+    PST_CHECK(o->dim != 2 && o->dim != 3, PST_EINVAL, err, "%s: dim must be 2 or 3 (got %d)", who,
+              o->dim);
+    PST_CHECK(!(o->s0 > 0) || !isfinite(o->s0), PST_EINVAL, err,
+              "%s: spacing s0 must be finite and > 0 (got %g)", who, o->s0);
+    PST_CHECK(!(o->jitter >= 0) || !isfinite(o->jitter), PST_EINVAL, err,
+              "%s: jitter K must be finite and >= 0 (got %g)", who, o->jitter);
+    PST_CHECK(!(o->h_ratio > 0) || !isfinite(o->h_ratio * o->s0), PST_EINVAL, err,
+              "%s: h_ratio must be > 0 with h = h_ratio*s0 finite (got %g)", who, o->h_ratio);
+    PST_CHECK(!isfinite(o->angle), PST_EINVAL, err, "%s: rotation angle must be finite (got %g)",
+              who, o->angle);
+    PST_CHECK(o->boundary_layer != 0 && o->boundary_layer != 1, PST_EINVAL, err,
+              "%s: boundary_layer must be 0 or 1 (got %d)", who, o->boundary_layer);
     g->dim = o->dim;
     for (int d = 0; d < o->dim; ++d) {
         double lo = o->lo[d], hi = o->hi[d];
-        if (!isfinite(lo) || !isfinite(hi) || !(hi > lo)) {
-            pst_set_err(err, "%s: box along %c must be finite with hi > lo (got [%g, %g])", who,
-                        axis_name[d], lo, hi);
-            return PST_EINVAL;
-        }
+        PST_CHECK(!isfinite(lo) || !isfinite(hi) || !(hi > lo), PST_EINVAL, err,
+                  "%s: box along %c must be finite with hi > lo (got [%g, %g])", who, axis_name[d],
+                  lo, hi);
         double r = (hi - lo) / o->s0;
-        if (!(r <= (double)UINT32_MAX)) {
-            pst_set_err(err, "%s: box along %c is %g spacings, too many", who, axis_name[d], r);
-            return PST_EINVAL;
-        }
+        PST_CHECK(!(r <= (double)UINT32_MAX), PST_EINVAL, err,
+                  "%s: box along %c is %g spacings, too many", who, axis_name[d], r);
         double rn = round(r);
-        if (rn < 1 || fabs(r - rn) > 1e-9 * r) {
-            pst_set_err(err,
-                        "%s: box length along %c (%.17g) is not a whole number of spacings "
-                        "s0 = %.17g (ratio %.17g)",
-                        who, axis_name[d], hi - lo, o->s0, r);
-            return PST_EINVAL;
-        }
+        PST_CHECK(rn < 1 || fabs(r - rn) > 1e-9 * r, PST_EINVAL, err,
+                  "%s: box length along %c (%.17g) is not a whole number of spacings s0 = %.17g "
+                  "(ratio %.17g)",
+                  who, axis_name[d], hi - lo, o->s0, r);
         g->n[d] = (uint32_t)rn;
         g->lo[d] = lo;
         g->hi[d] = hi;
@@ -101,17 +78,12 @@ static int mul_count(uint64_t *acc, uint64_t f)
 static int make_cloud(pst_cloud **out, const grid *g, uint64_t count, const pst_lattice_opts *o,
                       const char *who, char *err)
 {
-    if (count > UINT32_MAX) {
-        pst_set_err(err, "%s: more than %lu particles (the 32-bit index limit)", who,
-                    (unsigned long)UINT32_MAX);
-        return PST_EINVAL;
-    }
-    int st = pst_cloud_create(out, g->dim, (size_t)count);
-    if (st != PST_OK) {
-        pst_set_err(err, "%s: cannot allocate a cloud of %llu particles", who,
-                    (unsigned long long)count);
-        return st;
-    }
+    PST_CHECK(count > UINT32_MAX, PST_EINVAL, err,
+              "%s: more than %lu particles (the 32-bit index limit)", who,
+              (unsigned long)UINT32_MAX);
+    int st = pst_cloud_create(out, g->dim, (size_t)count, NULL);
+    PST_CHECK(st != PST_OK, st, err, "%s: cannot allocate a cloud of %llu particles", who,
+              (unsigned long long)count);
     pst_cloud_set_h_uniform(*out, o->h_ratio * o->s0, NULL); /* finite and > 0: checked */
     return PST_OK;
 }
@@ -164,9 +136,30 @@ void pst_lattice_defaults(pst_lattice_opts *o)
     };
 }
 
-/* Node p of the lattice, x fastest: p = i + (n_x+1)*(j + (n_y+1)*k). */
-static void lattice_point(const grid *g, size_t p, double x[3], double nrm[3], int *kind)
+/* Particle p of a layout: its position, normal and kind, from p alone. */
+typedef void (*point_fn)(const grid *g, size_t p, size_t ninterior, double x[3], double nrm[3],
+                         int *kind);
+
+/* Fill every particle of c, each from its own index (the same bits for every thread count). */
+static void fill(pst_cloud *c, const grid *g, point_fn point, size_t ninterior)
 {
+    double V = cell_volume(g);
+    size_t n = c->n;
+#pragma omp parallel for schedule(static)
+    for (size_t p = 0; p < n; ++p) {
+        double x[3] = {0, 0, 0}, nrm[3] = {0, 0, 0};
+        int kind;
+        point(g, p, ninterior, x, nrm, &kind);
+        store(c, p, x, nrm, kind, V);
+    }
+}
+
+/* Node p of the lattice, x fastest: p = i + (n_x+1)*(j + (n_y+1)*k). There are no interior
+ * particles listed first, so ninterior is not used. */
+static void lattice_point(const grid *g, size_t p, size_t ninterior, double x[3], double nrm[3],
+                          int *kind)
+{
+    (void)ninterior;
     size_t rest = p;
     int faces = 0;
     for (int d = 0; d < g->dim; ++d) {
@@ -198,26 +191,14 @@ int pst_cloud_lattice(pst_cloud **out, const pst_lattice_opts *o, char *err)
     static const char who[] = "lattice";
     *out = NULL;
     grid g;
-    int st = setup_grid(&g, o, who, err);
-    if (st != PST_OK)
-        return st;
+    PST_TRY(setup_grid(&g, o, who, err));
     uint64_t count = 1;
     int ok = 1;
     for (int d = 0; d < g.dim; ++d)
         ok = ok && mul_count(&count, (uint64_t)g.n[d] + 1);
     pst_cloud *c;
-    st = make_cloud(&c, &g, ok ? count : UINT64_MAX, o, who, err);
-    if (st != PST_OK)
-        return st;
-    double V = cell_volume(&g);
-    size_t n = c->n;
-#pragma omp parallel for schedule(static)
-    for (size_t p = 0; p < n; ++p) {
-        double x[3] = {0, 0, 0}, nrm[3] = {0, 0, 0};
-        int kind;
-        lattice_point(&g, p, x, nrm, &kind);
-        store(c, p, x, nrm, kind, V);
-    }
+    PST_TRY(make_cloud(&c, &g, ok ? count : UINT64_MAX, o, who, err));
+    fill(c, &g, lattice_point, 0);
     *out = c;
     return PST_OK;
 }
@@ -274,9 +255,7 @@ int pst_cloud_cell_centred(pst_cloud **out, const pst_lattice_opts *o, char *err
     static const char who[] = "cell-centred layout";
     *out = NULL;
     grid g;
-    int st = setup_grid(&g, o, who, err);
-    if (st != PST_OK)
-        return st;
+    PST_TRY(setup_grid(&g, o, who, err));
     uint64_t ninterior = 1, count;
     int ok = 1;
     for (int d = 0; d < g.dim; ++d)
@@ -288,18 +267,8 @@ int pst_cloud_cell_centred(pst_cloud **out, const pst_lattice_opts *o, char *err
         count += f; /* at most 7 terms <= UINT32_MAX: no wrap */
     }
     pst_cloud *c;
-    st = make_cloud(&c, &g, ok ? count : UINT64_MAX, o, who, err);
-    if (st != PST_OK)
-        return st;
-    double V = cell_volume(&g);
-    size_t n = c->n, nint = (size_t)ninterior;
-#pragma omp parallel for schedule(static)
-    for (size_t p = 0; p < n; ++p) {
-        double x[3] = {0, 0, 0}, nrm[3] = {0, 0, 0};
-        int kind;
-        cell_point(&g, p, nint, x, nrm, &kind);
-        store(c, p, x, nrm, kind, V);
-    }
+    PST_TRY(make_cloud(&c, &g, ok ? count : UINT64_MAX, o, who, err));
+    fill(c, &g, cell_point, (size_t)ninterior);
     *out = c;
     return PST_OK;
 }

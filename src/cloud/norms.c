@@ -1,7 +1,7 @@
 /* Error norms of the papers (docs/norms.md): the QSFDI paper's eqs. 11, 14/15 and the
  * Lukyanov-Vuik paper's eqs. 78 and 95, plus maxima. One serial pass in particle order, so
  * the value is the same for every thread count; O(n) beside the operators' O(n * neighbours). */
-#include "internal.h"
+#include "check.h"
 
 #include <math.h>
 #include <string.h>
@@ -38,12 +38,11 @@ static int error_norm(size_t n, const double *Vs, const int64_t *id, int ncomp,
                       const uint8_t *mask, int norm, double *out, char *err)
 {
     *out = 0;
-    if (norm < 0 || norm >= PST_NNORMS || ncomp < 1 || ncomp > 6) {
-        pst_set_err(err, "error norm: unknown norm %d or bad component count %d", norm, ncomp);
-        return PST_EINVAL;
-    }
+    PST_CHECK(norm < 0 || norm >= PST_NNORMS || ncomp < 1 || ncomp > 6, PST_EINVAL, err,
+              "error norm: unknown norm %d or bad component count %d", norm, ncomp);
     const int pointwise_relative = norm == PST_NORM_QSFDI11 ||
                                    norm == PST_NORM_QSFDI11_NORMALISED || norm == PST_NORM_LV95;
+    const char *where = id ? "particle (input order)" : "point"; /* for the messages */
     double num = 0, den = 0, vol = 0, emax = 0, xmax = 0;
     size_t used = 0;
     for (size_t i = 0; i < n; ++i) {
@@ -53,19 +52,13 @@ static int error_norm(size_t n, const double *Vs, const int64_t *id, int ncomp,
         for (int a = 0; a < ncomp; ++a)
             e2 += (approx[a][i] - exact[a][i]) * (approx[a][i] - exact[a][i]);
         double ex = length(ncomp, exact, i), e = sqrt(e2);
-        if (!isfinite(e)) {
-            pst_set_err(err, "error norm %s: the value at %s %lld is not finite",
-                        norm_names[norm], id ? "particle (input order)" : "point",
-                        id ? (long long)id[i] : (long long)i);
-            return PST_ENUMERIC;
-        }
-        if (pointwise_relative && ex == 0) {
-            pst_set_err(err, "error norm %s is relative to the exact value, which is 0 at "
-                             "%s %lld: use rel_l2, lv78 or max_abs",
-                        norm_names[norm], id ? "particle (input order)" : "point",
-                        id ? (long long)id[i] : (long long)i);
-            return PST_ENUMERIC;
-        }
+        long long at = id ? (long long)id[i] : (long long)i;
+        PST_CHECK(!isfinite(e), PST_ENUMERIC, err,
+                  "error norm %s: the value at %s %lld is not finite", norm_names[norm], where, at);
+        PST_CHECK(pointwise_relative && ex == 0, PST_ENUMERIC, err,
+                  "error norm %s is relative to the exact value, which is 0 at %s %lld: use "
+                  "rel_l2, lv78 or max_abs",
+                  norm_names[norm], where, at);
         double V = Vs ? Vs[i] : 1.0;
         ++used;
         vol += V;
@@ -77,19 +70,14 @@ static int error_norm(size_t n, const double *Vs, const int64_t *id, int ncomp,
         default: num += V * e2 / (ex * ex); break; /* the pointwise-relative norms */
         }
     }
-    if (used == 0) {
-        pst_set_err(err, "error norm %s: the region holds no particle", norm_names[norm]);
-        return PST_EINVAL;
-    }
+    PST_CHECK(used == 0, PST_EINVAL, err, "error norm %s: the region holds no particle",
+              norm_names[norm]);
     switch (norm) {
     case PST_NORM_REL_L2:
     case PST_NORM_MAX_REL:
         den = norm == PST_NORM_REL_L2 ? den : xmax;
-        if (den == 0) {
-            pst_set_err(err, "error norm %s: the exact values are all 0 in the region",
-                        norm_names[norm]);
-            return PST_ENUMERIC;
-        }
+        PST_CHECK(den == 0, PST_ENUMERIC, err,
+                  "error norm %s: the exact values are all 0 in the region", norm_names[norm]);
         *out = norm == PST_NORM_REL_L2 ? sqrt(num / den) : emax / den;
         break;
     case PST_NORM_QSFDI11: *out = sqrt(num); break;

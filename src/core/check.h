@@ -1,6 +1,7 @@
 /* The library's one error convention: a call returns PST_OK or a PST_E* code and, where it can
  * fail for more than one reason, writes the reason into the caller's `char *err` (PST_ERRLEN
- * bytes, NULL allowed). These macros keep a check to one line. Private to the library. */
+ * bytes, NULL allowed). These macros keep a check to one line (docs/errors.md). Private to the
+ * library. */
 #ifndef PSTENCIL_CHECK_H
 #define PSTENCIL_CHECK_H
 

@@ -234,6 +234,15 @@ static void fail(parser *ps, const char *at, const char *fmt, ...)
     va_end(ap);
 }
 
+/* When `cond` holds: record the error at `at` (fail) and leave the (void) parsing function. */
+#define REJECT_IF(cond, ps, at, ...)                                                               \
+    do {                                                                                           \
+        if (cond) {                                                                                \
+            fail((ps), (at), __VA_ARGS__);                                                         \
+            return;                                                                                \
+        }                                                                                          \
+    } while (0)
+
 static int is_digit(char c) { return c >= '0' && c <= '9'; }
 static int is_alpha(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; }
 static int is_space(char c) { return c == ' ' || (c >= '\t' && c <= '\r'); } /* \t\n\v\f\r */
@@ -260,21 +269,15 @@ static void lex_number(parser *ps, const char *s)
             ++p;
     if (*p == 'e' || *p == 'E') {
         const char *q = p + 1 + (p[1] == '+' || p[1] == '-');
-        if (!is_digit(*q)) {
-            fail(ps, s, "malformed number '%.*s' (exponent without digits)",
-                 (int)(q - s > 32 ? 32 : q - s), s);
-            return;
-        }
+        REJECT_IF(!is_digit(*q), ps, s, "malformed number '%.*s' (exponent without digits)",
+                  (int)(q - s > 32 ? 32 : q - s), s);
         for (p = q; is_digit(*p);)
             ++p;
     }
     /* strtod accepts more (hex, inf, nan), so it gets exactly the token. */
     size_t len = (size_t)(p - s);
     char small[64], *buf = len < sizeof small ? small : malloc(len + 1);
-    if (!buf) {
-        fail(ps, s, "out of memory");
-        return;
-    }
+    REJECT_IF(!buf, ps, s, "out of memory");
     memcpy(buf, s, len);
     buf[len] = '\0';
     char *end;
@@ -282,15 +285,9 @@ static void lex_number(parser *ps, const char *s)
     int whole = end == buf + len;
     if (buf != small)
         free(buf);
-    if (!whole) {
-        fail(ps, s, "malformed number '%.*s'", (int)(len > 32 ? 32 : len), s);
-        return;
-    }
-    if (isinf(v)) {
-        fail(ps, s, "number '%.*s%s' is out of range", (int)(len > 32 ? 32 : len), s,
-             len > 32 ? "..." : "");
-        return;
-    }
+    REJECT_IF(!whole, ps, s, "malformed number '%.*s'", (int)(len > 32 ? 32 : len), s);
+    REJECT_IF(isinf(v), ps, s, "number '%.*s%s' is out of range", (int)(len > 32 ? 32 : len), s,
+              len > 32 ? "..." : "");
     ps->tok = (token){T_NUM, s, len, v};
     ps->cur = p;
 }
@@ -344,10 +341,7 @@ static void emit(parser *ps, int code, int var, double k)
     if (ps->n == ps->cap) {
         size_t cap = ps->cap ? 2 * ps->cap : 32;
         op *p = realloc(ps->code, cap * sizeof *p);
-        if (!p) {
-            fail(ps, NULL, "out of memory");
-            return;
-        }
+        REJECT_IF(!p, ps, NULL, "out of memory");
         ps->code = p;
         ps->cap = cap;
     }
@@ -384,10 +378,7 @@ static void expect_close(parser *ps)
 {
     if (ps->failed)
         return;
-    if (!is_char(ps, ')')) {
-        fail(ps, ps->tok.s, "expected ')'");
-        return;
-    }
+    REJECT_IF(!is_char(ps, ')'), ps, ps->tok.s, "expected ')'");
     advance(ps);
 }
 
@@ -397,10 +388,8 @@ static void parse_call(parser *ps, token name)
     for (int i = 0; i < (int)(sizeof functions / sizeof *functions); ++i)
         if (name_is(&name, functions[i].name))
             f = i;
-    if (f < 0) {
-        fail(ps, name.s, "unknown function '%.*s'", (int)(name.len > 32 ? 32 : name.len), name.s);
-        return;
-    }
+    REJECT_IF(f < 0, ps, name.s, "unknown function '%.*s'", (int)(name.len > 32 ? 32 : name.len),
+              name.s);
     advance(ps); /* past '(' */
     if (!enter(ps, name.s))
         return;
@@ -426,11 +415,8 @@ static void parse_call(parser *ps, token name)
         }
     }
     --ps->depth;
-    if (nargs != functions[f].nargs) {
-        fail(ps, name.s, "function '%s' takes %d argument%s", functions[f].name,
-             functions[f].nargs, functions[f].nargs == 1 ? "" : "s");
-        return;
-    }
+    REJECT_IF(nargs != functions[f].nargs, ps, name.s, "function '%s' takes %d argument%s",
+              functions[f].name, functions[f].nargs, functions[f].nargs == 1 ? "" : "s");
     emit(ps, functions[f].code, 0, 0);
 }
 
@@ -452,11 +438,9 @@ static void parse_name(parser *ps, token name)
         return;
     }
     for (size_t i = 0; i < sizeof functions / sizeof *functions; ++i)
-        if (name_is(&name, functions[i].name)) {
-            fail(ps, name.s, "function '%s' needs its arguments in parentheses: %s(...)",
-                 functions[i].name, functions[i].name);
-            return;
-        }
+        REJECT_IF(name_is(&name, functions[i].name), ps, name.s,
+                  "function '%s' needs its arguments in parentheses: %s(...)", functions[i].name,
+                  functions[i].name);
     char known[PST_EXPR_MAX_VARS * 40 + 8] = "none";
     size_t w = 0;
     for (int i = 0; i < ps->nvars; ++i)
@@ -562,6 +546,61 @@ static int valid_name(const char *s)
     return !*s;
 }
 
+/* The variables must be distinct names. */
+static void check_vars(parser *ps)
+{
+    REJECT_IF(ps->nvars < 0 || ps->nvars > PST_EXPR_MAX_VARS || (ps->nvars && !ps->vars), ps, NULL,
+              "bad number of variables %d (at most %d)", ps->nvars, PST_EXPR_MAX_VARS);
+    for (int i = 0; i < ps->nvars; ++i) {
+        const char *v = ps->vars[i];
+        REJECT_IF(!valid_name(v), ps, NULL, "variable %d: '%.32s' is not a name", i + 1,
+                  v ? v : "");
+        for (int j = 0; j < i; ++j)
+            REJECT_IF(!strcmp(v, ps->vars[j]), ps, NULL, "variable '%.32s' given twice", v);
+    }
+}
+
+/* Parse the whole text into ps->code. */
+static void compile(parser *ps)
+{
+    REJECT_IF(!ps->text, ps, NULL, "no expression");
+    advance(ps);
+    parse_expr(ps);
+    if (!ps->failed && ps->tok.kind != T_END) {
+        char d[48];
+        fail(ps, ps->tok.s, "expected an operator or the end, found %s",
+             describe(&ps->tok, d, sizeof d));
+    }
+}
+
+/* The expression of the parsed code, with the stack depth and the variables it uses; NULL after
+ * a message. */
+static pst_expr *finish(parser *ps)
+{
+    pst_expr *e = malloc(sizeof *e + ps->n * sizeof *ps->code);
+    if (!e) {
+        fail(ps, NULL, "out of memory");
+        return NULL;
+    }
+    *e = (pst_expr){.n = ps->n, .nvars = ps->nvars};
+    memcpy(e->code, ps->code, ps->n * sizeof *ps->code);
+    size_t sp = 0;
+    for (size_t i = 0; i < ps->n; ++i) {
+        int a = arity(ps->code[i].code);
+        sp = sp + 1 - (size_t)a;
+        if (sp > e->depth)
+            e->depth = sp;
+        if (ps->code[i].code == OP_VAR)
+            e->uses |= 1u << ps->code[i].var;
+    }
+    if (e->depth > STACK_MAX) { /* cannot happen within the nesting limit; kept as a guard */
+        fail(ps, NULL, "expression too complex");
+        free(e);
+        return NULL;
+    }
+    return e;
+}
+
 pst_expr *pst_expr_parse(const char *text, const char *const *vars, int nvars, char *err,
                          size_t errlen)
 {
@@ -569,56 +608,10 @@ pst_expr *pst_expr_parse(const char *text, const char *const *vars, int nvars, c
                  .errlen = errlen};
     if (err && errlen)
         err[0] = '\0';
-    if (nvars < 0 || nvars > PST_EXPR_MAX_VARS || (nvars && !vars)) {
-        fail(&ps, NULL, "bad number of variables %d (at most %d)", nvars, PST_EXPR_MAX_VARS);
-        return NULL;
-    }
-    for (int i = 0; i < nvars; ++i) {
-        if (!valid_name(vars[i])) {
-            fail(&ps, NULL, "variable %d: '%.32s' is not a name", i + 1, vars[i] ? vars[i] : "");
-            return NULL;
-        }
-        for (int j = 0; j < i; ++j)
-            if (!strcmp(vars[i], vars[j])) {
-                fail(&ps, NULL, "variable '%.32s' given twice", vars[i]);
-                return NULL;
-            }
-    }
-    if (!text) {
-        fail(&ps, NULL, "no expression");
-        return NULL;
-    }
-    advance(&ps);
-    parse_expr(&ps);
-    if (!ps.failed && ps.tok.kind != T_END) {
-        char d[48];
-        fail(&ps, ps.tok.s, "expected an operator or the end, found %s",
-             describe(&ps.tok, d, sizeof d));
-    }
-    pst_expr *e = NULL;
-    if (!ps.failed) {
-        e = malloc(sizeof *e + ps.n * sizeof *ps.code);
-        if (!e)
-            fail(&ps, NULL, "out of memory");
-    }
-    if (e) {
-        *e = (pst_expr){.n = ps.n, .nvars = nvars};
-        memcpy(e->code, ps.code, ps.n * sizeof *ps.code);
-        size_t sp = 0;
-        for (size_t i = 0; i < ps.n; ++i) {
-            int a = arity(ps.code[i].code);
-            sp = sp + 1 - (size_t)a;
-            if (sp > e->depth)
-                e->depth = sp;
-            if (ps.code[i].code == OP_VAR)
-                e->uses |= 1u << ps.code[i].var;
-        }
-        if (e->depth > STACK_MAX) { /* cannot happen within the nesting limit; kept as a guard */
-            fail(&ps, NULL, "expression too complex");
-            free(e);
-            e = NULL;
-        }
-    }
+    check_vars(&ps);
+    if (!ps.failed)
+        compile(&ps);
+    pst_expr *e = ps.failed ? NULL : finish(&ps);
     free(ps.code);
     return e;
 }

@@ -173,7 +173,7 @@ static int rows_push(rows *r, size_t ncols)
 static int build_cloud(pst_cloud **out, const layout *l, const rows *r)
 {
     pst_cloud *c;
-    int st = pst_cloud_create(&c, l->dim, r->n);
+    int st = pst_cloud_create(&c, l->dim, r->n, NULL);
     if (st != PST_OK)
         return st;
     size_t nc = l->ncols;

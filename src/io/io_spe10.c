@@ -1,7 +1,7 @@
 /* SPE10 model 2 permeability: reading one 60x220 layer (GEOS voxel files or the RTSPHEM
  * Tarbert text, layouts in shared/data/spe10/README.md and docs/spe10.md) into a
  * Cartesian grid, and setting a cloud's mobility from the grid cell under each particle. */
-#include "internal.h"
+#include "check.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -38,10 +38,8 @@ static int next_value(reader *r, double *v, size_t *line, char *err)
     while ((ch = getc(r->f)) != EOF && isspace(ch))
         r->line += ch == '\n';
     if (ch == EOF) {
-        if (ferror(r->f)) {
-            pst_set_err(err, "%s:%zu: read error: %s", r->path, r->line, strerror(errno));
-            return PST_EIO;
-        }
+        PST_CHECK(ferror(r->f), PST_EIO, err, "%s:%zu: read error: %s", r->path, r->line,
+                  strerror(errno));
         return 0;
     }
     char tok[TOKEN_MAX + 1];
@@ -57,25 +55,15 @@ static int next_value(reader *r, double *v, size_t *line, char *err)
     *line = r->line;
     if (ch == '\n')
         ++r->line;
-    if (too_long) {
-        pst_set_err(err, "%s:%zu: token '%.20s...' is too long to be a number", r->path, *line,
-                    tok);
-        return PST_EINPUT;
-    }
+    PST_CHECK(too_long, PST_EINPUT, err, "%s:%zu: token '%.20s...' is too long to be a number",
+              r->path, *line, tok);
     char *end;
     double x = strtod(tok, &end); /* ERANGE on tiny values is fine: positivity decides */
-    if (*end) {
-        pst_set_err(err, "%s:%zu: cannot parse '%s' as a number", r->path, *line, tok);
-        return PST_EINPUT;
-    }
-    if (!isfinite(x)) {
-        pst_set_err(err, "%s:%zu: permeability '%s' is not finite", r->path, *line, tok);
-        return PST_EINPUT;
-    }
-    if (!(x > 0)) {
-        pst_set_err(err, "%s:%zu: permeability %.17g must be > 0", r->path, *line, x);
-        return PST_EINPUT;
-    }
+    PST_CHECK(*end, PST_EINPUT, err, "%s:%zu: cannot parse '%s' as a number", r->path, *line, tok);
+    PST_CHECK(!isfinite(x), PST_EINPUT, err, "%s:%zu: permeability '%s' is not finite", r->path,
+              *line, tok);
+    PST_CHECK(!(x > 0), PST_EINPUT, err, "%s:%zu: permeability %.17g must be > 0", r->path, *line,
+              x);
     *v = x;
     return 1;
 }
@@ -85,47 +73,48 @@ typedef struct {
     int i0, j0, ni, nj;
 } block;
 
-/* Read a whole file of exactly `total` values laid out as consecutive components of
- * SPE10_LAYER values each (i fastest, then j). Component block `first + k` of the file goes to
- * out[k] for k < ncomp (restricted to the sub-block); the other blocks are still parsed and
- * checked, so a corrupt file is always reported. */
-static int read_file(const char *path, size_t total, int first, int ncomp, const block *b,
-                     double *const out[3], char *err)
+/* Where the file's values go: component block `first + k` to out[k] for k < ncomp, restricted
+ * to the sub-block. */
+typedef struct {
+    const block *b;
+    int first, ncomp;
+    double *const *out;
+} target;
+
+/* Read the values of an open file, exactly `total` of them. */
+static int read_values(reader *r, size_t total, const target *t, char *err)
 {
-    reader r = {fopen(path, "r"), path, 1};
-    if (!r.f) {
-        pst_set_err(err, "%s: cannot open: %s", path, strerror(errno));
-        return PST_EIO;
-    }
-    int st = PST_OK;
     size_t n = 0, line = 0;
     for (;;) {
         double v;
-        int got = next_value(&r, &v, &line, err);
-        if (got < 0) {
-            st = got;
+        int got = next_value(r, &v, &line, err);
+        if (got <= 0) {
+            PST_TRY(got);
             break;
         }
-        if (got == 0) {
-            if (n < total) { /* named at the last value's line: where the file stops */
-                pst_set_err(err, "%s:%zu: too few values: expected %zu, found %zu", path,
-                            n ? line : r.line, total, n);
-                st = PST_EINPUT;
-            }
-            break;
-        }
-        if (n == total) {
-            pst_set_err(err, "%s:%zu: too many values: expected %zu", path, line, total);
-            st = PST_EINPUT;
-            break;
-        }
-        int comp = (int)(n / SPE10_LAYER) - first;
+        PST_CHECK(n == total, PST_EINPUT, err, "%s:%zu: too many values: expected %zu", r->path,
+                  line, total);
+        int comp = (int)(n / SPE10_LAYER) - t->first;
         size_t m = n % SPE10_LAYER;
-        int i = (int)(m % SPE10_NX) - b->i0, j = (int)(m / SPE10_NX) - b->j0;
-        if (comp >= 0 && comp < ncomp && i >= 0 && i < b->ni && j >= 0 && j < b->nj)
-            out[comp][i + (size_t)b->ni * (size_t)j] = v;
+        int i = (int)(m % SPE10_NX) - t->b->i0, j = (int)(m / SPE10_NX) - t->b->j0;
+        if (comp >= 0 && comp < t->ncomp && i >= 0 && i < t->b->ni && j >= 0 && j < t->b->nj)
+            t->out[comp][i + (size_t)t->b->ni * (size_t)j] = v;
         ++n;
     }
+    /* named at the last value's line: where the file stops */
+    PST_CHECK(n < total, PST_EINPUT, err, "%s:%zu: too few values: expected %zu, found %zu",
+              r->path, n ? line : r->line, total, n);
+    return PST_OK;
+}
+
+/* Read a whole file of exactly `total` values laid out as consecutive components of
+ * SPE10_LAYER values each (i fastest, then j) into t; the blocks t does not keep are still
+ * parsed and checked, so a corrupt file is always reported. */
+static int read_file(const char *path, size_t total, const target *t, char *err)
+{
+    reader r = {fopen(path, "r"), path, 1};
+    PST_CHECK(!r.f, PST_EIO, err, "%s: cannot open: %s", path, strerror(errno));
+    int st = read_values(&r, total, t, err);
     fclose(r.f);
     return st;
 }
@@ -159,75 +148,66 @@ void pst_perm_grid_free(pst_perm_grid *g)
     memset(g, 0, sizeof *g);
 }
 
-int pst_spe10_read(pst_perm_grid *g, const char *path, int layer, int i0, int j0, int ni,
-                   int nj, char *err)
+/* The three components of the GEOS files next to `path`: one component per file, both layers
+ * in each (block 0 is layer 84, block 1 is 85). */
+static int read_geos(const char *path, int layer, const block *b, double *const k[3], char *err)
 {
-    if (!g || !path) {
-        pst_set_err(err, "spe10: grid and path must not be NULL");
-        return PST_EINVAL;
+    static const char *const names[3] = {"permx.geos", "permy.geos", "permz.geos"};
+    for (int c = 0; c < 3; ++c) {
+        char *p = sibling(path, names[c]);
+        PST_CHECK_ALLOC(p, err, "%s: out of memory", path);
+        const target t = {b, layer - 84, 1, &k[c]};
+        int st = read_file(p, 2 * (size_t)SPE10_LAYER, &t, err);
+        free(p);
+        PST_TRY(st);
     }
-    memset(g, 0, sizeof *g);
-    int geos = has_basename(path, "permx.geos"), tarbert = has_basename(path, "perm.txt");
-    if (!geos && !tarbert) {
-        pst_set_err(err, "%s: unknown SPE10 file (expected a GEOS 'permx.geos' or the RTSPHEM "
-                         "'perm.txt')",
-                    path);
-        return PST_EINVAL;
+    return PST_OK;
+}
+
+/* Allocate g's arrays for the sub-block b and read the file(s) into them; on failure the caller
+ * frees what g holds. */
+static int load(pst_perm_grid *g, const char *path, int tarbert, int layer, const block *b,
+                char *err)
+{
+    size_t cells = (size_t)b->ni * (size_t)b->nj;
+    for (int c = 0; c < 3; ++c) {
+        g->k[c] = pst_alloc(cells * sizeof(double));
+        PST_CHECK_ALLOC(g->k[c], err, "%s: out of memory for a %dx%d grid", path, b->ni, b->nj);
     }
-    if (geos && layer != 84 && layer != 85) {
-        pst_set_err(err, "%s: the GEOS files hold layers 84 and 85 only (got layer %d)", path,
-                    layer);
-        return PST_EINVAL;
-    }
-    if (tarbert && layer != 0) {
-        pst_set_err(err, "%s: the Tarbert file holds one layer, pass layer 0 (got %d)", path,
-                    layer);
-        return PST_EINVAL;
-    }
-    /* Written so that no sum can overflow an int. */
-    if (i0 < 0 || j0 < 0 || ni < 1 || nj < 1 || i0 > SPE10_NX - ni || j0 > SPE10_NY - nj) {
-        pst_set_err(err, "%s: sub-block i in [%d, %d+%d), j in [%d, %d+%d) is not inside the "
-                         "%dx%d layer",
-                    path, i0, i0, ni, j0, j0, nj, SPE10_NX, SPE10_NY);
-        return PST_EINVAL;
-    }
-    size_t cells = (size_t)ni * (size_t)nj;
-    for (int c = 0; c < 3; ++c)
-        if (!(g->k[c] = pst_alloc(cells * sizeof(double)))) {
-            pst_perm_grid_free(g);
-            pst_set_err(err, "%s: out of memory for a %dx%d grid", path, ni, nj);
-            return PST_ENOMEM;
-        }
-    block b = {i0, j0, ni, nj};
-    int st = PST_OK;
-    if (tarbert) {
-        st = read_file(path, 3 * (size_t)SPE10_LAYER, 0, 3, &b, g->k, err);
-    } else {
-        /* One component per file, both layers in each: block 0 is layer 84, block 1 is 85. */
-        static const char *const names[3] = {"permx.geos", "permy.geos", "permz.geos"};
-        for (int c = 0; st == PST_OK && c < 3; ++c) {
-            char *p = sibling(path, names[c]);
-            if (!p) {
-                pst_set_err(err, "%s: out of memory", path);
-                st = PST_ENOMEM;
-                break;
-            }
-            double *const out[3] = {g->k[c], NULL, NULL};
-            st = read_file(p, 2 * (size_t)SPE10_LAYER, layer - 84, 1, &b, out, err);
-            free(p);
-        }
-    }
-    if (st != PST_OK) {
-        pst_perm_grid_free(g);
-        return st;
-    }
-    g->nx = ni;
-    g->ny = nj;
+    const target all = {b, 0, 3, g->k};
+    PST_TRY(tarbert ? read_file(path, 3 * (size_t)SPE10_LAYER, &all, err)
+                    : read_geos(path, layer, b, g->k, err));
+    g->nx = b->ni;
+    g->ny = b->nj;
     g->nz = 1;
     g->dx = SPE10_DX;
     g->dy = SPE10_DY;
     g->dz = SPE10_DZ;
     return PST_OK;
+}
+
+int pst_spe10_read(pst_perm_grid *g, const char *path, int layer, int i0, int j0, int ni,
+                   int nj, char *err)
+{
+    PST_CHECK(!g || !path, PST_EINVAL, err, "spe10: grid and path must not be NULL");
+    memset(g, 0, sizeof *g);
+    int geos = has_basename(path, "permx.geos"), tarbert = has_basename(path, "perm.txt");
+    PST_CHECK(!geos && !tarbert, PST_EINVAL, err,
+              "%s: unknown SPE10 file (expected a GEOS 'permx.geos' or the RTSPHEM 'perm.txt')",
+              path);
+    PST_CHECK(geos && layer != 84 && layer != 85, PST_EINVAL, err,
+              "%s: the GEOS files hold layers 84 and 85 only (got layer %d)", path, layer);
+    PST_CHECK(tarbert && layer != 0, PST_EINVAL, err,
+              "%s: the Tarbert file holds one layer, pass layer 0 (got %d)", path, layer);
+    /* Written so that no sum can overflow an int. */
+    PST_CHECK(i0 < 0 || j0 < 0 || ni < 1 || nj < 1 || i0 > SPE10_NX - ni || j0 > SPE10_NY - nj,
+              PST_EINVAL, err,
+              "%s: sub-block i in [%d, %d+%d), j in [%d, %d+%d) is not inside the %dx%d layer",
+              path, i0, i0, ni, j0, j0, nj, SPE10_NX, SPE10_NY);
+    int st = load(g, path, tarbert, layer, &(block){i0, j0, ni, nj}, err);
+    if (st != PST_OK)
+        pst_perm_grid_free(g); /* a failure leaves g empty */
+    return st;
 }
 
 /* ---- grid to cloud ------------------------------------------------------------------------- */
@@ -247,54 +227,39 @@ int pst_cloud_mobility_from_grid(pst_cloud *c, const pst_perm_grid *g, const dou
                                  const double scale[3], int diagonal, char *err)
 {
     static const char axis[] = "xyz";
-    if (!c || !g) {
-        pst_set_err(err, "mobility from grid: cloud and grid must not be NULL");
-        return PST_EINVAL;
-    }
+    PST_CHECK(!c || !g, PST_EINVAL, err, "mobility from grid: cloud and grid must not be NULL");
     int dim = c->dim;
     const int nn[3] = {g->nx, g->ny, g->nz};
     const double d[3] = {g->dx, g->dy, g->dz};
     double o[3] = {0, 0, 0}, w[3] = {1, 1, 1};
     for (int a = 0; a < 3; ++a) {
-        if (nn[a] < 1 || !(d[a] > 0) || !isfinite(d[a])) {
-            pst_set_err(err, "mobility from grid: grid needs n >= 1 and a finite cell size > 0 "
-                             "along %c (got n = %d, size %g)",
-                        axis[a], nn[a], d[a]);
-            return PST_EINVAL;
-        }
+        PST_CHECK(nn[a] < 1 || !(d[a] > 0) || !isfinite(d[a]), PST_EINVAL, err,
+                  "mobility from grid: grid needs n >= 1 and a finite cell size > 0 along %c (got "
+                  "n = %d, size %g)",
+                  axis[a], nn[a], d[a]);
         if (a >= dim)
             continue; /* a 2D cloud reads layer 0: origin[2], scale[2] are not used */
         double s = scale ? scale[a] : 1.0;
         o[a] = origin ? origin[a] : 0.0;
         w[a] = d[a] * s;
-        if (!isfinite(o[a]) || !(s > 0) || !isfinite(w[a]) || !(w[a] > 0)) {
-            pst_set_err(err, "mobility from grid: origin %g and scale %g along %c must be "
-                             "finite, the scale > 0",
-                        o[a], s, axis[a]);
-            return PST_EINVAL;
-        }
+        PST_CHECK(!isfinite(o[a]) || !(s > 0) || !isfinite(w[a]) || !(w[a] > 0), PST_EINVAL,
+                  err, "mobility from grid: origin %g and scale %g along %c must be finite, "
+                  "the scale > 0", o[a], s, axis[a]);
     }
     int ncomp = diagonal ? dim : 1;
     for (int k = 0; k < ncomp; ++k)
-        if (!g->k[k]) {
-            pst_set_err(err, "mobility from grid: the grid has no K%c component", axis[k]);
-            return PST_EINVAL;
-        }
+        PST_CHECK(!g->k[k], PST_EINVAL, err, "mobility from grid: the grid has no K%c component",
+                  axis[k]);
     size_t n = c->n;
     /* Check the positions before touching the mobility, so a failure leaves the cloud as is. */
     for (size_t p = 0; p < n; ++p)
         for (int a = 0; a < dim; ++a)
-            if (!isfinite(c->x[a][p])) {
-                pst_set_err(err, "mobility from grid: particle %zu (id %lld) has a non-finite "
-                                 "%c coordinate",
-                            p, (long long)c->id[p], axis[a]);
-                return PST_EINPUT;
-            }
+            PST_CHECK(!isfinite(c->x[a][p]), PST_EINPUT, err,
+                      "mobility from grid: particle %zu (id %lld) has a non-finite %c coordinate",
+                      p, (long long)c->id[p], axis[a]);
     int st = pst_cloud_set_mobility(c, ncomp, NULL);
-    if (st != PST_OK) {
-        pst_set_err(err, "mobility from grid: out of memory for %d mobility components", ncomp);
-        return st;
-    }
+    PST_CHECK(st != PST_OK, st, err, "mobility from grid: out of memory for %d mobility components",
+              ncomp);
     size_t nx = (size_t)g->nx, nxy = nx * (size_t)g->ny;
 #pragma omp parallel for schedule(static)
     for (size_t p = 0; p < n; ++p) {

@@ -303,7 +303,7 @@ static int fill_cloud(reader *r, const build_buffers *b, size_t ih, pst_cloud **
                 dim = 3;
     }
     PST_TRY(make_order(r, b->tmp, b->part, b->row));
-    int st = pst_cloud_create(c, dim, n);
+    int st = pst_cloud_create(c, dim, n, NULL);
     if (st != PST_OK)
         return st == PST_ENOMEM ? vtu_oom(r)
                                 : vtu_fail(r, "cannot create a cloud of %zu points", n);

@@ -1,0 +1,26 @@
+/* The set-up the benchmark programs share: jittered lattices from the library's own generator. */
+#ifndef PSTENCIL_BENCH_COMMON_H
+#define PSTENCIL_BENCH_COMMON_H
+
+#include "pstencil.h"
+
+/* The 10^6-particle lattices of bench_neighbours and bench_operators: jitter K and h / s0. */
+#define BENCH_JITTER 0.5
+#define BENCH_H_RATIO 1.2
+
+/* Options for the box [0, hi]^dim with spacing s0, jitter K (fraction of s0) and h = h_ratio s0;
+ * every other option at its default (pst_lattice_defaults). */
+pst_lattice_opts bench_box(int dim, double hi, double s0, double jitter, double h_ratio);
+
+/* The lattice of o; NULL after the message "who: reason" on stderr. */
+pst_cloud *bench_lattice(const char *who, const pst_lattice_opts *o);
+
+/* 10^6 particles (1000^2 or 100^3) on a lattice of spacing 1 (V = 1, the lattice cell), all
+ * interior, jitter BENCH_JITTER, h = BENCH_H_RATIO, seed 2024, lattice (input) order; NULL
+ * after a message naming `who`. */
+pst_cloud *bench_million(const char *who, int dim);
+
+/* Spacings per side of a lattice of about n points: round(n^(1/dim)) - 1. */
+int bench_side(size_t n, int dim);
+
+#endif
