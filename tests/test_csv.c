@@ -21,16 +21,12 @@ static char dir[64];
 
 static const char *path_of(const char *name)
 {
-    static char buf[256];
-    snprintf(buf, sizeof buf, "%s/%s", dir, name);
-    return buf;
+    return test_path_in(dir, name);
 }
 
 static void write_text(const char *name, const char *text)
 {
-    FILE *f = fopen(path_of(name), "w");
-    fputs(text, f);
-    fclose(f);
+    CHECK_INT(test_write_text(path_of(name), text), 0);
 }
 
 static int bits_equal(const double *a, const double *b, size_t n)
@@ -41,13 +37,7 @@ static int bits_equal(const double *a, const double *b, size_t n)
 /* Temporary files the writer might have left behind. */
 static int leftovers(void)
 {
-    int k = 0;
-    DIR *d = opendir(dir);
-    for (struct dirent *e; d && (e = readdir(d));)
-        k += strstr(e->d_name, ".tmp.") != NULL;
-    if (d)
-        closedir(d);
-    return k;
+    return test_count_temporaries(dir);
 }
 
 /* ---- the tokenizer and the table ------------------------------------------------------ */
@@ -454,6 +444,19 @@ static void test_bad_input(void)
     CHECK(c == NULL && strstr(err, "absent.csv: cannot open"));
 }
 
+/* The writer under test_under_file_limit: a cloud, the path and the message buffer. */
+typedef struct {
+    const pst_cloud *c;
+    const char *path;
+    char *err;
+} write_job;
+
+static int write_keep(const void *job)
+{
+    const write_job *j = job;
+    return pst_cloud_write_csv(j->c, j->path, j->err);
+}
+
 static void test_write_failures(void)
 {
     char err[PST_ERRLEN] = "";
@@ -468,23 +471,11 @@ static void test_write_failures(void)
     /* a write that fails half-way (file-size limit) leaves the old file as it was */
     const char *old = "old contents\n";
     write_text("keep.csv", old);
-    struct rlimit saved, small;
-    getrlimit(RLIMIT_FSIZE, &saved);
-    small = saved;
-    small.rlim_cur = 4096; /* the cloud needs far more */
-    void (*prev)(int) = signal(SIGXFSZ, SIG_IGN);
-    CHECK(setrlimit(RLIMIT_FSIZE, &small) == 0);
-    int st = pst_cloud_write_csv(c, path_of("keep.csv"), err);
-    setrlimit(RLIMIT_FSIZE, &saved);
-    signal(SIGXFSZ, prev);
-    CHECK_INT(st, PST_EIO);
+    write_job job = {c, path_of("keep.csv"), err};
+    CHECK_INT(test_under_file_limit(4096 /* the cloud needs far more */, write_keep, &job),
+              PST_EIO);
     CHECK(strstr(err, "keep.csv") != NULL);
-    char buf[64] = "";
-    FILE *f = fopen(path_of("keep.csv"), "r");
-    size_t got = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
-    if (f)
-        fclose(f);
-    CHECK(got == strlen(old) && !strcmp(buf, old));
+    CHECK(test_file_holds(path_of("keep.csv"), old));
     CHECK_INT(leftovers(), 0);
 
     /* rename onto a directory fails after the write: the temporary file is removed */

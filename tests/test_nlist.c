@@ -3,6 +3,7 @@
  * unsorted clouds, thread-count independence, argument errors. */
 #include "check.h"
 #include "internal.h"
+#include "nlist_layout.h"
 
 #include <omp.h>
 #include <stdlib.h>

@@ -22,21 +22,13 @@ static char dir[64];
 
 static const char *path_of(const char *name)
 {
-    static char buf[256];
-    snprintf(buf, sizeof buf, "%s/%s", dir, name);
-    return buf;
+    return test_path_in(dir, name);
 }
 
 /* Temporary files the writer might have left behind. */
 static int leftovers(void)
 {
-    int k = 0;
-    DIR *d = opendir(dir);
-    for (struct dirent *e; d && (e = readdir(d));)
-        k += strstr(e->d_name, ".tmp.") != NULL;
-    if (d)
-        closedir(d);
-    return k;
+    return test_count_temporaries(dir);
 }
 
 /* ---- a parser of the files the writer produces ------------------------------------------- */
@@ -428,6 +420,20 @@ static void test_exact_bytes(void)
     pst_cloud_destroy(c);
 }
 
+/* The writer under test_under_file_limit: a cloud, its row status, the path, the message. */
+typedef struct {
+    const pst_cloud *c;
+    const uint8_t *status;
+    const char *path;
+    char *err;
+} write_job;
+
+static int write_keep(const void *job)
+{
+    const write_job *j = job;
+    return pst_cloud_write_vtu(j->c, j->path, j->status, j->err);
+}
+
 static void test_failures(void)
 {
     char err[PST_ERRLEN] = "";
@@ -444,26 +450,13 @@ static void test_failures(void)
 
     /* a write that fails half-way (file-size limit) leaves the old file as it was */
     static const char old[] = "old contents\n";
-    FILE *f = fopen(path_of("keep.vtu"), "w");
-    fputs(old, f);
-    fclose(f);
-    struct rlimit saved, small;
-    getrlimit(RLIMIT_FSIZE, &saved);
-    small = saved;
-    small.rlim_cur = 2048; /* the header fits, the data does not */
-    void (*prev)(int) = signal(SIGXFSZ, SIG_IGN);
-    CHECK(setrlimit(RLIMIT_FSIZE, &small) == 0);
-    int st = pst_cloud_write_vtu(c, path_of("keep.vtu"), status, err);
-    setrlimit(RLIMIT_FSIZE, &saved);
-    signal(SIGXFSZ, prev);
-    CHECK_INT(st, PST_EIO);
+    CHECK_INT(test_write_text(path_of("keep.vtu"), old), 0);
+    write_job job = {c, status, path_of("keep.vtu"), err};
+    CHECK_INT(test_under_file_limit(2048 /* the header fits, the data does not */, write_keep,
+                                    &job),
+              PST_EIO);
     CHECK(strstr(err, "keep.vtu") != NULL);
-    char buf[64] = "";
-    f = fopen(path_of("keep.vtu"), "r");
-    size_t got = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
-    if (f)
-        fclose(f);
-    CHECK(got == strlen(old) && !strcmp(buf, old));
+    CHECK(test_file_holds(path_of("keep.vtu"), old));
     CHECK_INT(leftovers(), 0);
 
     /* rename onto a directory fails after the write: the temporary file is removed */

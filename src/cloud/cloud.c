@@ -1,4 +1,5 @@
 /* The particle cloud: structure-of-arrays storage, accessors, validation and permutation. */
+#include "cloud_layout.h"
 #include "check.h"
 
 #include <ctype.h>

@@ -2,6 +2,7 @@
  * Lukyanov–Vuik cell-centred layout with face particles (LV §5.1). Every particle is computed
  * from its own index alone (position, jitter from the counter-based RNG, kind, normal), so the
  * parallel fill gives the same bits for every thread count. Formulas: docs/clouds.md. */
+#include "cloud_layout.h"
 #include "check.h"
 
 #include <math.h>

@@ -1,6 +1,7 @@
 /* Error norms of the papers (docs/norms.md): the QSFDI paper's eqs. 11, 14/15 and the
  * Lukyanov-Vuik paper's eqs. 78 and 95, plus maxima. One serial pass in particle order, so
  * the value is the same for every thread count; O(n) beside the operators' O(n * neighbours). */
+#include "cloud_layout.h"
 #include "check.h"
 
 #include <math.h>

@@ -21,9 +21,4 @@ void pst_free(void *p);
 /* Write a formatted message into an error buffer of PST_ERRLEN bytes (NULL is ignored). */
 void pst_set_err(char *err, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
-/* The layouts behind the opaque handles live with their layers; every library file sees them
- * through this header. */
-#include "cloud_layout.h"
-#include "nlist_layout.h"
-
 #endif

@@ -3,6 +3,7 @@
  * name file, line and column; the writer goes through a
  * temporary file and rename() so that a destination is either the old file or the whole new
  * one. */
+#include "cloud_layout.h"
 #include "check.h"
 
 #include <stdlib.h>

@@ -4,6 +4,7 @@
  * block itself (per array a UInt64 byte count, then the values). Values are stored byte by
  * byte in little-endian order, so the file is the same on any host; rows are emitted in input
  * order (by ids) through small gather buffers, and the file goes through pst_write_atomic. */
+#include "cloud_layout.h"
 #include "check.h"
 
 #include <stdlib.h>

@@ -4,6 +4,7 @@
 #ifndef PSTENCIL_VTU_READ_H
 #define PSTENCIL_VTU_READ_H
 
+#include "cloud_layout.h"
 #include "internal.h"
 
 #include <stddef.h>

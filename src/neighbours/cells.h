@@ -3,7 +3,9 @@
 #ifndef PSTENCIL_CELLS_H
 #define PSTENCIL_CELLS_H
 
+#include "cloud_layout.h"
 #include "internal.h"
+#include "nlist_layout.h"
 
 typedef struct {
     int dim;

@@ -2,7 +2,9 @@
 #ifndef PSTENCIL_OPERATOR_H
 #define PSTENCIL_OPERATOR_H
 
+#include "cloud_layout.h"
 #include "internal.h"
+#include "nlist_layout.h"
 
 /* One scheme: a kernel file in kernels/ fills this table and operator.c registers it.
  *
