@@ -543,20 +543,8 @@ static void moments_block(const cs_ctx *k, size_t b0, size_t b1, double *mom_blk
 
 static int precompute(pst_op *op, int which, char *err)
 {
-    const pst_cloud *c = op->cloud;
     size_t n = op->n;
     int D = op->dim, nm = cs_nm(D), nc = cs_ncoef(D);
-    if (op->opts.variant != 0) {
-        pst_set_err(err, "%s has no variants (got variant %d)", op->scheme->name,
-                    op->opts.variant);
-        return PST_EINVAL;
-    }
-    if (c->mob_ncomp != 0) {
-        pst_set_err(err, "%s discretises the Laplacian only (no heterogeneous form): the "
-                         "cloud's mobility must be absent (ncomp 0), got ncomp %d",
-                    op->scheme->name, c->mob_ncomp);
-        return PST_EINVAL;
-    }
     cs_data *d = calloc(1, sizeof *d);
     if (!d)
         return PST_ENOMEM;

@@ -114,8 +114,6 @@ static void lpmps_solve(int dim, int nb, const double *M, const double *fac, dou
 
 static int lpmps_precompute(pst_op *op, char *err)
 {
-    PST_CHECK(op->opts.variant != 0, PST_EINVAL, err, "lpmps has no variants (got variant %d)",
-              op->opts.variant);
     return pst_wls_precompute(op, 0, lpmps_factor, lpmps_solve, err);
 }
 

@@ -363,11 +363,6 @@ static int precompute(pst_op *op, int which, char *err)
 {
     size_t n = op->n;
     int dim = op->dim, variant = op->opts.gradient;
-    if (op->opts.variant != 0) {
-        pst_set_err(err, "%s has no variants (got variant %d)", op->scheme->name,
-                    op->opts.variant);
-        return PST_EINVAL;
-    }
     lv_data *d = calloc(1, sizeof *d);
     if (!d)
         return PST_ENOMEM;

@@ -19,6 +19,7 @@
  * c omega2 (1 - xi . r), xi = (sum omega2 r r^T)^-1 sum omega2 r, c fixing lap |x|^2 = 2D; if
  * that matrix is singular or c <= 0 the Brookshaw-type row c w / d^2, c = 2D / sum w; with no
  * neighbour the row is 0. Neumann rows fall back to n . (linear WLS gradient), else 0. */
+#include "check.h"
 #include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
@@ -673,26 +674,14 @@ PST_KHOT int qs_precompute_t(pst_op *op, int D)
 
 static int qs_precompute(pst_op *op, char *err)
 {
-    if (op->opts.variant != 0) {
-        pst_set_err(err, "qsfdi has no variants (got variant %d)", op->opts.variant);
-        return PST_EINVAL;
-    }
-    if (op->cloud->mob_ncomp != 0) {
-        pst_set_err(err, "qsfdi discretises the plain Laplacian only: it has no heterogeneous "
-                         "form, so the cloud must have no mobility (it has %d components)",
-                    op->cloud->mob_ncomp);
-        return PST_EINVAL;
-    }
     qs_data *d = calloc(1, sizeof *d);
     if (!d)
         return PST_ENOMEM;
     op->data = d;
     d->kap = pst_alloc(op->n * (size_t)QS_NK(op->dim) * sizeof *d->kap);
     int st = !d->kap ? PST_ENOMEM : op->dim == 2 ? qs_precompute_t(op, 2) : qs_precompute_t(op, 3);
-    if (st != PST_OK) {
-        pst_set_err(err, "qsfdi: cannot allocate the coefficients of %zu particles", op->n);
-        return PST_ENOMEM;
-    }
+    PST_CHECK(st != PST_OK, PST_ENOMEM, err,
+              "qsfdi: cannot allocate the coefficients of %zu particles", op->n);
     return PST_OK;
 }
 
@@ -879,10 +868,8 @@ static int qs_interpolate(const pst_op *op, const double *const pts[3], size_t m
     int D = op->dim;
     for (size_t q = 0; q < m; ++q)
         for (int a = 0; a < D; ++a)
-            if (!isfinite(pts[a][q])) {
-                pst_set_err(err, "interpolation point %zu has a non-finite coordinate", q);
-                return PST_EINVAL;
-            }
+            PST_CHECK(!isfinite(pts[a][q]), PST_EINVAL, err,
+                      "interpolation point %zu has a non-finite coordinate", q);
     double h = pst_cloud_h_max(op->cloud);
     int64_t *off;
     uint32_t *idx;

@@ -23,6 +23,7 @@
  * row a_Ij = w_j |x^_j|^2 2D / (h^2 sum w |x^|^4) (exact for |x|^2) -> an empty row (no weighted
  * neighbour). Never NaN. */
 #include "cells.h"
+#include "check.h"
 #include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
@@ -572,12 +573,6 @@ int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn
     double t0 = omp_get_wtime();
     size_t n = op->n;
     int D = op->dim;
-    if (op->cloud->mob_ncomp != 0) {
-        pst_set_err(err, "%s has no heterogeneous form: the cloud must have no mobility "
-                         "(it has %d components)",
-                    op->scheme->name, op->cloud->mob_ncomp);
-        return PST_EINVAL;
-    }
     wls_data *d = calloc(1, sizeof *d);
     if (!d)
         return PST_ENOMEM;
@@ -899,10 +894,8 @@ int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,
     double h = pst_cloud_h_max(op->cloud);
     pst_cells g;
     *fallbacks = 0;
-    if (op->n == 0) {
-        pst_set_err(err, "%s: cannot interpolate on an empty cloud", op->scheme->name);
-        return PST_EINVAL;
-    }
+    PST_CHECK(op->n == 0, PST_EINVAL, err,
+              "%s: cannot interpolate on an empty cloud", op->scheme->name);
     int st = pst_cells_build(&g, op->cloud, pst_sph_support[k.d->kernel] * h, err);
     if (st != PST_OK)
         return st;

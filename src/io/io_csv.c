@@ -224,15 +224,10 @@ static int check_duplicates(const pst_cloud *c, const rows *r, const char *path,
 {
     size_t a, b;
     int found = pst_cloud_find_duplicate(c, &a, &b);
-    if (found < 0) {
-        pst_set_err(err, "%s: out of memory", path);
-        return found;
-    }
-    if (found) {
-        pst_set_err(err, "%s:%zu:1: duplicate particle: same coordinates as line %zu", path,
-                    r->line[b], r->line[a]);
-        return PST_EINPUT;
-    }
+    PST_CHECK(found < 0, found, err, "%s: out of memory", path);
+    PST_CHECK(found, PST_EINPUT, err,
+              "%s:%zu:1: duplicate particle: same coordinates as line %zu",
+              path, r->line[b], r->line[a]);
     return PST_OK;
 }
 

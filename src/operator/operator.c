@@ -181,6 +181,16 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
               "scheme '%s' does not average the mobility pairwise: the harmonic mobility mean "
               "applies only to brookshaw, cb, schwaiger and lv",
               (*scheme)->name);
+    PST_CHECK((*scheme)->variants <= 1 && o->variant != 0, PST_EINVAL, err,
+              "%s has no variants (got variant %d)", (*scheme)->name, o->variant);
+    /* a scheme without a heterogeneous form cannot build rows on a mobility (its derivatives
+     * alone, opts.laplacian = 0, do not read it) */
+    PST_CHECK(!(*scheme)->mobility && c->mob_ncomp != 0 &&
+                  (o->laplacian || !(*scheme)->derivatives_standalone),
+              PST_EINVAL, err,
+              "%s discretises the plain Laplacian only: it has no heterogeneous form, so the "
+              "cloud must have no mobility (it has %d components)",
+              (*scheme)->name, c->mob_ncomp);
     PST_CHECK(pst_nlist_rows(nl) != c->n, PST_EINVAL, err,
               "the neighbour list has %zu rows for a cloud of %zu particles", pst_nlist_rows(nl),
               c->n);
