@@ -11,6 +11,10 @@ typedef struct {
     /* When not NULL, receives the run's JSON report (docs/running.md; cJSON_Delete it), also
      * after a solve that did not converge; NULL after any other failure. */
     struct cJSON **report;
+    /* Called before the first AMG set-up of the run (NULL: none). hypre needs MPI and the
+     * library never starts it (docs/solving.md, "MPI"), so the program starts it here, only
+     * for the runs that need it. Non-zero: the run stops with PST_ENUMERIC. */
+    int (*start_mpi)(void);
 } pst_run_opts;
 
 /* Run scene `s`. On success the counters and the plan are filled (either may be NULL) and,

@@ -95,6 +95,9 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     monitor_ctx mc = {&pg, t->rtol};
     so.monitor = solve_monitor;
     so.monitor_ctx = &mc;
+    if (so.precond == PST_PREC_AMG && r->o->start_mpi && r->o->start_mpi() != 0)
+        return run_fail(r, PST_ENUMERIC, "%s: task '%s': MPI, which the AMG preconditioner "
+                        "needs, could not be started", r->s->path, t->name);
     pst_solve_result res;
     char msg[PST_ERRLEN];
     progress_begin(&pg, !r->o->quiet, "solve");

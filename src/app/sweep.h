@@ -54,6 +54,7 @@ typedef struct {
     int resume;                   /* keep the runs of an existing CSV (ok or not-converged)    */
     int quiet;                    /* no progress bar                                           */
     const struct cJSON *machine;  /* members copied into the summary (NULL: none)             */
+    int (*start_mpi)(void);       /* handed to every run (pst_run_opts.start_mpi)              */
 } pst_sweep_opts;
 
 typedef struct {

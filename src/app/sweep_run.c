@@ -187,7 +187,8 @@ static int resume_rows(const pst_sweep *sw, sweep_rows *j, char *done, pst_sweep
 
 /* Run combination k and add its rows (failed rows when its scene does not parse or its run
  * fails). PST_ENOMEM or PST_OK, whatever the run did (stats says). */
-static int run_combo(const pst_sweep *sw, sweep_rows *j, size_t k, pst_sweep_stats *stats)
+static int run_combo(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j, size_t k,
+                     pst_sweep_stats *stats)
 {
     pst_scene s;
     char msg[PST_ERRLEN * 2];
@@ -199,7 +200,7 @@ static int run_combo(const pst_sweep *sw, sweep_rows *j, size_t k, pst_sweep_sta
         return sweep_add_rows(j, k, NULL, NULL, msg);
     }
     cJSON *rep = NULL;
-    pst_run_opts ro = {.quiet = 1, .report = &rep};
+    pst_run_opts ro = {.quiet = 1, .report = &rep, .start_mpi = o->start_mpi};
     int rs = pst_run_scene(&s, &ro, NULL, NULL, NULL, msg, sizeof msg);
     stats->runs++;
     int st;
@@ -243,7 +244,7 @@ static int run_all(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j,
         sweep_combo_label(sw, k, label, sizeof label);
         snprintf(detail, sizeof detail, "run %zu/%zu: %.100s", made + 1, todo, label);
         progress_update(&pg, todo ? (double)made / (double)todo : 1, detail);
-        st = run_combo(sw, j, k, stats);
+        st = run_combo(sw, o, j, k, stats);
         ++made;
         if (st != PST_OK)
             snprintf(err, errlen, "out of memory for the rows");

@@ -16,6 +16,11 @@ int cli_exit_code(int status);
 /* Print "pstencil: WHAT: <status name>: DETAIL" to stderr and return the exit code. */
 int cli_fail(int status, const char *what, const char *detail);
 
+/* Start MPI for hypre once, on the first call (src/cli/main.c finalises it at exit): the hook
+ * the runner calls before its first AMG set-up (pst_run_opts.start_mpi). 0, or -1 when MPI
+ * cannot be started. */
+int cli_start_mpi(void);
+
 /* Strict number parsing: the whole string must be a finite number. 0 on success. */
 int cli_parse_double(const char *s, double *out);
 int cli_parse_long(const char *s, long *out);

@@ -51,7 +51,7 @@ int cli_run(const cli_ctx *ctx, int argc, char **argv)
                   : pst_scene_default(&s, overrides, noverrides, err, sizeof err);
     if (st != PST_OK)
         return cli_fail(st, "scene", err);
-    pst_run_opts ro = {.quiet = ctx->quiet, .plan_only = plan_only};
+    pst_run_opts ro = {.quiet = ctx->quiet, .plan_only = plan_only, .start_mpi = cli_start_mpi};
     st = pst_run_scene(&s, &ro, NULL, NULL, NULL, err, sizeof err);
     pst_scene_free(&s);
     if (st != PST_OK)

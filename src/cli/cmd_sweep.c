@@ -99,7 +99,8 @@ int cli_sweep(const cli_ctx *ctx, int argc, char **argv)
         return st == PST_OK ? CLI_OK : cli_fail(st, "sweep --plan", err);
     }
     cJSON *machine = machine_info();
-    pst_sweep_opts o = {.resume = resume, .quiet = ctx->quiet, .machine = machine};
+    pst_sweep_opts o = {.resume = resume, .quiet = ctx->quiet, .machine = machine,
+                        .start_mpi = cli_start_mpi};
     pst_sweep_stats stats;
     st = pst_sweep_run(&sw, &o, &stats, err, sizeof err);
     cJSON_Delete(machine);
