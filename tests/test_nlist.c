@@ -355,6 +355,59 @@ static void test_errors(void)
     pst_cloud_destroy(c);
 }
 
+/* The cut list (pst_nlist_cut, the AMG proxy's stencil) is the list of the cut radius: the same
+ * rows as a list built with support cut * support, for any thread count; a row with no pair
+ * inside the cut keeps its whole row and is counted; a bad cut is refused. */
+static void test_cut(void)
+{
+    int saved = omp_get_max_threads();
+    for (int dim = 2; dim <= 3; ++dim)
+        for (int vary = 0; vary <= 1; ++vary) {
+            pst_cloud *c = lattice(dim, dim == 2 ? 60 : 14, 1.0, 0.4, 1, 1.2, vary, 7);
+            pst_nlist *nl = NULL, *cut[2] = {NULL, NULL};
+            CHECK_INT(pst_nlist_build(&nl, c, 3.0, NULL), PST_OK);
+            size_t full[2] = {1, 1};
+            for (int t = 0; t < 2; ++t) {
+                omp_set_num_threads(t + 1);
+                CHECK_INT(pst_nlist_cut(&cut[t], c, nl, 0.55, &full[t], NULL), PST_OK);
+            }
+            CHECK(full[0] == 0 && full[1] == 0);
+            ref_list r = brute(c, 0.55 * 3.0);
+            CHECK(cut[0] && same_list(cut[0], r, pst_cloud_size(c)));
+            CHECK(cut[0] && cut[1] && same_nlists(cut[0], cut[1]));
+            CHECK(cut[0] && pst_nlist_support(cut[0]) == 3.0 && cut[0]->cut == 0.55);
+            free(r.off);
+            free(r.idx);
+            pst_nlist_destroy(cut[0]);
+            pst_nlist_destroy(cut[1]);
+            pst_nlist_destroy(nl);
+            pst_cloud_destroy(c);
+        }
+    omp_set_num_threads(saved);
+
+    /* an unjittered lattice of spacing 1, R = 2.4: cut 0.3 (0.72) reaches no neighbour, so every
+     * row keeps its whole row; cut 0.5 (1.2) keeps the four axis neighbours of inner rows */
+    pst_cloud *c = lattice(2, 9, 1.0, 0.0, 0, 1.2, 0, 3);
+    pst_nlist *nl = NULL, *cut = NULL;
+    CHECK_INT(pst_nlist_build(&nl, c, 2.0, NULL), PST_OK);
+    size_t full = 0;
+    CHECK_INT(pst_nlist_cut(&cut, c, nl, 0.3, &full, NULL), PST_OK);
+    CHECK(full == 81 && cut && same_nlists(cut, nl));
+    pst_nlist_destroy(cut);
+    CHECK_INT(pst_nlist_cut(&cut, c, nl, 0.5, &full, NULL), PST_OK);
+    CHECK(full == 0 && cut && cut->offset[41] - cut->offset[40] == 4);
+    pst_nlist_destroy(cut);
+    char err[PST_ERRLEN] = "";
+    const double bad[4] = {0.0, -0.5, 1.5, NAN};
+    for (int k = 0; k < 4; ++k) {
+        cut = (pst_nlist *)&cut;
+        CHECK_INT(pst_nlist_cut(&cut, c, nl, bad[k], &full, err), PST_EINVAL);
+        CHECK(cut == NULL && strstr(err, "cut") != NULL);
+    }
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
 int main(void)
 {
     test_random_clouds();
@@ -365,5 +418,6 @@ int main(void)
     test_sorted_vs_unsorted();
     test_threads();
     test_errors();
+    test_cut();
     return check_summary("test_nlist");
 }

@@ -340,6 +340,7 @@ static int new_list(pst_nlist **out, size_t n, double support, char *err)
     }
     nl->n = n;
     nl->support = support;
+    nl->cut = 1;
     *out = nl;
     return PST_OK;
 }
