@@ -7,7 +7,11 @@
  * the grid of docs/solving.md.
  *
  * usage: bench_solve [--dim 2|3] [--n N] [--scheme S] [--precond jacobi|amg] [--stored 0|1]
- *                    [--h-ratio F] [--max-iter N] [--header]
+ *                    [--h-ratio F] [--max-iter N] [--restart M] [--amg-radius F]
+ *                    [--amg-aggressive L] [--amg-strong T] [--amg-source brookshaw|own] [--header]
+ *
+ * "setup s" is the preconditioner's set-up (pst_krylov_create), "solve s" the iterations
+ * (pst_krylov_solve); "AMG nnz/row" the entries per row of the matrix handed to hypre.
  *
  * --header prints "# machine: <cpu, topology, caches>; flags: <compiler flags>; triad ...,
  * FP64 peak ..." (src/machine.h, peak.h: probes run in this process) and the table header.
@@ -63,9 +67,9 @@ static void print_header(void)
     pstb_probes_line(&p, line, sizeof line);
     printf("# machine: %s\n", line);
     printf("| dim | particles | nbrs | scheme | precond | operator | neighbours s | precompute s "
-           "| store s | solve s | iterations | rel. residual | eq. 15 error | apply ms "
-           "| apply rate | triad GB/s | peak GB |\n"
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+           "| store s | setup s | solve s | iterations | rel. residual | eq. 15 error | apply ms "
+           "| apply rate | AMG nnz/row | triad GB/s | peak GB |\n"
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
 }
 
 int main(int argc, char **argv)
@@ -74,6 +78,8 @@ int main(int argc, char **argv)
     int dim = 2, stored = 1, precond = PST_PREC_AMG, max_iter = 0;
     size_t n = 1000000;
     double ratio = 1.2;
+    pst_solve_opts so;
+    pst_solve_defaults(&so);
     const char *scheme = "qsfdi";
     if (argc == 2 && strcmp(argv[1], "--header") == 0) {
         print_header();
@@ -94,6 +100,16 @@ int main(int argc, char **argv)
             ratio = atof(argv[i + 1]);
         else if (strcmp(argv[i], "--max-iter") == 0)
             max_iter = atoi(argv[i + 1]);
+        else if (strcmp(argv[i], "--restart") == 0)
+            so.restart = atoi(argv[i + 1]);
+        else if (strcmp(argv[i], "--amg-radius") == 0)
+            so.amg_radius = atof(argv[i + 1]);
+        else if (strcmp(argv[i], "--amg-aggressive") == 0)
+            so.amg_aggressive = atoi(argv[i + 1]);
+        else if (strcmp(argv[i], "--amg-strong") == 0)
+            so.amg_strong = atof(argv[i + 1]);
+        else if (strcmp(argv[i], "--amg-source") == 0)
+            so.amg_source = strcmp(argv[i + 1], "own") == 0 ? PST_AMG_OWN : PST_AMG_BROOKSHAW;
         else {
             fprintf(stderr, "bench_solve: unknown option %s\n", argv[i]);
             return 1;
@@ -144,15 +160,22 @@ int main(int argc, char **argv)
         ue[i] = exact(dim, x);
         b[i] = kind[i] == PST_DIRICHLET ? ue[i] : laplacian(dim, x);
     }
-    pst_solve_opts so;
-    pst_solve_defaults(&so);
     so.rtol = 1e-8;
     so.stored = stored;
     so.precond = precond;
     if (max_iter > 0)
         so.max_iter = max_iter;
-    pst_solve_result r;
-    int st = pst_solve(op, b, u, &so, &r, err);
+    pst_solve_result r = {0};
+    pst_krylov *ks = NULL;
+    int st = pst_krylov_create(&ks, op, &so, err);
+    double t45 = omp_get_wtime();
+    if (st == PST_OK)
+        st = pst_krylov_solve(ks, b, u, &r, err);
+    else
+        fprintf(stderr, "bench_solve: %s\n", err);
+    pst_krylov_stats ksst;
+    pst_krylov_get_stats(ks, &ksst);
+    pst_krylov_destroy(ks);
     double t5 = omp_get_wtime();
     double num = 0, den = 0;
     for (size_t i = 0; i < np; ++i)
@@ -171,12 +194,18 @@ int main(int argc, char **argv)
     }
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
-    printf("| %dD | %zu | %.1f | %s | %s | %s | %.2f | %.2f | %.2f | %.2f | %d%s | %.1e | %.2e "
-           "| %.1f | %s | %.1f | %.2f |\n",
-           dim, np, pairs / (double)np, scheme, precond == PST_PREC_AMG ? "AMG" : "Jacobi",
-           stored ? "stored" : "matrix-free", t2 - t1, t3 - t2, t4 - t3, t5 - t4, r.iterations,
-           st == PST_OK ? "" : " (not converged)", r.rel_residual, sqrt(num / den), ta * 1e3,
-           rate, triad, (double)ru.ru_maxrss / (1 << 20));
+    char pc[96] = "Jacobi";
+    if (precond == PST_PREC_AMG)
+        snprintf(pc, sizeof pc, "AMG %s r %g agg %d thr %g",
+                 so.amg_source == PST_AMG_OWN ? "own" : "proxy", so.amg_radius, so.amg_aggressive,
+                 so.amg_strong > 0 ? so.amg_strong : dim == 3 ? 0.5 : 0.25);
+    printf("| %dD | %zu | %.1f | %s | %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %d%s | %.1e "
+           "| %.2e | %.1f | %s | %.1f | %.1f | %.2f |\n",
+           dim, np, pairs / (double)np, scheme, pc,
+           stored ? "stored" : "matrix-free", t2 - t1, t3 - t2, t4 - t3, t45 - t4, t5 - t45,
+           r.iterations, st == PST_OK ? "" : " (not converged)", r.rel_residual,
+           sqrt(num / den), ta * 1e3, rate, (double)ksst.amg_entries / (double)np, triad,
+           (double)ru.ru_maxrss / (1 << 20));
     pst_solve_result_free(&r);
     free(b);
     free(u);

@@ -59,10 +59,10 @@ static void check_refused(problem *p, const char *expect)
 {
     char err[PST_ERRLEN] = "";
     pst_prec m;
-    CHECK_INT(pst_prec_amg(&m, p->op, PST_AMG_BROOKSHAW, err), PST_EINVAL);
+    pst_solve_opts o = amg_opts();
+    CHECK_INT(pst_prec_amg(&m, p->op, &o, err), PST_EINVAL);
     CHECK(strstr(err, expect) != NULL);
     printf("pst_prec_amg: %s\n", err);
-    pst_solve_opts o = amg_opts();
     pst_krylov *s = NULL;
     CHECK_INT(pst_krylov_create(&s, p->op, &o, err), PST_EINVAL);
     CHECK(s == NULL && strstr(err, expect) != NULL);

@@ -66,6 +66,16 @@ typedef struct {
     int solver;            /* pst_solver (default AUTO)                                       */
     int precond;           /* pst_precond (default JACOBI)                                    */
     int amg_source;        /* pst_amg_source (default BROOKSHAW)                              */
+    /* The AMG matrix's stencil and hypre's coarsening (docs/solving.md, "The AMG matrix"; the
+     * defaults come from the measured table there): */
+    double amg_radius;     /* BROOKSHAW source: the proxy keeps the pairs closer than
+                              amg_radius * h (h of the pair, (h_I + h_J) / 2); 0, or at least
+                              the kernel's support, keeps the whole list; -1 (the default):
+                              1.6 h, or the whole list where the mobility's max / min over
+                              the particles exceeds 10                                        */
+    int amg_aggressive;    /* levels of aggressive coarsening, 0-10 (default 0)              */
+    double amg_strong;     /* strong threshold in (0, 1); 0 = by dimension (0.25 in 2D, 0.5
+                              in 3D, the default)                                            */
     int restart;           /* GMRES restart length m (default 50)                             */
     int max_iter;          /* iteration limit (default 5000)                                  */
     double rtol;           /* stop when ||b - L u|| <= rtol ||b|| (2-norms, default 1e-10)      */
@@ -80,6 +90,9 @@ typedef struct {
 
 /* The defaults noted beside each field. */
 void pst_solve_defaults(pst_solve_opts *o);
+
+/* 1 when this build has the AMG preconditioner (pstencil built with hypre), else 0. */
+int pst_have_amg(void);
 
 /* Why a solve stopped (pst_solve_result.stop); the message gives the numbers. */
 typedef enum {
@@ -168,6 +181,11 @@ typedef struct {
     int user_precond;      /* 1 when the preconditioner is the caller's M                     */
     int precond_setups;    /* preconditioner set-ups (AMG hierarchies, Jacobi diagonals) done */
     int solves;            /* pst_krylov_solve calls that iterated (or found b = 0)           */
+    /* AMG only (0 otherwise): */
+    long long amg_entries; /* entries of the matrix handed to hypre                           */
+    size_t amg_full_rows;  /* rows of the cut proxy that had no pair within amg_radius and
+                              kept their full support (the fallback)                          */
+    double amg_setup_seconds; /* the AMG matrix and hypre's set-up, last set-up               */
 } pst_krylov_stats;
 /* The counters of s (all 0 for NULL). */
 void pst_krylov_get_stats(const pst_krylov *s, pst_krylov_stats *st);

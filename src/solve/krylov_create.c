@@ -20,6 +20,15 @@ int pst_solve_check_opts(const pst_solve_opts *o, const pst_op *op, char *err)
               "unknown preconditioner %d (NONE, JACOBI or AMG)", o->precond);
     PST_CHECK(o->amg_source != PST_AMG_BROOKSHAW && o->amg_source != PST_AMG_OWN, PST_EINVAL,
               err, "unknown AMG source %d (BROOKSHAW or OWN)", o->amg_source);
+    PST_CHECK(!(o->amg_radius >= -1 && o->amg_radius <= 1e3), PST_EINVAL, err,
+              "amg_radius must be in [-1, 1000] (in units of h; 0 for the whole list, -1 for "
+              "the automatic choice; got %g)",
+              o->amg_radius);
+    PST_CHECK(o->amg_aggressive < 0 || o->amg_aggressive > 10, PST_EINVAL, err,
+              "amg_aggressive must be in [0, 10] (levels of aggressive coarsening; got %d)",
+              o->amg_aggressive);
+    PST_CHECK(!(o->amg_strong >= 0 && o->amg_strong < 1), PST_EINVAL, err,
+              "amg_strong must be in [0, 1) (0: by dimension; got %g)", o->amg_strong);
     PST_CHECK(o->restart < 1 || o->restart > 100000 || o->max_iter < 0, PST_EINVAL, err,
               "restart must be in [1, 100000] and max_iter >= 0 (got %d, %d)", o->restart,
               o->max_iter);
@@ -155,7 +164,7 @@ static int op_setup(pst_krylov *s, int *stop, char *err)
         return PST_OK;
     s->precond_setups++;
     int st = s->o.precond == PST_PREC_JACOBI ? pst_prec_jacobi(&s->prec, &s->A, err)
-                                             : pst_prec_amg(&s->prec, s->op, s->o.amg_source, err);
+                                             : pst_prec_amg(&s->prec, s->op, &s->o, err);
     if (st != PST_OK)
         *stop = PST_STOP_PRECOND_SETUP;
     s->k.M = st == PST_OK ? &s->prec.lin : NULL;
@@ -262,4 +271,6 @@ void pst_krylov_get_stats(const pst_krylov *s, pst_krylov_stats *st)
     st->user_precond = s->user_precond;
     st->precond_setups = s->precond_setups;
     st->solves = s->solves;
+    if (st->precond == PST_PREC_AMG)
+        pst_prec_amg_stats(&s->prec, st);
 }

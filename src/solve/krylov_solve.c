@@ -4,6 +4,7 @@
 
 #include <math.h>
 #include <omp.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -92,6 +93,19 @@ int pst_solve_refused(pst_solve_result *r, int st, const char *err, char *err_ou
     return st;
 }
 
+/* What to try after a solve that stopped short of the tolerance, by its preconditioner. */
+static const char *stall_hint(const pst_krylov *s)
+{
+    if (s->user_precond || !s->op)
+        return "";
+    if (s->o.precond != PST_PREC_AMG)
+        return pst_have_amg() ? "; try the AMG preconditioner (precond amg)" : "";
+    return s->o.amg_source == PST_AMG_BROOKSHAW
+               ? "; try the scheme's own matrix for AMG (amg_source own), a wider AMG matrix "
+                 "(amg_radius 0) or a longer GMRES restart"
+               : "; try a longer GMRES restart, or BiCGSTAB";
+}
+
 int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result *r,
                      char *err_out)
 {
@@ -125,6 +139,10 @@ int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result
     r->history = k->history;
     r->nhistory = k->history ? k->nhistory : 0;
     k->history = NULL;
+    if (st != PST_OK && k->stop == PST_STOP_ITERATION_LIMIT) {
+        size_t len = strlen(r->message);
+        snprintf(r->message + len, PST_ERRLEN - len, "%s", stall_hint(s));
+    }
     if (st != PST_OK && err_out)
         pst_set_err(err_out, "%s did not converge: %s", pst_solver_label(s->solver), r->message);
     r->seconds = omp_get_wtime() - t0;

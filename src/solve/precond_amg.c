@@ -17,14 +17,20 @@
 
 #ifndef PSTENCIL_HAVE_HYPRE
 
-int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err)
+int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
 {
     (void)op;
     *p = (pst_prec){0};
-    PST_CHECK(source != PST_AMG_BROOKSHAW && source != PST_AMG_OWN, PST_EINVAL, err,
-              "unknown AMG source %d (brookshaw = 0, own = 1)", source);
+    PST_CHECK(o->amg_source != PST_AMG_BROOKSHAW && o->amg_source != PST_AMG_OWN, PST_EINVAL,
+              err, "unknown AMG source %d (brookshaw = 0, own = 1)", o->amg_source);
     pst_set_err(err, "pstencil was built without hypre: the AMG preconditioner is unavailable");
     return PST_EINVAL;
+}
+
+void pst_prec_amg_stats(const pst_prec *p, pst_krylov_stats *st)
+{
+    (void)p;
+    (void)st;
 }
 
 int pst_prec_amg_ready(char *err)
@@ -32,6 +38,8 @@ int pst_prec_amg_ready(char *err)
     pst_set_err(err, "pstencil was built without hypre: the AMG preconditioner is unavailable");
     return PST_EINVAL;
 }
+
+int pst_have_amg(void) { return 0; }
 
 #else
 
@@ -42,6 +50,7 @@ int pst_prec_amg_ready(char *err)
 #include <limits.h>
 #include <math.h>
 #include <mpi.h>
+#include <omp.h>
 #include <stdlib.h>
 
 /* ---- MPI and hypre's process-wide state ---------------------------------------------------- */
@@ -75,6 +84,13 @@ int pst_prec_amg_ready(char *err)
     return PST_OK;
 }
 
+int pst_have_amg(void) { return 1; }
+
+/* The automatic proxy radius (in h) and the mobility contrast above which the proxy keeps the
+ * whole list (docs/solving.md, "The AMG matrix"). */
+#define PST_AMG_RADIUS 1.6
+#define PST_AMG_CONTRAST 10.0
+
 /* MPI checked, then hypre initialised (when it is not yet). */
 static int runtime_ready(char *err)
 {
@@ -105,6 +121,9 @@ typedef struct {
     HYPRE_ParCSRMatrix pA;
     HYPRE_ParVector pB, pX;
     HYPRE_Solver amg;
+    long long entries;     /* of A_II, for pst_krylov_get_stats                               */
+    size_t full_rows;      /* rows of the cut proxy that kept their full support              */
+    double seconds;        /* of the set-up                                                   */
 } amg_ctx;
 
 /* hypre's destroy calls make MPI calls, which MPI forbids after MPI_Finalize (Open MPI aborts
@@ -185,6 +204,25 @@ static void amg_apply(void *ctx, const double *r, double *z)
         z[c->row[k]] = bad ? c->b[k] / c->diag[k] : c->x[k];
 }
 
+/* What the set-up holds only until hypre has its matrix. */
+typedef struct {
+    pst_csr a;             /* the low-order matrix                                            */
+    int64_t *aoff;         /* offsets of the AMG rows' entries (m + 1)                        */
+    HYPRE_Int *ncols;      /* entries per AMG row (m)                                         */
+    HYPRE_BigInt *cols;    /* the AMG matrix's columns and values                             */
+    double *vals;
+} amg_build;
+
+static void build_free(amg_build *t)
+{
+    pst_csr_free(&t->a);
+    pst_free(t->aoff);
+    pst_free(t->ncols);
+    pst_free(t->cols);
+    pst_free(t->vals);
+    *t = (amg_build){0};
+}
+
 /* Message of a hypre error code. */
 static int hypre_failure(char *err, const char *what, HYPRE_Int code)
 {
@@ -196,9 +234,11 @@ static int hypre_failure(char *err, const char *what, HYPRE_Int code)
 
 /* The hypre objects: the IJ matrix of A_II, the two vectors and BoomerAMG set up on them.
  * Called inside the critical section. */
-static int hypre_setup(amg_ctx *c, int dim, HYPRE_Int *ncols, const HYPRE_BigInt *cols,
-                       const double *vals, char *err)
+static int hypre_setup(amg_ctx *c, int dim, const pst_solve_opts *o, amg_build *t, char *err)
 {
+    HYPRE_Int *ncols = t->ncols;
+    const HYPRE_BigInt *cols = t->cols;
+    const double *vals = t->vals;
     const HYPRE_Int m = c->m;
     HYPRE_Int e = 0;
     HYPRE_ClearAllErrors();
@@ -217,6 +257,7 @@ static int hypre_setup(amg_ctx *c, int dim, HYPRE_Int *ncols, const HYPRE_BigInt
         e = HYPRE_IJMatrixGetObject(c->A, (void **)&c->pA);
     if (e)
         return hypre_failure(err, "matrix assembly", e);
+    build_free(t); /* hypre holds its copy now: a lower peak for the coarsening */
     HYPRE_IJVector *vec[2] = {&c->B, &c->X};
     HYPRE_ParVector *par[2] = {&c->pB, &c->pX};
     for (int v = 0; v < 2 && !e; ++v) {
@@ -262,7 +303,12 @@ static int hypre_setup(amg_ctx *c, int dim, HYPRE_Int *ncols, const HYPRE_BigInt
         HYPRE_BoomerAMGSetCycleRelaxType(c->amg, 6, 3);
         HYPRE_BoomerAMGSetCycleNumSweeps(c->amg, 4, 3);
     }
-    HYPRE_BoomerAMGSetStrongThreshold(c->amg, dim == 3 ? 0.5 : 0.25);
+    /* Aggressive coarsening on the first levels (multipass interpolation there): fewer coarse
+     * points where the proxy's rows are widest, the cheapest set-up of the measured table. */
+    HYPRE_BoomerAMGSetAggNumLevels(c->amg, o->amg_aggressive);
+    HYPRE_BoomerAMGSetStrongThreshold(c->amg, o->amg_strong > 0 ? o->amg_strong
+                                              : dim == 3     ? 0.5
+                                                             : 0.25);
     e = HYPRE_GetError();
     if (!e)
         e = HYPRE_BoomerAMGSetup(c->amg, c->pA, c->pB, c->pX);
@@ -273,43 +319,67 @@ static int hypre_setup(amg_ctx *c, int dim, HYPRE_Int *ncols, const HYPRE_BigInt
 
 /* ---- set-up ------------------------------------------------------------------------------- */
 
-/* The assembled low-order operator: Brookshaw with the operator's kernel, so the operator's
- * neighbour list covers its support, or the operator itself. */
-static int low_order_matrix(const pst_op *op, int source, pst_csr *a, char *err)
+/* The largest ratio max / min over the particles of a mobility component (1 without one). */
+static double mobility_contrast(const pst_cloud *c)
 {
-    const pst_op *low = op;
-    pst_op *brookshaw = NULL;
-    if (source == PST_AMG_BROOKSHAW && strcmp(op->scheme->name, "brookshaw") != 0) {
-        pst_op_opts o = op->opts;
-        o.scheme = "brookshaw";
-        o.kernel = (int)op->kernel;
-        o.variant = 0;
-        PST_TRY(pst_op_create(&brookshaw, op->cloud, op->nl, &o, err));
-        low = brookshaw;
+    double worst = 1;
+    for (int a = 0; a < c->mob_ncomp; ++a) {
+        double lo = INFINITY, hi = 0;
+#pragma omp parallel for schedule(static) reduction(min : lo) reduction(max : hi)
+        for (size_t i = 0; i < c->n; ++i) {
+            lo = fmin(lo, c->mob[a][i]);
+            hi = fmax(hi, c->mob[a][i]);
+        }
+        worst = fmax(worst, lo > 0 ? hi / lo : INFINITY);
     }
-    int st = pst_op_assemble(low, a);
-    pst_op_destroy(brookshaw);
-    PST_CHECK(st != PST_OK, st, err, "cannot assemble the AMG matrix of %zu rows", op->n);
-    return PST_OK;
+    return worst;
 }
 
-/* What the set-up holds only until hypre has its matrix. */
-typedef struct {
-    pst_csr a;             /* the low-order matrix                                            */
-    int64_t *aoff;         /* offsets of the AMG rows' entries (m + 1)                        */
-    HYPRE_Int *ncols;      /* entries per AMG row (m)                                         */
-    HYPRE_BigInt *cols;    /* the AMG matrix's columns and values                             */
-    double *vals;
-} amg_build;
-
-static void build_free(amg_build *t)
+/* The proxy's radius in h: amg_radius, or for the automatic choice (< 0) the measured default,
+ * except where the mobility varies more than tenfold: there the long pairs of the scheme couple
+ * cells across a low-mobility neighbour, and a proxy without them stalls (SPE10: 57 iterations
+ * with the whole list, no convergence in 3000 with the cut one). */
+static double proxy_radius(const pst_op *op, double asked)
 {
-    pst_csr_free(&t->a);
-    pst_free(t->aoff);
-    pst_free(t->ncols);
-    pst_free(t->cols);
-    pst_free(t->vals);
-    *t = (amg_build){0};
+    if (asked >= 0)
+        return asked;
+    return mobility_contrast(op->cloud) > PST_AMG_CONTRAST ? 0 : PST_AMG_RADIUS;
+}
+
+/* The assembled low-order operator: the operator itself (OWN), or the Brookshaw proxy with the
+ * operator's kernel (and mobility and boundary rows) on the operator's list cut to amg_radius h
+ * (the whole list when that reaches the list's support: a Brookshaw operator is then its own
+ * proxy). */
+static int low_order_matrix(const pst_op *op, const pst_solve_opts *so, pst_csr *a,
+                            size_t *full_rows, char *err)
+{
+    *full_rows = 0;
+    double support = pst_nlist_support(op->nl), radius = proxy_radius(op, so->amg_radius);
+    double cut = radius > 0 && radius < support ? radius / support : 1;
+    int own = so->amg_source == PST_AMG_OWN ||
+              (strcmp(op->scheme->name, "brookshaw") == 0 && cut == 1);
+    if (own) {
+        int st = pst_op_assemble(op, a);
+        PST_CHECK(st != PST_OK, st, err, "cannot assemble the AMG matrix of %zu rows", op->n);
+        return PST_OK;
+    }
+    pst_nlist *list = NULL;
+    if (cut < 1)
+        PST_TRY(pst_nlist_cut(&list, op->cloud, op->nl, cut, full_rows, err));
+    pst_op_opts o = op->opts;
+    o.scheme = "brookshaw";
+    o.kernel = (int)op->kernel;
+    o.variant = 0;
+    pst_op *brookshaw = NULL;
+    int st = pst_op_create(&brookshaw, op->cloud, list ? list : op->nl, &o, err);
+    if (st == PST_OK) {
+        st = pst_op_assemble(brookshaw, a);
+        if (st != PST_OK)
+            pst_set_err(err, "cannot assemble the AMG matrix of %zu rows", op->n);
+    }
+    pst_op_destroy(brookshaw);
+    pst_nlist_destroy(list);
+    return st;
 }
 
 /* The AMG unknowns (the non-Dirichlet rows, in row order), both maps and the per-row arrays. */
@@ -424,35 +494,40 @@ static int fill_entries(amg_ctx *c, amg_build *t, const pst_op *op, char *err)
     return PST_OK;
 }
 
-int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err)
+int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
 {
     *p = (pst_prec){0};
-    PST_CHECK(source != PST_AMG_BROOKSHAW && source != PST_AMG_OWN, PST_EINVAL, err,
-              "unknown AMG source %d (brookshaw = 0, own = 1)", source);
+    PST_CHECK(o->amg_source != PST_AMG_BROOKSHAW && o->amg_source != PST_AMG_OWN, PST_EINVAL,
+              err, "unknown AMG source %d (brookshaw = 0, own = 1)", o->amg_source);
     PST_CHECK(op->n > (size_t)INT_MAX, PST_EINVAL, err,
               "%zu particles exceed hypre's 32-bit indices", op->n);
     PST_TRY(runtime_ready(err));
+    double t0 = omp_get_wtime();
     amg_build t = {0};
-    PST_TRY(low_order_matrix(op, source, &t.a, err));
+    size_t full_rows;
+    PST_TRY(low_order_matrix(op, o, &t.a, &full_rows, err));
     int st = PST_OK;
     amg_ctx *c = calloc(1, sizeof *c);
     PST_CHECK_GOTO(!c, st, PST_ENOMEM, fail, err, "cannot allocate the AMG matrix of %zu rows",
                    op->n);
     c->n = op->n;
+    c->full_rows = full_rows;
     PST_TRY_GOTO(st, amg_layout(c, op->kind, &t, err), fail);
     PST_TRY_GOTO(st, count_entries(c, &t, err), fail);
     PST_TRY_GOTO(st, fill_entries(c, &t, op, err), fail);
     pst_csr_free(&t.a);   /* before hypre builds its copy: a lower peak */
+    c->entries = c->m > 0 ? (long long)t.aoff[c->m] : 0;
     if (c->m > 0) {
 #pragma omp critical(pst_hypre)
         {
-            st = hypre_setup(c, op->dim, t.ncols, t.cols, t.vals, err);
+            st = hypre_setup(c, op->dim, o, &t, err);
             HYPRE_ClearAllErrors();
         }
         if (st != PST_OK)
             goto fail;
     }
     build_free(&t);
+    c->seconds = omp_get_wtime() - t0;
     p->lin = (pst_linop){.n = op->n, .apply = amg_apply, .ctx = c};
     p->destroy = amg_destroy;
     return PST_OK;
@@ -461,6 +536,16 @@ fail:
     build_free(&t);
     amg_free(c);
     return st;
+}
+
+void pst_prec_amg_stats(const pst_prec *p, pst_krylov_stats *st)
+{
+    const amg_ctx *c = p->lin.ctx;
+    if (!c)
+        return;
+    st->amg_entries = c->entries;
+    st->amg_full_rows = c->full_rows;
+    st->amg_setup_seconds = c->seconds;
 }
 
 #endif

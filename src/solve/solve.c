@@ -11,6 +11,9 @@ void pst_solve_defaults(pst_solve_opts *o)
     o->solver = PST_SOLVER_AUTO;
     o->precond = PST_PREC_JACOBI;
     o->amg_source = PST_AMG_BROOKSHAW;
+    o->amg_radius = -1;
+    o->amg_aggressive = 0;
+    o->amg_strong = 0;
     o->restart = 50;
     o->max_iter = 5000;
     o->rtol = 1e-10;

@@ -19,13 +19,15 @@ typedef struct {
  * callback fails, PST_ENOMEM. */
 int pst_prec_jacobi(pst_prec *p, const pst_linop *A, char *err);
 
-/* hypre BoomerAMG on an assembled low-order operator (src/solve/precond_amg.c): `source` is a
- * pst_amg_source. L has a negative diagonal on interior rows and a positive one on Neumann
+/* hypre BoomerAMG on an assembled low-order operator (src/solve/precond_amg.c), with the AMG
+ * options of o (amg_source, amg_radius, amg_aggressive, amg_strong). L has a negative diagonal on interior rows and a positive one on Neumann
  * (flux) and Dirichlet rows, so the AMG matrix is A = S L_low with S = -1 on interior rows and
  * +1 elsewhere (an M-matrix with a positive diagonal for Brookshaw), and apply computes
  * z = A^-1 (S r). Dirichlet rows are eliminated inside (they give z = r). The caller must have
  * initialised MPI: PST_EINVAL saying so when it has not (or has finalised it). */
-int pst_prec_amg(pst_prec *p, const pst_op *op, int source, char *err);
+int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err);
+/* The AMG fields of st (amg_*) from an AMG preconditioner p. */
+void pst_prec_amg_stats(const pst_prec *p, pst_krylov_stats *st);
 /* PST_OK when hypre may run now: MPI initialised and not finalised, and, from a thread other
  * than MPI's main thread, at least MPI_THREAD_SERIALIZED; else PST_EINVAL saying what to do.
  * Checked by every AMG set-up and by every solve of a handle that holds an AMG hierarchy. */
