@@ -255,6 +255,7 @@ static void test_run_keeps_cloud(void)
 
 int main(void)
 {
+    test_mpi_init(); /* the solves' default preconditioner is AMG, which needs MPI */
     test_override_equals_cloud(2);
     test_override_equals_cloud(3);
     test_bad_override();

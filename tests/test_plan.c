@@ -169,9 +169,17 @@ static void test_solve_plan(void)
     pst_cloud *c = run(&s, &k, &p, PST_OK);
     CHECK_INT(p.task_stored[0], 1);
     CHECK_INT(p.task_solver[0], PST_SOLVER_GMRES);
+    CHECK_INT(p.task_precond[0], pst_have_amg() ? PST_PREC_AMG : PST_PREC_JACOBI); /* auto */
     CHECK_INT(k.solves, 1);
     CHECK_INT(k.stored_weights, 1);
     CHECK_INT(k.applies, 0);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+
+    const char *jac[] = {solve[0], "tasks.0.precond=jacobi"};
+    s = scene(jac, 2);
+    c = run(&s, &k, &p, PST_OK);
+    CHECK_INT(p.task_precond[0], PST_PREC_JACOBI); /* asked for: kept */
     pst_cloud_destroy(c);
     pst_scene_free(&s);
 
@@ -180,6 +188,7 @@ static void test_solve_plan(void)
     c = run(&s, &k, &p, PST_OK);
     CHECK_INT(p.task_solver[0], PST_SOLVER_CG);
     CHECK_INT(p.task_stored[0], 0);
+    CHECK_INT(p.task_precond[0], pst_have_amg() ? PST_PREC_AMG : PST_PREC_JACOBI);
     CHECK_INT(k.stored_weights, 0);
     pst_cloud_destroy(c);
     pst_scene_free(&s);
@@ -359,6 +368,7 @@ static void test_parameters(void)
 
 int main(void)
 {
+    test_mpi_init(); /* the solves' default preconditioner is AMG, which needs MPI */
     test_only_what_is_asked();
     test_mobility_factor();
     test_solve_plan();

@@ -196,7 +196,8 @@ static void test_tasks(void)
     CHECK(strcmp(s.tasks[3].name, "solve") == 0);
     CHECK_INT(s.tasks[0].nnorms, 0); /* no exact, no norms */
     CHECK_INT(s.tasks[3].solver, PST_SOLVER_AUTO);
-    CHECK_INT(s.tasks[3].precond, PST_PREC_JACOBI);
+    CHECK_INT(s.tasks[3].precond, SC_PRECOND_AUTO);
+    CHECK(s.tasks[3].amg_radius == -1 && s.tasks[3].amg_aggressive == 0);
     CHECK_INT(s.tasks[3].stored, -1);
     CHECK_INT(s.tasks[3].restart, 50);
     CHECK_INT(s.tasks[3].max_iter, 5000);

@@ -15,6 +15,10 @@
 
 #define PLAN_PI 3.14159265358979323846
 
+/* The AMG set-up's peak memory, fitted to bench_solve's peak RSS (docs/solving.md, "Memory"). */
+#define AMG_BYTES_PER_ENTRY 40.0
+#define AMG_BYTES_PER_ROW 200.0
+
 /* Bytes the machine can give a run: MemAvailable from /proc/meminfo, else physical memory. */
 static double available_bytes(void)
 {
@@ -109,6 +113,30 @@ static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t
     return PST_OK;
 }
 
+/* Entries per row of the AMG matrix: the Brookshaw proxy's pairs within amg_radius h (or the
+ * whole list), or the scheme's own stencil (the list for every scheme but the mixed ones),
+ * plus the diagonal. */
+static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, const sc_task *t)
+{
+    /* the automatic radius (-1) is 1.6 h, or the whole list for a contrasted mobility, which
+     * only the cloud shows: with a per-particle mobility the estimate assumes the whole list */
+    double radius = t->amg_radius >= 0 ? t->amg_radius : p->mobility_ncomp ? 0 : 1.6;
+    double reach = p->support;
+    if (t->amg_source == PST_AMG_BROOKSHAW && radius > 0 && radius < reach)
+        reach = radius;
+    reach *= s->cloud.h_ratio; /* in spacings */
+    double pairs = s->dim == 2 ? PLAN_PI * reach * reach : 4.0 / 3.0 * PLAN_PI * pow(reach, 3);
+    return fmax(pairs - 1, 1) + 1;
+}
+
+/* The AMG set-up's peak per row: bytes per AMG matrix entry and per row measured at the peak
+ * (hypre's copy of the matrix, its strength graph, interpolation and coarse levels, with
+ * pstencil's copy freed), docs/solving.md "Memory". */
+static double amg_bytes_per_row(const pst_plan *p, const pst_scene *s, const sc_task *t)
+{
+    return AMG_BYTES_PER_ENTRY * amg_entries_per_row(p, s, t) + AMG_BYTES_PER_ROW;
+}
+
 int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
@@ -155,8 +183,11 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
                                                              : PST_SOLVER_GMRES;
             double vectors = p->task_solver[k] == PST_SOLVER_GMRES ? t->restart + 8 : 8;
             solver_vectors = fmax(solver_vectors, vectors);
-            if (t->precond == PST_PREC_AMG) /* assembled low-order matrix + hierarchy, ~2x */
-                amg = fmax(amg, 2.0 * (12.0 * p->neighbours + 24.0));
+            p->task_precond[k] = t->precond != SC_PRECOND_AUTO ? t->precond
+                                 : pst_have_amg()              ? PST_PREC_AMG
+                                                               : PST_PREC_JACOBI;
+            if (p->task_precond[k] == PST_PREC_AMG)
+                amg = fmax(amg, amg_bytes_per_row(p, s, t));
         }
     }
     double n = (double)particles;
@@ -236,7 +267,7 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
         fprintf(f, "  task %-6d %s '%s'", k, task_type_name(t->type), t->name);
         if (t->type == SC_TASK_SOLVE)
             fprintf(f, ": %s + %s, rtol %g, %s operator%s", solver_name(p->task_solver[k]),
-                    precond_name(t->precond), t->rtol,
+                    precond_name(p->task_precond[k]), t->rtol,
                     p->task_stored[k] ? "stored" : "matrix-free",
                     t->ngroups ? ", own boundary groups" : "");
         else if (t->field)

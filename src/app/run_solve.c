@@ -84,8 +84,11 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     pst_solve_opts so;
     pst_solve_defaults(&so);
     so.solver = r->plan.task_solver[k];
-    so.precond = t->precond;
+    so.precond = r->plan.task_precond[k];
     so.amg_source = t->amg_source;
+    so.amg_radius = t->amg_radius;
+    so.amg_aggressive = t->amg_aggressive;
+    so.amg_strong = t->amg_strong;
     so.restart = t->restart;
     so.max_iter = t->max_iter;
     so.rtol = t->rtol;

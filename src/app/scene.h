@@ -14,6 +14,9 @@
 
 enum { SC_MAX_TASKS = 32, SC_MAX_FIELDS = 32, SC_MAX_GROUPS = 8, SC_MAX_NORMS = 8 };
 
+/* tasks[].precond "auto" (after none, jacobi, amg: their pst_precond values) */
+enum { SC_PRECOND_AUTO = 3 };
+
 typedef enum { SC_CLOUD_LATTICE, SC_CLOUD_CELL_CENTRED, SC_CLOUD_FILE } sc_cloud_source;
 
 typedef struct {
@@ -87,7 +90,10 @@ typedef struct {
     char *rhs;               /* expression                                                     */
     sc_group groups[SC_MAX_GROUPS];
     int ngroups;             /* 0: every boundary particle is Dirichlet with u = exact          */
-    int solver, precond, amg_source, restart, max_iter;
+    int solver, amg_source, restart, max_iter;
+    int precond;             /* a pst_precond, or SC_PRECOND_AUTO (the planner decides)         */
+    double amg_radius, amg_strong;
+    int amg_aggressive;
     double rtol;
     int stored;              /* -1 auto (the planner decides), 0 matrix-free, 1 stored          */
     /* errors */

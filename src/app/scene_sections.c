@@ -300,6 +300,9 @@ static int read_task(ctx *c, const cJSON *o, pst_scene *s, sc_task *t)
     t->solver = scene_get_enum(o, "tasks[].solver");
     t->precond = scene_get_enum(o, "tasks[].precond");
     t->amg_source = scene_get_enum(o, "tasks[].amg_source");
+    t->amg_radius = scene_get_real(o, "tasks[].amg_radius");
+    t->amg_aggressive = (int)scene_get_real(o, "tasks[].amg_aggressive");
+    t->amg_strong = scene_get_real(o, "tasks[].amg_strong");
     t->restart = (int)scene_get_real(o, "tasks[].restart");
     t->max_iter = (int)scene_get_real(o, "tasks[].max_iter");
     t->rtol = scene_get_real(o, "tasks[].rtol");
