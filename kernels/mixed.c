@@ -15,13 +15,17 @@
  * The derivative rows sum to zero (constants are reproduced), so the difference form is exact.
  * Per particle only Q_I = rows 1..D of M_I^-1 (basis unscaled, see inversion()) is stored; the
  * pair weight phi is recomputed from positions and Q by one inline function that the matrix-free
- * apply, emit_row and the gradient share. The stencil is the neighbours of neighbours: the
- * precompute builds that pattern and emit_row writes the composed weights in it.
+ * apply, emit_row and the gradient share. The matrix-free apply is two one-ring sweeps over the
+ * neighbour list. The stored rows' stencil is the neighbours of neighbours (~1500 columns per
+ * row in 3D): that pattern is built only when operator.c asks for it (the wide_pattern hook:
+ * stored weights, assembly, diagonal, audit), never by the precompute, and emit_row writes the
+ * composed weights in it.
  *
  * Fallback chain (docs/schemes/mixed.md): quadratic fit (mixed2) -> linear fit -> "no fit": the
  * particle's gradient is the uncorrected kernel gradient sum_J V_J (u_J - u_I) grad W_IJ (cloud
  * volumes) and its interior row is the Brookshaw row V_J sum_a (M^a_I + M^a_J) a_IJ x_a^2 / d^2.
  * Neumann rows are n . M_I . (D u)_I with the particle's gradient. Never NaN. */
+#include "check.h"
 #include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
@@ -47,8 +51,6 @@ typedef struct {
     double *Q; /* D*m per particle: d/dx_a weights in the unscaled basis, 1/h folded in  */
     uint8_t *mode;   /* MX_FIT / MX_LINEAR_FIT / MX_NOFIT                               */
     double *Vn;      /* mixed0: number-density volumes 1/sum W (eq. 4), else NULL        */
-    int64_t *poff;   /* the neighbours-of-neighbours pattern (op->poff / op->pidx)       */
-    uint32_t *pidx;
 } mx_data;
 
 /* Everything the pair functions read, gathered once per call: c.off / c.idx are the
@@ -367,8 +369,6 @@ static void mx_free(void *p)
     pst_free(d->Q);
     pst_free(d->mode);
     pst_free(d->Vn);
-    pst_free(d->poff);
-    pst_free(d->pidx);
     free(d);
 }
 
@@ -558,55 +558,61 @@ static int64_t ring2(const mx_ctx *k, size_t i, uint32_t *mark, uint32_t *out)
     return c;
 }
 
-/* WEIGHTS: the neighbours-of-neighbours pattern, a counting pass and a filling pass (memory
- * stays one copy of the pattern). Bound by the |N|^2 gathers of mark[] per row, then the sort. */
-static int build_pattern(pst_op *op, const mx_ctx *k, char *err)
+/* Every thread's marker array reset (i < n <= UINT32_MAX never equals the reset value). */
+static void reset_marks(uint32_t *marks, size_t len)
 {
-    mx_data *d = op->data;
-    size_t n = op->n;
-    int nt = omp_get_max_threads();
-    uint32_t *marks = pst_alloc((size_t)nt * (n ? n : 1) * sizeof *marks);
-    d->poff = pst_alloc((n + 1) * sizeof *d->poff);
-    if (!marks || !d->poff) {
-        pst_free(marks);
-        pst_set_err(err, "%s: cannot allocate the stencil pattern of %zu particles",
-                    op->scheme->name, n);
-        return PST_ENOMEM;
-    }
-    for (size_t t = 0; t < (size_t)nt * n; ++t)
-        marks[t] = UINT32_MAX; /* i < n <= UINT32_MAX never equals it */
-    d->poff[0] = 0;
+    for (size_t t = 0; t < len; ++t)
+        marks[t] = UINT32_MAX;
+}
+
+/* The wide_pattern hook: the neighbours-of-neighbours pattern, a counting pass and (with pidx)
+ * a filling pass, so memory stays one copy of it. Bound by the |N|^2 gathers of mark[] per row,
+ * then the sort. Nothing is left allocated on failure. */
+static int mx_wide_pattern(const pst_op *op, int64_t **poff, uint32_t **pidx, char *err)
+{
+    mx_ctx k = make_ctx(op);
+    size_t n = op->n, nm = (size_t)omp_get_max_threads() * n;
+    uint32_t *marks = pst_alloc(nm * sizeof *marks), *idx = NULL;
+    int64_t *off = pst_alloc((n + 1) * sizeof *off);
+    int st = PST_OK;
+    PST_CHECK_GOTO(!marks || !off, st, PST_ENOMEM, fail, err,
+                   "%s: cannot allocate the stencil pattern of %zu particles", op->scheme->name,
+                   n);
+    reset_marks(marks, nm);
+    off[0] = 0;
 #pragma omp parallel
     {
         uint32_t *mark = marks + (size_t)omp_get_thread_num() * n;
 #pragma omp for schedule(dynamic, 256)
         for (size_t i = 0; i < n; ++i)
-            d->poff[i + 1] = ring2(k, i, mark, NULL);
+            off[i + 1] = ring2(&k, i, mark, NULL);
     }
     for (size_t i = 0; i < n; ++i)
-        d->poff[i + 1] += d->poff[i];
-    d->pidx = pst_alloc((size_t)d->poff[n] * sizeof *d->pidx);
-    if (!d->pidx) {
-        pst_free(marks);
-        pst_set_err(err, "%s: cannot allocate the stencil pattern (%lld entries)",
-                    op->scheme->name, (long long)d->poff[n]);
-        return PST_ENOMEM;
-    }
-    for (size_t t = 0; t < (size_t)nt * n; ++t)
-        marks[t] = UINT32_MAX;
+        off[i + 1] += off[i];
+    if (pidx) {
+        idx = pst_alloc((size_t)off[n] * sizeof *idx);
+        PST_CHECK_GOTO(!idx, st, PST_ENOMEM, fail, err,
+                       "%s: cannot allocate the stencil pattern (%lld entries)",
+                       op->scheme->name, (long long)off[n]);
+        reset_marks(marks, nm);
 #pragma omp parallel
-    {
-        uint32_t *mark = marks + (size_t)omp_get_thread_num() * n;
+        {
+            uint32_t *mark = marks + (size_t)omp_get_thread_num() * n;
 #pragma omp for schedule(dynamic, 256)
-        for (size_t i = 0; i < n; ++i) {
-            ring2(k, i, mark, d->pidx + d->poff[i]);
-            sort_u32(d->pidx + d->poff[i], d->poff[i + 1] - d->poff[i]);
+            for (size_t i = 0; i < n; ++i) {
+                ring2(&k, i, mark, idx + off[i]);
+                sort_u32(idx + off[i], off[i + 1] - off[i]);
+            }
         }
+        *pidx = idx;
     }
     pst_free(marks);
-    op->poff = d->poff;
-    op->pidx = d->pidx;
+    *poff = off;
     return PST_OK;
+fail:
+    pst_free(marks);
+    pst_free(off);
+    return st;
 }
 
 static int precompute(pst_op *op, int which, char *err)
@@ -652,10 +658,7 @@ static int precompute(pst_op *op, int which, char *err)
         op->phase[PST_PHASE_INVERSION] += omp_get_wtime() - t1;
     }
     pst_free(tri);
-    t0 = omp_get_wtime();
-    int st = build_pattern(op, &k, err);
-    op->phase[PST_PHASE_WEIGHTS] += omp_get_wtime() - t0;
-    return st;
+    return PST_OK; /* no WEIGHTS phase: the weights are formed by the applies or on emission */
 }
 
 static int pre_ordinary(pst_op *op, char *err) { return precompute(op, MX_ORDINARY, err); }
@@ -761,6 +764,7 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
                            .mobility = 1,                                                      \
                            .min_neighbours = MIN,                                              \
                            .precompute = PRE,                                                  \
+                           .wide_pattern = mx_wide_pattern,                                    \
                            .apply = mx_apply,                                                  \
                            .emit_row = mx_emit_row,                                            \
                            .gradient = mx_gradient,                                            \

@@ -157,10 +157,13 @@ int pst_op_kernel(const pst_op *op);
 void pst_op_options(const pst_op *op, pst_op_opts *o);
 /* Entries of the operator's sparsity pattern without the diagonal: the neighbour list's
  * pairs, or more for schemes with a wider stencil (the mixed schemes' neighbours of
- * neighbours). pst_op_store keeps 8 bytes per entry. */
+ * neighbours, counted on demand until pst_op_store builds the pattern; -1 when the count
+ * cannot allocate its n + 1 offsets). pst_op_store keeps 8 bytes per entry. */
 int64_t pst_op_pattern_pairs(const pst_op *op);
 
-/* Compute and keep the stencil weights w_IJ (CSR, the list's layout: 8 bytes per pair). */
+/* Compute and keep the stencil weights w_IJ (CSR in the pattern's layout: 8 bytes per entry;
+ * a wider pattern than the list, the mixed schemes', is built here and kept with them, 4 bytes
+ * more per entry). PST_ENOMEM when they do not fit (nothing is kept then). */
 int pst_op_store(pst_op *op);
 /* Apply from the stored weights (same rows as pst_op_apply, to rounding). PST_EINVAL when
  * pst_op_store has not been called. */

@@ -257,8 +257,10 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
         pst_set_err(err, "cannot allocate the row status of %zu particles", c->n);
         return PST_ENOMEM;
     }
-    op->poff = pst_nlist_offsets(nl);
-    op->pidx = pst_nlist_indices(nl);
+    if (!scheme->wide_pattern) { /* a wide pattern is built only where it is read */
+        op->poff = pst_nlist_offsets(nl);
+        op->pidx = pst_nlist_indices(nl);
+    }
     /* Derivatives only: the rows are skipped when the scheme's derivative estimates do not
      * read them (the planner's "model only what a scene needs"). */
     op->rows = o->laplacian || !scheme->derivatives_standalone;
@@ -292,6 +294,8 @@ void pst_op_destroy(pst_op *op)
         op->scheme->free_data(op->data);
     pst_free(op->status);
     pst_free(op->w);
+    pst_free(op->own_poff);
+    pst_free(op->own_pidx);
     free(op);
 }
 
@@ -338,7 +342,42 @@ void pst_op_options(const pst_op *op, pst_op_opts *o)
     o->scheme = op->scheme->name;
     o->kernel = op->kernel;
 }
-int64_t pst_op_pattern_pairs(const pst_op *op) { return op->poff[op->n]; }
+
+/* A wide pattern not built yet is counted (offsets only, no index). */
+int64_t pst_op_pattern_pairs(const pst_op *op)
+{
+    if (op->poff)
+        return op->poff[op->n];
+    int64_t *off;
+    if (op->scheme->wide_pattern(op, &off, NULL, NULL) != PST_OK)
+        return -1;
+    int64_t pairs = off[op->n];
+    pst_free(off);
+    return pairs;
+}
+
+/* The stored weights need the pattern for as long as they live: a wide one is built into op. */
+static int own_pattern(pst_op *op)
+{
+    if (op->poff)
+        return PST_OK;
+    PST_TRY(op->scheme->wide_pattern(op, &op->own_poff, &op->own_pidx, NULL));
+    op->poff = op->own_poff;
+    op->pidx = op->own_pidx;
+    return PST_OK;
+}
+
+static void drop_own_pattern(pst_op *op)
+{
+    if (!op->own_poff)
+        return;
+    pst_free(op->own_poff);
+    pst_free(op->own_pidx);
+    op->own_poff = NULL;
+    op->own_pidx = NULL;
+    op->poff = NULL;
+    op->pidx = NULL;
+}
 
 int pst_op_store(pst_op *op)
 {
@@ -346,10 +385,13 @@ int pst_op_store(pst_op *op)
         return PST_EINVAL;
     if (op->w)
         return PST_OK;
+    PST_TRY(own_pattern(op));
     const int64_t *off = op->poff;
     double *w = pst_alloc((size_t)off[op->n] * sizeof *w);
-    if (!w)
+    if (!w) {
+        drop_own_pattern(op); /* a caller that goes on matrix-free gets its memory back */
         return PST_ENOMEM;
+    }
     const uint8_t *kind = op->kind;
 #pragma omp parallel for schedule(dynamic, 256)
     for (size_t i = 0; i < op->n; ++i) {
@@ -390,6 +432,37 @@ int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
     return PST_OK;
 }
 
+/* A read-only path's operator with the rows' pattern in place: op itself when it has one,
+ * else a copy of op pointing at a wide pattern built for this call (pattern_view_free frees
+ * it). Building it into op instead would write through a const operator that concurrent
+ * read-only calls may share; the copy writes nothing shared, and the pattern (4 bytes per
+ * entry, ~6 GB for a 3D mixed scheme at 10^6) does not outlive the call. NULL: no memory. */
+typedef struct {
+    pst_op copy;
+    int64_t *poff;
+    uint32_t *pidx;
+} pattern_view;
+
+static const pst_op *pattern_view_of(const pst_op *op, pattern_view *v)
+{
+    v->poff = NULL;
+    v->pidx = NULL;
+    if (op->poff)
+        return op;
+    if (op->scheme->wide_pattern(op, &v->poff, &v->pidx, NULL) != PST_OK)
+        return NULL;
+    v->copy = *op;
+    v->copy.poff = v->poff;
+    v->copy.pidx = v->pidx;
+    return &v->copy;
+}
+
+static void pattern_view_free(pattern_view *v)
+{
+    pst_free(v->poff);
+    pst_free(v->pidx);
+}
+
 /* The weights of row i, from the store or emitted into `buf`. */
 static const double *row_weights(const pst_op *op, size_t i, double *buf)
 {
@@ -410,10 +483,8 @@ static double *row_scratch(const pst_op *op, size_t *len)
     return op->w ? NULL : pst_alloc((size_t)omp_get_max_threads() * *len * sizeof(double));
 }
 
-int pst_op_diagonal(const pst_op *op, double *diag)
+static int diagonal_rows(const pst_op *op, double *diag)
 {
-    if (!op->rows)
-        return PST_EINVAL;
     const int64_t *off = op->poff;
     const uint8_t *kind = op->kind;
     size_t L;
@@ -440,6 +511,17 @@ int pst_op_diagonal(const pst_op *op, double *diag)
     return PST_OK;
 }
 
+int pst_op_diagonal(const pst_op *op, double *diag)
+{
+    if (!op->rows)
+        return PST_EINVAL;
+    pattern_view v;
+    const pst_op *p = pattern_view_of(op, &v);
+    int st = p ? diagonal_rows(p, diag) : PST_ENOMEM;
+    pattern_view_free(&v);
+    return st;
+}
+
 int pst_op_scale(const pst_op *op, double *s)
 {
     if (!op->rows)
@@ -462,11 +544,8 @@ void pst_csr_free(pst_csr *a)
 
 /* Row i of the explicit matrix: the off-diagonal weights and the diagonal merged in column
  * order (list rows are sorted; the diagonal is inserted where it belongs). */
-int pst_op_assemble(const pst_op *op, pst_csr *a)
+static int assemble_rows(const pst_op *op, pst_csr *a)
 {
-    if (!op->rows)
-        return PST_EINVAL;
-    memset(a, 0, sizeof *a);
     size_t n = op->n;
     const int64_t *off = op->poff;
     const uint32_t *idx = op->pidx;
@@ -510,6 +589,18 @@ int pst_op_assemble(const pst_op *op, pst_csr *a)
     }
     pst_free(scratch);
     return PST_OK;
+}
+
+int pst_op_assemble(const pst_op *op, pst_csr *a)
+{
+    if (!op->rows)
+        return PST_EINVAL;
+    memset(a, 0, sizeof *a);
+    pattern_view v;
+    const pst_op *p = pattern_view_of(op, &v);
+    int st = p ? assemble_rows(p, a) : PST_ENOMEM;
+    pattern_view_free(&v);
+    return st;
 }
 
 typedef struct {
@@ -565,10 +656,8 @@ static uint8_t audit_row(const pst_op *op, size_t i, const double *w, int64_t *n
 
 /* Audit every interior row (threaded): the flags into `flags` (may be NULL) and the totals
  * into a (may be NULL). */
-static int audit(const pst_op *op, uint8_t *flags, pst_op_audit *a)
+static int audit_rows(const pst_op *op, uint8_t *flags, pst_op_audit *a)
 {
-    if (!op->rows)
-        return PST_EINVAL;
     const uint8_t *kind = op->kind;
     size_t L;
     double *scratch = row_scratch(op, &L);
@@ -607,6 +696,17 @@ static int audit(const pst_op *op, uint8_t *flags, pst_op_audit *a)
         a->lemma3_xi_large = has_lemma3 ? large : -1;
     }
     return PST_OK;
+}
+
+static int audit(const pst_op *op, uint8_t *flags, pst_op_audit *a)
+{
+    if (!op->rows)
+        return PST_EINVAL;
+    pattern_view v;
+    const pst_op *p = pattern_view_of(op, &v);
+    int st = p ? audit_rows(p, flags, a) : PST_ENOMEM;
+    pattern_view_free(&v);
+    return st;
 }
 
 int pst_op_audit_rows(const pst_op *op, pst_op_audit *a)

@@ -38,6 +38,12 @@ typedef struct pst_scheme {
     /* Precompute the per-particle data into op->data (op->status is zeroed, fill it); one
      * threaded pass over particles. Returns PST_OK or an error with a message in err. */
     int (*precompute)(pst_op *op, char *err);
+    /* The rows' sparsity pattern when it is wider than the neighbour list (the mixed schemes'
+     * neighbours of neighbours), into fresh arrays: *poff (n + 1 offsets) and, unless pidx is
+     * NULL (count only), *pidx, sorted by column in a row, without the diagonal. NULL: the
+     * pattern is the neighbour list. Never called by precompute or the applies: it is such a
+     * scheme's largest array, built only for the paths that read the pattern (operator.c). */
+    int (*wide_pattern)(const pst_op *op, int64_t **poff, uint32_t **pidx, char *err);
     /* y_I = sum_J w_IJ (u_J - u_I) for every non-Dirichlet row I (threaded). */
     void (*apply)(const pst_op *op, const double *u, double *y);
     /* The weights w_IJ of non-Dirichlet row i, in the order of the row's pattern. */
@@ -77,10 +83,12 @@ struct pst_op {
     size_t counts[PST_ROW_NSTATUS];
     double *w;             /* stored weights (pattern layout) or NULL                */
     /* The sparsity pattern of the rows (without the diagonal), sorted by column in a row: the
-     * neighbour list by default; a scheme with a wider stencil (e.g. the mixed schemes'
-     * neighbours of neighbours) points these at its own arrays in precompute. */
+     * neighbour list, or for a scheme with a wide_pattern NULL until pst_op_store builds it
+     * into own_poff / own_pidx (the read-only paths build theirs per call, operator.c). */
     const int64_t *poff;
     const uint32_t *pidx;
+    int64_t *own_poff;
+    uint32_t *own_pidx;
     double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
     int rows;              /* 1 when the Laplacian rows were precomputed (opts.laplacian)     */
 };
