@@ -11,7 +11,9 @@
  *                    [--amg-aggressive L] [--amg-strong T] [--amg-source brookshaw|own] [--header]
  *
  * "setup s" is the preconditioner's set-up (pst_krylov_create), "solve s" the iterations
- * (pst_krylov_solve); "AMG nnz/row" the entries per row of the matrix handed to hypre.
+ * (pst_krylov_solve); "AMG nnz/row" the entries per row of the matrix handed to hypre;
+ * "setup peak" and "setup kept" the set-up's resident memory above what was there before it,
+ * at its peak and after it (Linux /proc/self/status, the peak reset first).
  *
  * --header prints "# machine: <cpu, topology, caches>; flags: <compiler flags>; triad ...,
  * FP64 peak ..." (src/machine.h, peak.h: probes run in this process) and the table header.
@@ -59,6 +61,31 @@ static double apply_seconds(const pst_op *op, size_t np, int stored, int reps)
     return t;
 }
 
+/* VmRSS or VmHWM of this process in bytes (/proc/self/status), 0 when unreadable. */
+static double status_bytes(const char *key)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    double kb = 0;
+    size_t len = strlen(key);
+    while (f && fgets(line, sizeof line, f))
+        if (strncmp(line, key, len) == 0)
+            kb = atof(line + len + 1);
+    if (f)
+        fclose(f);
+    return kb * 1024;
+}
+
+/* Start a new peak: the kernel resets VmHWM to the current RSS (Linux clear_refs 5). */
+static void reset_peak(void)
+{
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    if (f) {
+        fputs("5", f);
+        fclose(f);
+    }
+}
+
 static void print_header(void)
 {
     pstb_probes p;
@@ -68,8 +95,9 @@ static void print_header(void)
     printf("# machine: %s\n", line);
     printf("| dim | particles | nbrs | scheme | precond | operator | neighbours s | precompute s "
            "| store s | setup s | solve s | iterations | rel. residual | eq. 15 error | apply ms "
-           "| apply rate | AMG nnz/row | triad GB/s | peak GB |\n"
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+           "| apply rate | AMG nnz/row | setup peak B/row | setup kept B/row | triad GB/s "
+           "| peak GB |\n"
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
 }
 
 int main(int argc, char **argv)
@@ -129,13 +157,16 @@ int main(int argc, char **argv)
         return 1;
     double support = pst_kernel_support(pst_scheme_default_kernel(scheme));
     pst_cloud_morton_sort(c, support * ratio * o.s0, NULL);
-    double t1 = omp_get_wtime();
+    reset_peak();
+    double t1 = omp_get_wtime(), rss1 = status_bytes("VmRSS");
     pst_nlist *nl = NULL;
     if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
         fprintf(stderr, "bench_solve: %s\n", err);
         return 1;
     }
-    double t2 = omp_get_wtime();
+    double t2 = omp_get_wtime(), nl_peak = status_bytes("VmHWM") - rss1;
+    reset_peak();
+    double rss2 = status_bytes("VmRSS");
     pst_op_opts oo;
     pst_op_defaults(&oo);
     oo.scheme = scheme;
@@ -144,7 +175,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "bench_solve: %s\n", err);
         return 1;
     }
-    double t3 = omp_get_wtime();
+    double t3 = omp_get_wtime(), op_peak = status_bytes("VmHWM") - rss2;
     if (stored && pst_op_store(op) != PST_OK) {
         fprintf(stderr, "bench_solve: cannot store the weights\n");
         return 1;
@@ -167,7 +198,11 @@ int main(int argc, char **argv)
         so.max_iter = max_iter;
     pst_solve_result r = {0};
     pst_krylov *ks = NULL;
+    reset_peak();
+    double rss0 = status_bytes("VmRSS");
     int st = pst_krylov_create(&ks, op, &so, err);
+    /* the set-up's own peak and what it keeps (the preconditioner and the Krylov vectors) */
+    double setup_peak = status_bytes("VmHWM") - rss0, setup_kept = status_bytes("VmRSS") - rss0;
     double t45 = omp_get_wtime();
     if (st == PST_OK)
         st = pst_krylov_solve(ks, b, u, &r, err);
@@ -192,6 +227,9 @@ int main(int argc, char **argv)
     } else {
         snprintf(rate, sizeof rate, "%.0f M pairs/s", pairs / ta * 1e-6);
     }
+    fprintf(stderr, "bench_solve: peak B/row above the start of the phase: neighbours %.0f, "
+            "precompute %.0f, solver set-up %.0f\n", nl_peak / (double)np, op_peak / (double)np,
+            setup_peak / (double)np);
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     char pc[96] = "Jacobi";
@@ -200,11 +238,12 @@ int main(int argc, char **argv)
                  so.amg_source == PST_AMG_OWN ? "own" : "proxy", so.amg_radius, so.amg_aggressive,
                  so.amg_strong > 0 ? so.amg_strong : dim == 3 ? 0.5 : 0.25);
     printf("| %dD | %zu | %.1f | %s | %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %d%s | %.1e "
-           "| %.2e | %.1f | %s | %.1f | %.1f | %.2f |\n",
+           "| %.2e | %.1f | %s | %.1f | %.0f | %.0f | %.1f | %.2f |\n",
            dim, np, pairs / (double)np, scheme, pc,
            stored ? "stored" : "matrix-free", t2 - t1, t3 - t2, t4 - t3, t45 - t4, t5 - t45,
            r.iterations, st == PST_OK ? "" : " (not converged)", r.rel_residual,
-           sqrt(num / den), ta * 1e3, rate, (double)ksst.amg_entries / (double)np, triad,
+           sqrt(num / den), ta * 1e3, rate, (double)ksst.amg_entries / (double)np,
+           setup_peak / (double)np, setup_kept / (double)np, triad,
            (double)ru.ru_maxrss / (1 << 20));
     pst_solve_result_free(&r);
     free(b);

@@ -745,7 +745,8 @@ static void cs_degrade(pst_op *op, size_t i)
                            .gradient = cs_gradient,                                           \
                            .hessian = HESS,                                                   \
                            .degrade = cs_degrade,                                             \
-                           .free_data = cs_free}
+                           .free_data = cs_free,                                              \
+                           .data_bytes = {80, 136}} /* V and cs_ncoef = 9 / 16 doubles */
 
 CS_SCHEME(pst_scheme_cspm, "cspm", "CSPM, Chen et al. 1999 (QSFDI eqs. 38-41)",
           "too few neighbours or singular -> csph2g row -> Brookshaw row -> zero row; flat "

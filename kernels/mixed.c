@@ -754,7 +754,7 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
 #define MX_FALLBACK_LINEAR                                                                     \
     "linear fit: too few neighbours or singular -> kernel gradient and Brookshaw row -> zero row"
 
-#define MX_SCHEME(ID, NAME, DESC, FALLBACK, DEG, PRE, MIN, HESS)                               \
+#define MX_SCHEME(ID, NAME, DESC, FALLBACK, DEG, PRE, MIN, HESS, BYTES2, BYTES3)              \
     const pst_scheme ID = {.name = NAME,                                                       \
                            .description = DESC,                                                \
                            .fallback = FALLBACK,                                               \
@@ -769,16 +769,17 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
                            .emit_row = mx_emit_row,                                            \
                            .gradient = mx_gradient,                                            \
                            .hessian = HESS,                                                    \
-                           .free_data = mx_free}
+                           .free_data = mx_free,                                               \
+                           .data_bytes = {BYTES2, BYTES3}} /* Q, mode, Vn (mixed0) */
 
 MX_SCHEME(pst_scheme_mixed0, "mixed0",
           "mixed ordinary method, nested LS gradient with W V weights (seed 003 Model 3)",
-          MX_FALLBACK_LINEAR, 1, pre_ordinary, mx_min_linear, NULL);
+          MX_FALLBACK_LINEAR, 1, pre_ordinary, mx_min_linear, NULL, 57, 105);
 MX_SCHEME(pst_scheme_mixed1, "mixed1",
           "mixed least squares 1st order, nested linear LS gradient (seed 003 Model 4)",
-          MX_FALLBACK_LINEAR, 1, pre_linear, mx_min_linear, NULL);
+          MX_FALLBACK_LINEAR, 1, pre_linear, mx_min_linear, NULL, 49, 97);
 MX_SCHEME(pst_scheme_mixed2, "mixed2",
           "mixed least squares 2nd order, nested quadratic LS gradient (seed 003 Model 5)",
           "quadratic fit: too few neighbours or singular -> linear fit -> kernel gradient and "
           "Brookshaw row -> zero row",
-          2, pre_quadratic, mx_min_quadratic, mx_hessian);
+          2, pre_quadratic, mx_min_quadratic, mx_hessian, 97, 241);

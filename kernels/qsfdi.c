@@ -933,4 +933,5 @@ const pst_scheme pst_scheme_qsfdi = {
     .hessian = qs_hessian,
     .interpolate = qs_interpolate,
     .free_data = qs_free,
+    .data_bytes = {64, 120}, /* kap: QS_NK = 8 / 15 doubles */
 };

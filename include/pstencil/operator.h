@@ -123,6 +123,11 @@ int pst_scheme_degree(const char *name, int lattice);
  * 0), 0 for an unknown name. */
 int pst_scheme_variants(const char *name);
 
+/* Bytes per particle of a scheme's precomputed data in dimension dim (2 or 3), the largest
+ * over its variants, without the stored weights (8 per pattern entry) or the row status
+ * (1): what a memory plan counts. 0 for an unknown name or dimension. */
+int pst_scheme_data_bytes(const char *name, int dim);
+
 /* What a scheme can do, for planning before an operator exists (0 for an unknown name). */
 enum {
     PST_SUPPORTS_GRADIENT = 0,     /* pst_op_gradient                                          */

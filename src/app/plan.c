@@ -19,6 +19,9 @@
 #define AMG_BYTES_PER_ENTRY 40.0
 #define AMG_BYTES_PER_ROW 200.0
 
+/* The shortest GMRES restart the planner chooses to fit the memory (AMG solves). */
+#define PLAN_MIN_RESTART 20
+
 /* Bytes the machine can give a run: MemAvailable from /proc/meminfo, else physical memory. */
 static double available_bytes(void)
 {
@@ -137,6 +140,29 @@ static double amg_bytes_per_row(const pst_plan *p, const pst_scene *s, const sc_
     return AMG_BYTES_PER_ENTRY * amg_entries_per_row(p, s, t) + AMG_BYTES_PER_ROW;
 }
 
+/* Vectors of n doubles the largest solve holds: GMRES(m) m + 8 (the basis and the solver's
+ * own), the other methods 8. */
+static double solver_vectors(const pst_plan *p, const pst_scene *s)
+{
+    double v = 0;
+    for (int k = 0; k < s->ntasks; ++k)
+        if (s->tasks[k].type == SC_TASK_SOLVE)
+            v = fmax(v, p->task_solver[k] == PST_SOLVER_GMRES ? p->task_restart[k] + 8 : 8);
+    return v;
+}
+
+/* Where the Krylov vectors would not fit in `room` bytes, shorten the GMRES restarts of the
+ * AMG solves (they converge in tens of iterations) down to PLAN_MIN_RESTART. */
+static void fit_restarts(pst_plan *p, const pst_scene *s, double room)
+{
+    double n = (double)p->particles;
+    int fits = (int)floor(room / (8.0 * n)) - 8;
+    for (int k = 0; k < s->ntasks; ++k)
+        if (s->tasks[k].type == SC_TASK_SOLVE && p->task_solver[k] == PST_SOLVER_GMRES &&
+            p->task_precond[k] == PST_PREC_AMG && p->task_restart[k] > fits)
+            p->task_restart[k] = fits > PLAN_MIN_RESTART ? fits : PLAN_MIN_RESTART;
+}
+
 int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
@@ -157,7 +183,7 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
 
     /* per particle: x, V, normals, id, the fields, the mobility (task outputs below) */
     double doubles = dim + 1 + dim + 1 + s->nfields + p->mobility_ncomp;
-    double solver_vectors = 0, amg = 0;
+    double amg = 0;
     for (int k = 0; k < s->ntasks; ++k) {
         const sc_task *t = &s->tasks[k];
         int st = check_task(s, k, p->mobility_ncomp > 0, err, errlen);
@@ -181,8 +207,7 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
             p->task_solver[k] = t->solver != PST_SOLVER_AUTO ? t->solver
                                 : symmetric                  ? PST_SOLVER_CG
                                                              : PST_SOLVER_GMRES;
-            double vectors = p->task_solver[k] == PST_SOLVER_GMRES ? t->restart + 8 : 8;
-            solver_vectors = fmax(solver_vectors, vectors);
+            p->task_restart[k] = t->restart;
             p->task_precond[k] = t->precond != SC_PRECOND_AUTO ? t->precond
                                  : pst_have_amg()              ? PST_PREC_AMG
                                                                : PST_PREC_JACOBI;
@@ -196,12 +221,14 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
     int nops = p->base_operator;
     for (int k = 0; k < s->ntasks; ++k)
         nops += s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].ngroups > 0;
-    /* the largest per-particle data of any scheme is about 32 doubles (3D quadratic fits) */
-    p->bytes_operators = nops * n * (1.0 + 8.0 * (dim == 2 ? 16 : 32));
-    p->bytes_solver = n * (8.0 * solver_vectors + amg);
+    /* the scheme's per-particle data and the row status */
+    p->bytes_operators = nops * n * (1.0 + pst_scheme_data_bytes(s->op.scheme, dim));
     p->bytes_available = available_bytes();
-    double without = p->bytes_cloud + p->bytes_neighbours + p->bytes_operators + p->bytes_solver;
     double budget = s->memory_fraction * p->bytes_available;
+    double fixed = p->bytes_cloud + p->bytes_neighbours + p->bytes_operators + n * amg;
+    fit_restarts(p, s, budget - fixed);
+    p->bytes_solver = n * (8.0 * solver_vectors(p, s) + amg);
+    double without = fixed + n * 8.0 * solver_vectors(p, s);
     /* Weights pay off for solves (hundreds of applies); a single apply is cheaper without. */
     for (int k = 0; k < s->ntasks; ++k) {
         const sc_task *t = &s->tasks[k];
@@ -245,6 +272,16 @@ static const char *precond_name(int p)
     return names[p];
 }
 
+static void print_solve(FILE *f, const pst_plan *p, int k, const sc_task *t)
+{
+    fprintf(f, ": %s", solver_name(p->task_solver[k]));
+    if (p->task_solver[k] == PST_SOLVER_GMRES)
+        fprintf(f, "(%d)%s", p->task_restart[k],
+                p->task_restart[k] < t->restart ? " (restart shortened to fit)" : "");
+    fprintf(f, " + %s, rtol %g, %s operator%s", precond_name(p->task_precond[k]), t->rtol,
+            p->task_stored[k] ? "stored" : "matrix-free", t->ngroups ? ", own boundary groups" : "");
+}
+
 void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
 {
     fprintf(f, "plan for %s%s%s\n", s->path, s->title ? ": " : "", s->title ? s->title : "");
@@ -266,10 +303,7 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
         const sc_task *t = &s->tasks[k];
         fprintf(f, "  task %-6d %s '%s'", k, task_type_name(t->type), t->name);
         if (t->type == SC_TASK_SOLVE)
-            fprintf(f, ": %s + %s, rtol %g, %s operator%s", solver_name(p->task_solver[k]),
-                    precond_name(p->task_precond[k]), t->rtol,
-                    p->task_stored[k] ? "stored" : "matrix-free",
-                    t->ngroups ? ", own boundary groups" : "");
+            print_solve(f, p, k, t);
         else if (t->field)
             fprintf(f, " of %s", t->field);
         if (t->nexact && t->nnorms)

@@ -41,6 +41,7 @@ typedef struct {
     int task_stored[SC_MAX_TASKS];  /* 1: stored weights, 0: matrix-free                      */
     int task_solver[SC_MAX_TASKS];  /* pst_solver a solve task will use                        */
     int task_precond[SC_MAX_TASKS]; /* pst_precond a solve task will use                       */
+    int task_restart[SC_MAX_TASKS]; /* its GMRES restart (the scene's, shortened to fit)       */
     /* Memory estimate in bytes. */
     double bytes_cloud, bytes_neighbours, bytes_operators, bytes_weights, bytes_solver;
     double bytes_total, bytes_available;

@@ -89,7 +89,7 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     so.amg_radius = t->amg_radius;
     so.amg_aggressive = t->amg_aggressive;
     so.amg_strong = t->amg_strong;
-    so.restart = t->restart;
+    so.restart = r->plan.task_restart[k];
     so.max_iter = t->max_iter;
     so.rtol = t->rtol;
     so.stored = r->plan.task_stored[k];

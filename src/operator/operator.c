@@ -123,6 +123,12 @@ int pst_scheme_variants(const char *name)
     return !s ? 0 : s->variants > 1 ? s->variants : 1;
 }
 
+int pst_scheme_data_bytes(const char *name, int dim)
+{
+    const pst_scheme *s = find_scheme(name);
+    return s && (dim == 2 || dim == 3) ? s->data_bytes[dim - 2] : 0;
+}
+
 /* The boundary override of opts (kinds, normals): known kinds, finite Neumann normals. */
 static int check_boundary(const pst_op_opts *o, const pst_cloud *c, char *err)
 {

@@ -33,6 +33,9 @@ typedef struct pst_scheme {
     /* 1 when gradient, hessian and interpolate do not read the precomputed rows, so an
      * operator for derivatives only (opts.laplacian = 0) can skip the precompute */
     int derivatives_standalone;
+    /* bytes per particle of the precomputed data (op->data) in 2D and 3D, the largest over
+     * the variants: the planner's memory estimate (pst_scheme_data_bytes) */
+    int data_bytes[2];
     /* minimum neighbours (j != i) of a row in dimension dim (spec choice 6) */
     int (*min_neighbours)(int dim);
     /* Precompute the per-particle data into op->data (op->status is zeroed, fill it); one
