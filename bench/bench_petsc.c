@@ -3,14 +3,14 @@
  * solved by pstencil from the cloud to the answer (Morton sort, neighbour list, operator
  * precompute, stored weights, solver set-up, solve). Its operator is then assembled
  * (pst_op_assemble: Dirichlet rows are identity rows, so with the same b the system has
- * pstencil's solution; --eliminate 1 also moves the Dirichlet columns to the right-hand side,
- * as pstencil's solver does, the default) and handed to PETSc as a SeqAIJ matrix (not timed), which solves
- * it with KSP: GMRES + BoomerAMG, GMRES + ILU(0), BiCGStab + ILU(0) and GMRES + Jacobi. Every solve
- * starts from u = 0 and stops at the same rtol on the unpreconditioned residual relative to
- * ||b|| (right preconditioning); the true residual ||b - A u|| / ||b|| of every answer is
- * recomputed here. PETSc's time is KSPSetUp (the preconditioner's set-up) + KSPSolve. Then
- * GMRES + Jacobi runs a fixed number of iterations in both, alternating R times (medians),
- * for the cost of one iteration.
+ * pstencil's solution; by default (--eliminate 1) the Dirichlet columns are moved to the
+ * right-hand side too, as pstencil's solver does) and handed to PETSc as a SeqAIJ matrix (not
+ * timed), which solves it with KSP: GMRES + BoomerAMG, GMRES + ILU(0), BiCGStab + ILU(0) and
+ * GMRES + Jacobi. Every solve starts from u = 0 and stops at the same rtol on the
+ * unpreconditioned residual relative to ||b|| (right preconditioning); the true residual
+ * ||b - A u|| / ||b|| of every answer is recomputed here. PETSc's time is KSPSetUp (the
+ * preconditioner's set-up) + KSPSolve. Then GMRES + Jacobi runs a fixed number of iterations
+ * in both, alternating R times (medians), for the cost of one iteration.
  *
  * usage: bench_petsc [--dim 2|3] [--n N] [--scheme S] [--precond amg|jacobi|none]
  *                    [--stored 0|1] [--rtol R] [--restart M] [--jacobi-iters K]
@@ -84,7 +84,8 @@ static int parse_options(int argc, char **argv, options *o, int *petsc_first)
     pst_solve_opts so;
     pst_solve_defaults(&so);
     *o = (options){.dim = 3, .precond = PST_PREC_AMG, .stored = 1, .restart = so.restart,
-                   .jacobi_iters = 100, .reps = 3, .eliminate = 1, .n = 130000, .scheme = "qsfdi", .rtol = 1e-8};
+                   .jacobi_iters = 100, .reps = 3, .eliminate = 1, .n = 130000,
+                   .scheme = "qsfdi", .rtol = 1e-8};
     int i = 1;
     for (; i < argc && strcmp(argv[i], "--") != 0; i += 2) {
         const char *k = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -372,7 +373,8 @@ static PetscErrorCode petsc_run(Mat A, const csr_system *s, const petsc_config *
     pst_solve_defaults(&so);
     PetscFunctionBeginUser;
     /* the same target ||r|| <= rtol ||b|| as pstencil's, in the terms of this system's b */
-    PetscCall(petsc_ksp(A, c, o, o->rtol * s->bnorm / s->rhs_norm, fixed > 0 ? fixed : so.max_iter, &ksp));
+    int max_iter = fixed > 0 ? fixed : so.max_iter;
+    PetscCall(petsc_ksp(A, c, o, o->rtol * s->bnorm / s->rhs_norm, max_iter, &ksp));
     if (fixed > 0)
         PetscCall(KSPSetConvergenceTest(ksp, KSPConvergedSkip, NULL, NULL));
     PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, s->n, s->b, &b));
@@ -426,7 +428,7 @@ static int wanted(const petsc_config *c)
 
 /* ---- the report ---------------------------------------------------------------------------- */
 
-static void print_machine(const options *o, size_t np, const csr_system *s)
+static void print_machine(const options *o, size_t np, double pairs, const csr_system *s)
 {
     pstb_probes p;
     pstb_probes_run(&p);
@@ -437,10 +439,11 @@ static void print_machine(const options *o, size_t np, const csr_system *s)
            "process, serial (PETSc and hypre built without OpenMP)\n",
            omp_get_max_threads());
     printf("# problem: %dD, %zu particles, scheme %s, rtol %.0e, restart %d, u0 = 0; PETSc's "
-           "matrix: %lld nonzeros (%.1f per row), Dirichlet rows identity%s\n\n",
+           "matrix: %lld nonzeros (%.1f per row), Dirichlet rows identity%s; pstencil's "
+           "neighbour list: %.0f pairs (%.1f per row, Dirichlet rows included)\n\n",
            o->dim, np, o->scheme, o->rtol, o->restart, (long long)s->ia[s->n],
            (double)s->ia[s->n] / (double)s->n,
-           s->eliminated ? ", Dirichlet columns eliminated" : "");
+           s->eliminated ? ", Dirichlet columns eliminated" : "", pairs, pairs / (double)np);
 }
 
 static void print_table(const result *r, int nr)
@@ -561,12 +564,13 @@ int main(int argc, char **argv)
     /* The matrix on the exported arrays (PETSc does not copy them), not timed. */
     PetscCall(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, s.n, s.n, s.ia, s.ja, s.va, &A));
     PetscCall(jacobi_compare(A, &s, &o, op, b, med));
+    double pairs = (double)pst_nlist_pairs(nl);
     pst_op_destroy(op);
     pst_nlist_destroy(nl);
     pst_cloud_destroy(c);
     int nr = 1;
     PetscCall(petsc_table(A, &s, &o, r, &nr));
-    print_machine(&o, np, &s);
+    print_machine(&o, np, pairs, &s);
     print_table(r, nr);
     print_jacobi_line(&o, med);
     printf("pstencil phases: sort + neighbours %.3f s, precompute %.3f s, store %.3f s, solver "
