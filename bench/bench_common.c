@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 pst_lattice_opts bench_box(int dim, double hi, double s0, double jitter, double h_ratio)
 {
@@ -38,6 +39,18 @@ pst_cloud *bench_million(const char *who, int dim)
 }
 
 int bench_side(size_t n, int dim) { return (int)lround(pow((double)n, 1.0 / dim)) - 1; }
+
+static int by_value(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+double bench_median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, by_value);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
 
 pst_cloud *bench_poisson_cloud(const char *who, int dim, size_t n, double h_ratio)
 {

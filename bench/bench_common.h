@@ -23,6 +23,9 @@ pst_cloud *bench_million(const char *who, int dim);
 /* Spacings per side of a lattice of about n points: round(n^(1/dim)) - 1. */
 int bench_side(size_t n, int dim);
 
+/* The median of v[0..n) (n >= 1); v is sorted in place. */
+double bench_median(double *v, int n);
+
 /* The manufactured Poisson problem of bench_solve and bench_petsc (docs/solving.md): a jittered
  * lattice of about n particles on the unit square or cube, K = 0.3, h = h_ratio s0, with a
  * Dirichlet boundary layer; NULL after a message naming `who`. */

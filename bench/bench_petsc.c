@@ -462,18 +462,6 @@ static void print_table(const result *r, int nr)
     }
 }
 
-static int by_value(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, by_value);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /* GMRES + Jacobi for a fixed number of iterations on the same matrix, pstencil and PETSc
  * alternating o->reps times (the machine may be shared): the medians of the seconds per
  * iteration, pstencil's in med[0], PETSc's in med[1]. */
@@ -488,8 +476,8 @@ static PetscErrorCode jacobi_compare(Mat A, const csr_system *s, const options *
         PetscCall(petsc_run(A, s, &configs[3], o, o->jacobi_iters, &r));
         t[1][k] = r.solve / r.iterations;
     }
-    med[0] = median(t[0], o->reps);
-    med[1] = median(t[1], o->reps);
+    med[0] = bench_median(t[0], o->reps);
+    med[1] = bench_median(t[1], o->reps);
     PetscFunctionReturn(0);
 }
 
