@@ -23,4 +23,16 @@ pst_cloud *bench_million(const char *who, int dim);
 /* Spacings per side of a lattice of about n points: round(n^(1/dim)) - 1. */
 int bench_side(size_t n, int dim);
 
+/* The median of v[0..n) (n >= 1); v is sorted in place. */
+double bench_median(double *v, int n);
+
+/* The manufactured Poisson problem of bench_solve and bench_petsc (docs/solving.md): a jittered
+ * lattice of about n particles on the unit square or cube, K = 0.3, h = h_ratio s0, with a
+ * Dirichlet boundary layer; NULL after a message naming `who`. */
+pst_cloud *bench_poisson_cloud(const char *who, int dim, size_t n, double h_ratio);
+
+/* Its right-hand side and exact solution at every particle of c: ue = sin(6x + 8y) (2D) or
+ * sin(2x + 3y + 4z) (3D), b = the exact Laplacian inside and ue on Dirichlet particles. */
+void bench_poisson_rhs(const pst_cloud *c, double *b, double *ue);
+
 #endif

@@ -35,18 +35,6 @@ static const entry entries[] = {
 #define NENTRIES (sizeof entries / sizeof *entries)
 #define NCOLS (PST_NPHASES) /* geometry, moments, inversion, weights, precompute, apply */
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int m)
-{
-    qsort(v, (size_t)m, sizeof *v, cmp_double);
-    return m % 2 ? v[m / 2] : 0.5 * (v[m / 2 - 1] + v[m / 2]);
-}
-
 static int parse_list(const char *s, double *out, int max)
 {
     int k = 0;
@@ -181,7 +169,7 @@ int main(int argc, char **argv)
                     pst_op_destroy(op);
                 }
                 for (int k = 0; k < NCOLS; ++k)
-                    med[e][k] = median(t[k], reps);
+                    med[e][k] = bench_median(t[k], reps);
                 printf("%-8s %9.4f %9.4f %9.4f %9.4f %10.4f %9.4f  %zu\n", entries[e].label,
                        med[e][0], med[e][1], med[e][2], med[e][3], med[e][4], med[e][5], notok);
                 if (js) {

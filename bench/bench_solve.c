@@ -31,16 +31,6 @@
 #include <string.h>
 #include <sys/resource.h>
 
-static double exact(int dim, const double *x)
-{
-    return dim == 2 ? sin(6 * x[0] + 8 * x[1]) : sin(2 * x[0] + 3 * x[1] + 4 * x[2]);
-}
-
-static double laplacian(int dim, const double *x)
-{
-    return dim == 2 ? -100 * sin(6 * x[0] + 8 * x[1]) : -29 * sin(2 * x[0] + 3 * x[1] + 4 * x[2]);
-}
-
 /* The operator's apply rate: the mean of `reps` applies of the path the solver uses. The stored
  * path's byte model is bench/README.md's: 12 bytes per pair (weight + index) and 32 per row. */
 static double apply_seconds(const pst_op *op, size_t np, int stored, int reps)
@@ -150,13 +140,11 @@ int main(int argc, char **argv)
     char err[PST_ERRLEN];
     /* 3 x 80 MB: far beyond the caches, small beside the solve's memory. */
     double triad = pstb_triad_gbs(10000000, 10);
-    pst_lattice_opts o = bench_box(dim, 1, 1.0 / bench_side(n, dim), 0.3, ratio);
-    o.boundary_layer = 1;
-    pst_cloud *c = bench_lattice("bench_solve", &o);
+    pst_cloud *c = bench_poisson_cloud("bench_solve", dim, n, ratio);
     if (!c)
         return 1;
     double support = pst_kernel_support(pst_scheme_default_kernel(scheme));
-    pst_cloud_morton_sort(c, support * ratio * o.s0, NULL);
+    pst_cloud_morton_sort(c, support * ratio * (1.0 / bench_side(n, dim)), NULL);
     reset_peak();
     double t1 = omp_get_wtime(), rss1 = status_bytes("VmRSS");
     pst_nlist *nl = NULL;
@@ -184,13 +172,7 @@ int main(int argc, char **argv)
     size_t np = pst_cloud_size(c);
     double *b = malloc(np * sizeof *b), *u = calloc(np, sizeof *u), *ue = malloc(np * sizeof *ue);
     const uint8_t *kind = pst_cloud_kinds_const(c);
-    for (size_t i = 0; i < np; ++i) {
-        double x[3] = {0, 0, 0};
-        for (int d = 0; d < dim; ++d)
-            x[d] = pst_cloud_coord_const(c, d)[i];
-        ue[i] = exact(dim, x);
-        b[i] = kind[i] == PST_DIRICHLET ? ue[i] : laplacian(dim, x);
-    }
+    bench_poisson_rhs(c, b, ue);
     so.rtol = 1e-8;
     so.stored = stored;
     so.precond = precond;
