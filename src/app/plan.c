@@ -15,9 +15,10 @@
 
 #define PLAN_PI 3.14159265358979323846
 
-/* The AMG set-up's peak memory, fitted to bench_solve's peak RSS (docs/solving.md, "Memory"). */
-#define AMG_BYTES_PER_ENTRY 40.0
-#define AMG_BYTES_PER_ROW 200.0
+/* The AMG set-up's peak memory, fitted to bench_solve's resident memory at 3D 10^6 (qsfdi, radius
+ * 1.3 h and 1.6 h: 710 and 1123 bytes per row at 15.3 and 26.6 entries; docs/solving.md). */
+#define AMG_BYTES_PER_ENTRY 36.5
+#define AMG_BYTES_PER_ROW 150.0
 
 /* The shortest GMRES restart the planner chooses to fit the memory (AMG solves). */
 #define PLAN_MIN_RESTART 20
@@ -121,9 +122,12 @@ static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t
  * plus the diagonal. */
 static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, const sc_task *t)
 {
-    /* the automatic radius (-1) is 1.6 h, or the whole list for a contrasted mobility, which
+    /* the automatic radius (-1) is 1.6 h in 2D and 1.3 h in 3D, or the whole list for a contrasted mobility, which
      * only the cloud shows: with a per-particle mobility the estimate assumes the whole list */
-    double radius = t->amg_radius >= 0 ? t->amg_radius : p->mobility_ncomp ? 0 : 1.6;
+    double radius = t->amg_radius >= 0 ? t->amg_radius
+                    : p->mobility_ncomp  ? 0
+                    : s->dim == 2        ? 1.6
+                                         : 1.3;
     double reach = p->support;
     if (t->amg_source == PST_AMG_BROOKSHAW && radius > 0 && radius < reach)
         reach = radius;
