@@ -53,7 +53,22 @@ void pst_ksp_free(pst_ksp *k)
 /* ---- deterministic kernels ------------------------------------------------------------------ */
 
 /* Elementwise loops are memory-bound (streams of 8-byte doubles); reductions go through fixed
- * blocks so the summation order never depends on the thread count. */
+ * blocks so the summation order never depends on the thread count. Inside a block, LANES
+ * independent partial sums (lane l takes the entries lo + l, lo + l + LANES, ...) break the
+ * chain of dependent additions, so the loop vectorises and runs at the speed of its streams
+ * instead of the latency of one adder; the lanes are combined in a fixed pairwise order. */
+#define LANES 8
+
+/* The first i of [lo, hi) that the lanes do not cover: the tail is summed serially. */
+static size_t lanes_end(size_t lo, size_t hi)
+{
+    return lo + (hi - lo) / LANES * LANES;
+}
+
+static double lanes_sum(const double *acc)
+{
+    return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+}
 
 /* The sum of part[0..nb) in block order. */
 static double sum_blocks(const double *part, size_t nb)
@@ -64,19 +79,39 @@ static double sum_blocks(const double *part, size_t nb)
     return s;
 }
 
-/* One block's serial sum: of a_i b_i, or of (a_i / b_i)^2. */
-static double block_dot(const double *a, const double *b, size_t lo, size_t hi)
+/* [lo, hi) of block blk. */
+static size_t block_end(size_t blk, size_t n)
 {
-    double s = 0;
-    for (size_t i = lo; i < hi; ++i)
+    size_t hi = (blk + 1) * PST_KSP_BLOCK;
+    return hi < n ? hi : n;
+}
+
+/* One block's sum of a_i b_i, or of (a_i / b_i)^2: memory-bound on two streams. */
+static double block_dot(const double *restrict a, const double *restrict b, size_t lo, size_t hi)
+{
+    double acc[LANES] = {0};
+    size_t end = lanes_end(lo, hi), i = lo;
+    for (; i < end; i += LANES)
+        for (int l = 0; l < LANES; ++l)
+            acc[l] += a[i + l] * b[i + l];
+    double s = lanes_sum(acc);
+    for (; i < hi; ++i)
         s += a[i] * b[i];
     return s;
 }
 
-static double block_norm2_div(const double *a, const double *sc, size_t lo, size_t hi)
+static double block_norm2_div(const double *restrict a, const double *restrict sc, size_t lo,
+                              size_t hi)
 {
-    double s = 0;
-    for (size_t i = lo; i < hi; ++i) {
+    double acc[LANES] = {0};
+    size_t end = lanes_end(lo, hi), i = lo;
+    for (; i < end; i += LANES)
+        for (int l = 0; l < LANES; ++l) {
+            double t = a[i + l] / sc[i + l];
+            acc[l] += t * t;
+        }
+    double s = lanes_sum(acc);
+    for (; i < hi; ++i) {
         double t = a[i] / sc[i];
         s += t * t;
     }
@@ -90,10 +125,8 @@ static double reduce(pst_ksp *k, double (*block)(const double *, const double *,
     size_t n = k->n, nb = k->nblocks;
     double *part = k->part;
 #pragma omp parallel for schedule(static)
-    for (size_t blk = 0; blk < nb; ++blk) {
-        size_t lo = blk * PST_KSP_BLOCK, hi = lo + PST_KSP_BLOCK < n ? lo + PST_KSP_BLOCK : n;
-        part[blk] = block(a, b, lo, hi);
-    }
+    for (size_t blk = 0; blk < nb; ++blk)
+        part[blk] = block(a, b, blk * PST_KSP_BLOCK, block_end(blk, n));
     return sum_blocks(part, nb);
 }
 
@@ -111,10 +144,11 @@ void pst_ksp_mdot(pst_ksp *k, int m, double *const *V, const double *w, double *
 {
     size_t n = k->n, nb = k->nblocks;
     double *part = k->part;
-    /* One pass over w for all m vectors: memory-bound on the m + 1 streams. */
+    /* One pass over w for all m vectors: each V[j] streams from memory once while w's block
+     * stays in L1, so the pass is memory-bound on m streams. */
 #pragma omp parallel for schedule(static)
     for (size_t blk = 0; blk < nb; ++blk) {
-        size_t lo = blk * PST_KSP_BLOCK, hi = lo + PST_KSP_BLOCK < n ? lo + PST_KSP_BLOCK : n;
+        size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
         for (int j = 0; j < m; ++j)
             part[blk * (size_t)m + (size_t)j] = block_dot(V[j], w, lo, hi);
     }
@@ -124,6 +158,29 @@ void pst_ksp_mdot(pst_ksp *k, int m, double *const *V, const double *w, double *
             s += part[blk * (size_t)m + (size_t)j];
         out[j] = s;
     }
+}
+
+double pst_ksp_subtract_norm2(pst_ksp *k, int m, double *const *V, const double *h, double *w)
+{
+    size_t n = k->n, nb = k->nblocks;
+    double *part = k->part;
+    /* Block by block: the m vectors stream from memory one after the other (never m streams at
+     * once, which would defeat the prefetchers), w's block is updated in L1 in the order
+     * j = 0, 1, ... of every entry, and its norm is summed before it leaves the cache: memory-bound
+     * on m streams plus w read and written once. */
+#pragma omp parallel for schedule(static)
+    for (size_t blk = 0; blk < nb; ++blk) {
+        size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
+        double *restrict wb = w;
+        for (int j = 0; j < m; ++j) {
+            const double *restrict v = V[j];
+            double c = h[j];
+            for (size_t i = lo; i < hi; ++i)
+                wb[i] -= c * v[i];
+        }
+        part[blk] = block_dot(wb, wb, lo, hi);
+    }
+    return sum_blocks(part, nb);
 }
 
 void pst_ksp_apply(pst_ksp *k, const double *x, double *y)
