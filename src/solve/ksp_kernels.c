@@ -86,7 +86,7 @@ static size_t block_end(size_t blk, size_t n)
     return hi < n ? hi : n;
 }
 
-/* One block's sum of a_i b_i, or of (a_i / b_i)^2: memory-bound on two streams. */
+/* One block's sum of a_i b_i, or of (a_i / b_i)^2. */
 static double block_dot(const double *restrict a, const double *restrict b, size_t lo, size_t hi)
 {
     double acc[LANES] = {0};
@@ -118,26 +118,15 @@ static double block_norm2_div(const double *restrict a, const double *restrict s
     return s;
 }
 
-/* A reduction over the fixed blocks: the block sums in parallel, then their sum in order. */
-static double reduce(pst_ksp *k, double (*block)(const double *, const double *, size_t, size_t),
-                     const double *a, const double *b)
+double pst_ksp_dot(pst_ksp *k, const double *a, const double *b)
 {
     size_t n = k->n, nb = k->nblocks;
     double *part = k->part;
+    /* the block sums in parallel, then their sum in order: memory-bound on two streams */
 #pragma omp parallel for schedule(static)
     for (size_t blk = 0; blk < nb; ++blk)
-        part[blk] = block(a, b, blk * PST_KSP_BLOCK, block_end(blk, n));
+        part[blk] = block_dot(a, b, blk * PST_KSP_BLOCK, block_end(blk, n));
     return sum_blocks(part, nb);
-}
-
-double pst_ksp_dot(pst_ksp *k, const double *a, const double *b)
-{
-    return reduce(k, block_dot, a, b);
-}
-
-double pst_ksp_norm2_div(pst_ksp *k, const double *a, const double *sc)
-{
-    return reduce(k, block_norm2_div, a, sc);
 }
 
 void pst_ksp_mdot(pst_ksp *k, int m, double *const *V, const double *w, double *out)
@@ -181,6 +170,48 @@ double pst_ksp_subtract_norm2(pst_ksp *k, int m, double *const *V, const double 
         part[blk] = block_dot(wb, wb, lo, hi);
     }
     return sum_blocks(part, nb);
+}
+
+double pst_ksp_axpy_norm2(pst_ksp *k, double a, const double *x, const double *y, double *z)
+{
+    size_t n = k->n, nb = k->nblocks;
+    double *part = k->part;
+    /* memory-bound on three streams; the norm reads z's block back from L1 */
+#pragma omp parallel for schedule(static)
+    for (size_t blk = 0; blk < nb; ++blk) {
+        size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
+        for (size_t i = lo; i < hi; ++i)
+            z[i] = y[i] + a * x[i];
+        part[blk] = block_dot(z, z, lo, hi);
+    }
+    return sum_blocks(part, nb);
+}
+
+int pst_ksp_update_residual(pst_ksp *k, double *x, double a, const double *p, double *r,
+                            const double *q, const double *sc, double *norm2)
+{
+    size_t n = k->n, nb = k->nblocks;
+    double *part = k->part;
+    int bad = 0;
+    /* One pass updates r, sums its norm from L1 and checks x + a p (memory-bound on five
+     * streams); x is written in a second pass only when every entry is finite, so that a
+     * failed update leaves the last finite iterate. */
+#pragma omp parallel for schedule(static) reduction(| : bad)
+    for (size_t blk = 0; blk < nb; ++blk) {
+        size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
+        for (size_t i = lo; i < hi; ++i) {
+            r[i] -= a * q[i];
+            bad |= !isfinite(x[i] + a * p[i]);
+        }
+        part[blk] = sc ? block_norm2_div(r, sc, lo, hi) : block_dot(r, r, lo, hi);
+    }
+    *norm2 = sum_blocks(part, nb);
+    if (bad)
+        return 0;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; ++i)
+        x[i] += a * p[i];
+    return 1;
 }
 
 void pst_ksp_apply(pst_ksp *k, const double *x, double *y)

@@ -106,8 +106,13 @@ void pst_ksp_mdot(pst_ksp *k, int m, double *const *V, const double *w, double *
 /* w -= sum_{j<m} h_j V[j] (subtracted in the order j = 0, 1, ...); returns ||w||^2 of the
  * result, summed in the same pass. */
 double pst_ksp_subtract_norm2(pst_ksp *k, int m, double *const *V, const double *h, double *w);
-/* sum (a_i / s_i)^2: the norm of the unscaled residual from CG's scaled one. */
-double pst_ksp_norm2_div(pst_ksp *k, const double *a, const double *s);
+/* z = y + a x (z may be y); returns ||z||^2, summed in the same pass. */
+double pst_ksp_axpy_norm2(pst_ksp *k, double a, const double *x, const double *y, double *z);
+/* CG's step: r -= a q with *norm2 = ||r||^2 (||r / sc||^2 when sc is not NULL) in one pass
+ * that also checks x + a p; then x += a p when every entry is finite (returns 1), else x is
+ * untouched (returns 0; r and *norm2 are updated all the same). */
+int pst_ksp_update_residual(pst_ksp *k, double *x, double a, const double *p, double *r,
+                            const double *q, const double *sc, double *norm2);
 /* y = A x. */
 void pst_ksp_apply(pst_ksp *k, const double *x, double *y);
 /* z = M^-1 r, or z = r without a preconditioner. */
