@@ -2,10 +2,12 @@
  * finite-difference Laplacian written here, with a known discrete solution, solved by CG,
  * GMRES and BiCGSTAB without a preconditioner, with Jacobi from its diagonal and with a user
  * symmetric Gauss-Seidel preconditioner; a handle reused for several right-hand sides; the
- * same bits for 1 and 2 threads; every stop reason provoked; bad input refused clearly; an
- * engine operator through pst_op_linop. */
+ * same bits for 1 and 2 threads (also for sizes that end inside a reduction block); GMRES's
+ * second Gram-Schmidt pass where the first cancels; every stop reason provoked; bad input
+ * refused clearly; an engine operator through pst_op_linop. */
 #include "check.h"
 #include "pstencil.h"
+#include "solve.h"
 #include "support.h"
 
 #include <math.h>
@@ -268,6 +270,112 @@ static void test_reuse_and_threads(void)
     free(ustar), free(b), free(u), free(u2);
 }
 
+/* 1 and 2 threads bit for bit on a grid of 101 x 101 = 10201 rows: five reduction blocks, the
+ * last one partial and ending off the partial sums' stride. */
+static void test_threads_partial_block(void)
+{
+    grid g = {101, 1.0, 0, 0};
+    pst_linop A = grid_linop(&g);
+    size_t n = A.n;
+    double *ustar = malloc(n * sizeof *ustar), *b = malloc(n * sizeof *b);
+    double *u1 = malloc(n * sizeof *u1), *u2 = malloc(n * sizeof *u2);
+    manufacture(&g, 1, ustar, b);
+    int nt = omp_get_max_threads();
+    for (int s = PST_SOLVER_CG; s <= PST_SOLVER_BICGSTAB; ++s) {
+        pst_solve_opts o = opts(s, PST_PREC_JACOBI);
+        o.rtol = 1e-8; /* GMRES(50) needs ~1000 iterations: many restarts to compare */
+        pst_solve_result r1, r2;
+        omp_set_num_threads(1);
+        CHECK_INT(solve_once(&A, NULL, &o, b, u1, &r1), PST_OK);
+        omp_set_num_threads(2);
+        CHECK_INT(solve_once(&A, NULL, &o, b, u2, &r2), PST_OK);
+        CHECK(same_result(&r1, u1, &r2, u2, n));
+        CHECK(true_residual(&g, b, u1, n) <= 2e-8);
+        printf("n = %zu, %-8s Jacobi: %d iterations, 1 and 2 threads %s\n", n, method_name[s],
+               r1.iterations, same_result(&r1, u1, &r2, u2, n) ? "identical" : "DIFFER");
+        pst_solve_result_free(&r1), pst_solve_result_free(&r2);
+    }
+    omp_set_num_threads(nt);
+    free(ustar), free(b), free(u1), free(u2);
+}
+
+/* y = d .* x: a diagonal operator. */
+typedef struct {
+    size_t n;
+    const double *d;
+} diagonal;
+
+static void diagonal_apply(void *ctx, const double *x, double *y)
+{
+    const diagonal *D = ctx;
+    for (size_t i = 0; i < D->n; ++i)
+        y[i] = D->d[i] * x[i];
+}
+
+/* GMRES through the internal workspace on A = diag(d), b_i = 1 + 0.3 sin(1.7 i), from x = 0:
+ * the iterations, the second passes, the true residual, and the worst |V_i . V_l - delta_il|
+ * over the last cycle's normalised basis vectors V_1 .. V_{j-1} (V_0 holds the final residual
+ * on return, V_j is not normalised when the cycle converged). x is returned in `x`. */
+static double gmres_orthogonality(const diagonal *D, int restart, double rtol, double *x,
+                                  int *iterations, int *second_passes, double *rel_residual)
+{
+    size_t n = D->n;
+    pst_linop A = {n, diagonal_apply, NULL, (void *)D};
+    char message[PST_ERRLEN] = "";
+    pst_ksp k = {.A = &A, .n = n, .max_iter = 1000, .restart = restart, .message = message};
+    double *b = malloc(n * sizeof *b), *y = malloc(n * sizeof *y);
+    CHECK_INT(pst_ksp_alloc(&k, PST_SOLVER_GMRES, NULL), PST_OK);
+    for (size_t i = 0; i < n; ++i) {
+        b[i] = 1 + 0.3 * sin(1.7 * (double)i);
+        x[i] = 0;
+    }
+    k.b = b, k.x = x;
+    k.bnorm = sqrt(pst_ksp_dot(&k, b, b));
+    k.target = rtol * k.bnorm;
+    CHECK_INT(pst_ksp_gmres(&k), PST_OK);
+    int last = k.iterations < restart ? k.iterations : restart;
+    double worst = 0, num = 0;
+    for (int i = 1; i < last; ++i)
+        for (int l = i; l < last; ++l)
+            worst = fmax(worst, fabs(pst_ksp_dot(&k, k.vec[i], k.vec[l]) - (i == l)));
+    diagonal_apply((void *)D, x, y);
+    for (size_t i = 0; i < n; ++i)
+        num += (b[i] - y[i]) * (b[i] - y[i]);
+    *iterations = k.iterations;
+    *second_passes = k.reorthogonalised;
+    *rel_residual = sqrt(num) / k.bnorm;
+    printf("GMRES(%d) on 4 clusters of width 1e-9: %s; %d second passes, basis orthogonal to "
+           "%.2e\n", restart, message, k.reorthogonalised, worst);
+    pst_ksp_free(&k);
+    free(b), free(y);
+    return worst;
+}
+
+/* Eigenvalues in 4 clusters of relative width 1e-9: after 4 Arnoldi steps A M^-1 V_j lies in
+ * the basis up to 1e-9 of its norm, the single pass cancels 9 digits and leaves a basis
+ * orthogonal only to ~1e-5; the second pass it triggers restores orthogonality to rounding.
+ * The solve converges to the true residual and gives the same bits for 1 and 2 threads. */
+static void test_gmres_reorthogonalisation(void)
+{
+    size_t n = 10003;
+    double *d = malloc(n * sizeof *d), *x1 = malloc(n * sizeof *x1), *x2 = malloc(n * sizeof *x2);
+    for (size_t i = 0; i < n; ++i)
+        d[i] = (double)(1 + i % 4) * (1 + 1e-9 * (double)i / (double)n);
+    diagonal D = {n, d};
+    int nt = omp_get_max_threads(), it1, it2, sp1, sp2;
+    double res1, res2;
+    omp_set_num_threads(1);
+    double orth = gmres_orthogonality(&D, 40, 1e-12, x1, &it1, &sp1, &res1);
+    omp_set_num_threads(2);
+    gmres_orthogonality(&D, 40, 1e-12, x2, &it2, &sp2, &res2);
+    omp_set_num_threads(nt);
+    CHECK(sp1 >= 1);
+    CHECK(orth < 1e-12);
+    CHECK(res1 <= 1e-12);
+    CHECK(it1 == it2 && sp1 == sp2 && res1 == res2 && memcmp(x1, x2, n * sizeof *x1) == 0);
+    free(d), free(x1), free(x2);
+}
+
 /* The reason of a solve of A u = b (b = 1) from u = 0 with the given solver and restart. */
 static int stop_of(const pst_linop *A, const pst_linop *M, int solver, int restart, int max_iter,
                    pst_solve_result *r)
@@ -446,6 +554,8 @@ int main(void)
     test_bad_input();
     test_methods();
     test_reuse_and_threads();
+    test_threads_partial_block();
+    test_gmres_reorthogonalisation();
     test_stop_reasons();
     test_engine_linop();
     return check_summary("test_krylov");

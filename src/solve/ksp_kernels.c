@@ -53,7 +53,16 @@ void pst_ksp_free(pst_ksp *k)
 /* ---- deterministic kernels ------------------------------------------------------------------ */
 
 /* Elementwise loops are memory-bound (streams of 8-byte doubles); reductions go through fixed
- * blocks so the summation order never depends on the thread count. */
+ * blocks so the summation order never depends on the thread count. Inside a block, LANES
+ * independent partial sums (lane l takes the entries lo + l, lo + l + LANES, ...) break the
+ * chain of dependent additions, so the loop vectorises and runs at the speed of its streams
+ * instead of the latency of one adder; the lanes are combined in a fixed pairwise order. */
+#define LANES 8
+
+static double lanes_sum(const double *acc)
+{
+    return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+}
 
 /* The sum of part[0..nb) in block order. */
 static double sum_blocks(const double *part, size_t nb)
@@ -64,57 +73,69 @@ static double sum_blocks(const double *part, size_t nb)
     return s;
 }
 
-/* One block's serial sum: of a_i b_i, or of (a_i / b_i)^2. */
-static double block_dot(const double *a, const double *b, size_t lo, size_t hi)
+/* [lo, hi) of block blk. */
+static size_t block_end(size_t blk, size_t n)
 {
-    double s = 0;
-    for (size_t i = lo; i < hi; ++i)
+    size_t hi = (blk + 1) * PST_KSP_BLOCK;
+    return hi < n ? hi : n;
+}
+
+/* One block's sum of a_i b_i, or of (a_i / b_i)^2. The block is walked as rows of LANES entries
+ * through bumped pointers: written with a running index, GCC vectorises across rows instead
+ * and the loop runs slower than one accumulator. */
+static double block_dot(const double *restrict a, const double *restrict b, size_t lo, size_t hi)
+{
+    double acc[LANES] = {0};
+    size_t rows = (hi - lo) / LANES;
+    const double *pa = a + lo, *pb = b + lo;
+    for (size_t r = 0; r < rows; ++r, pa += LANES, pb += LANES)
+        for (int l = 0; l < LANES; ++l)
+            acc[l] += pa[l] * pb[l];
+    double s = lanes_sum(acc);
+    for (size_t i = lo + rows * LANES; i < hi; ++i)
         s += a[i] * b[i];
     return s;
 }
 
-static double block_norm2_div(const double *a, const double *sc, size_t lo, size_t hi)
+static double block_norm2_div(const double *restrict a, const double *restrict sc, size_t lo,
+                              size_t hi)
 {
-    double s = 0;
-    for (size_t i = lo; i < hi; ++i) {
+    double acc[LANES] = {0};
+    size_t rows = (hi - lo) / LANES;
+    const double *pa = a + lo, *ps = sc + lo;
+    for (size_t r = 0; r < rows; ++r, pa += LANES, ps += LANES)
+        for (int l = 0; l < LANES; ++l) {
+            double t = pa[l] / ps[l];
+            acc[l] += t * t;
+        }
+    double s = lanes_sum(acc);
+    for (size_t i = lo + rows * LANES; i < hi; ++i) {
         double t = a[i] / sc[i];
         s += t * t;
     }
     return s;
 }
 
-/* A reduction over the fixed blocks: the block sums in parallel, then their sum in order. */
-static double reduce(pst_ksp *k, double (*block)(const double *, const double *, size_t, size_t),
-                     const double *a, const double *b)
+double pst_ksp_dot(pst_ksp *k, const double *a, const double *b)
 {
     size_t n = k->n, nb = k->nblocks;
     double *part = k->part;
+    /* the block sums in parallel, then their sum in order: memory-bound on two streams */
 #pragma omp parallel for schedule(static)
-    for (size_t blk = 0; blk < nb; ++blk) {
-        size_t lo = blk * PST_KSP_BLOCK, hi = lo + PST_KSP_BLOCK < n ? lo + PST_KSP_BLOCK : n;
-        part[blk] = block(a, b, lo, hi);
-    }
+    for (size_t blk = 0; blk < nb; ++blk)
+        part[blk] = block_dot(a, b, blk * PST_KSP_BLOCK, block_end(blk, n));
     return sum_blocks(part, nb);
-}
-
-double pst_ksp_dot(pst_ksp *k, const double *a, const double *b)
-{
-    return reduce(k, block_dot, a, b);
-}
-
-double pst_ksp_norm2_div(pst_ksp *k, const double *a, const double *sc)
-{
-    return reduce(k, block_norm2_div, a, sc);
 }
 
 void pst_ksp_mdot(pst_ksp *k, int m, double *const *V, const double *w, double *out)
 {
     size_t n = k->n, nb = k->nblocks;
     double *part = k->part;
-    /* One pass over w for all m vectors: memory-bound on the m + 1 streams. */
+    /* One pass over w for all m vectors: each V[j] streams from memory once while w's block
+     * stays in L1, so the pass is memory-bound on m streams. */
 #pragma omp parallel for schedule(static)
     for (size_t blk = 0; blk < nb; ++blk) {
-        size_t lo = blk * PST_KSP_BLOCK, hi = lo + PST_KSP_BLOCK < n ? lo + PST_KSP_BLOCK : n;
+        size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
         for (int j = 0; j < m; ++j)
             part[blk * (size_t)m + (size_t)j] = block_dot(V[j], w, lo, hi);
     }
@@ -124,6 +145,79 @@ void pst_ksp_mdot(pst_ksp *k, int m, double *const *V, const double *w, double *
             s += part[blk * (size_t)m + (size_t)j];
         out[j] = s;
     }
+}
+
+double pst_ksp_subtract_norm2(pst_ksp *k, int m, double *const *V, const double *h, double *w)
+{
+    size_t n = k->n, nb = k->nblocks;
+    double *part = k->part;
+    /* Block by block: the vectors stream from memory four at a time (never m streams at once,
+     * which would defeat the prefetchers), w's block is updated in L1, every entry in the order
+     * j = 0, 1, ..., and its norm is summed before it leaves the cache: memory-bound on m
+     * streams plus w read and written once. */
+#pragma omp parallel for schedule(static)
+    for (size_t blk = 0; blk < nb; ++blk) {
+        size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
+        double *restrict wb = w;
+        int j = 0;
+        for (; j + 4 <= m; j += 4) {
+            const double *restrict v0 = V[j], *restrict v1 = V[j + 1], *restrict v2 = V[j + 2],
+                                   *restrict v3 = V[j + 3];
+            double c0 = h[j], c1 = h[j + 1], c2 = h[j + 2], c3 = h[j + 3];
+            for (size_t i = lo; i < hi; ++i)
+                wb[i] = wb[i] - c0 * v0[i] - c1 * v1[i] - c2 * v2[i] - c3 * v3[i];
+        }
+        for (; j < m; ++j) {
+            const double *restrict v = V[j];
+            double c = h[j];
+            for (size_t i = lo; i < hi; ++i)
+                wb[i] -= c * v[i];
+        }
+        part[blk] = block_dot(wb, wb, lo, hi);
+    }
+    return sum_blocks(part, nb);
+}
+
+double pst_ksp_axpy_norm2(pst_ksp *k, double a, const double *x, const double *y, double *z)
+{
+    size_t n = k->n, nb = k->nblocks;
+    double *part = k->part;
+    /* memory-bound on three streams; the norm reads z's block back from L1 */
+#pragma omp parallel for schedule(static)
+    for (size_t blk = 0; blk < nb; ++blk) {
+        size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
+        for (size_t i = lo; i < hi; ++i)
+            z[i] = y[i] + a * x[i];
+        part[blk] = block_dot(z, z, lo, hi);
+    }
+    return sum_blocks(part, nb);
+}
+
+int pst_ksp_update_residual(pst_ksp *k, double *x, double a, const double *p, double *r,
+                            const double *q, const double *sc, double *norm2)
+{
+    size_t n = k->n, nb = k->nblocks;
+    double *part = k->part;
+    int bad = 0;
+    /* One pass updates r, sums its norm from L1 and checks x + a p (memory-bound on five
+     * streams); x is written in a second pass only when every entry is finite, so that a
+     * failed update leaves the last finite iterate. */
+#pragma omp parallel for schedule(static) reduction(| : bad)
+    for (size_t blk = 0; blk < nb; ++blk) {
+        size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
+        for (size_t i = lo; i < hi; ++i) {
+            r[i] -= a * q[i];
+            bad |= !isfinite(x[i] + a * p[i]);
+        }
+        part[blk] = sc ? block_norm2_div(r, sc, lo, hi) : block_dot(r, r, lo, hi);
+    }
+    *norm2 = sum_blocks(part, nb);
+    if (bad)
+        return 0;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; ++i)
+        x[i] += a * p[i];
+    return 1;
 }
 
 void pst_ksp_apply(pst_ksp *k, const double *x, double *y)

@@ -65,6 +65,7 @@ typedef struct {
     double target;         /* rtol * bnorm                                                */
     /* results */
     int iterations, converged, stop; /* stop: a pst_stop_reason                           */
+    int reorthogonalised;  /* GMRES: Arnoldi steps that needed a second Gram-Schmidt pass */
     double rel_residual;   /* true residual of x at return                                */
     double *history;       /* max_iter + 1 entries or NULL                                */
     int nhistory;
@@ -98,14 +99,22 @@ int pst_ksp_gmres(pst_ksp *k);
 int pst_ksp_bicgstab(pst_ksp *k);
 
 /* Deterministic kernels (src/solve/ksp_kernels.c). Reductions sum fixed blocks of
- * PST_KSP_BLOCK entries serially, then the block sums in block order: the same bits for every
- * thread count. */
+ * PST_KSP_BLOCK entries (each with 8 interleaved partial sums added in a fixed order), then the
+ * block sums in block order: the same bits for every thread count. */
 #define PST_KSP_BLOCK 2048
 double pst_ksp_dot(pst_ksp *k, const double *a, const double *b);
 /* out[j] = V[j] . w for j < m, one pass over w (m <= restart + 2). */
 void pst_ksp_mdot(pst_ksp *k, int m, double *const *V, const double *w, double *out);
-/* sum (a_i / s_i)^2: the norm of the unscaled residual from CG's scaled one. */
-double pst_ksp_norm2_div(pst_ksp *k, const double *a, const double *s);
+/* w -= sum_{j<m} h_j V[j] (subtracted in the order j = 0, 1, ...); returns ||w||^2 of the
+ * result, summed in the same pass. */
+double pst_ksp_subtract_norm2(pst_ksp *k, int m, double *const *V, const double *h, double *w);
+/* z = y + a x (z may be y); returns ||z||^2, summed in the same pass. */
+double pst_ksp_axpy_norm2(pst_ksp *k, double a, const double *x, const double *y, double *z);
+/* CG's step: r -= a q with *norm2 = ||r||^2 (||r / sc||^2 when sc is not NULL) in one pass
+ * that also checks x + a p; then x += a p when every entry is finite (returns 1), else x is
+ * untouched (returns 0; r and *norm2 are updated all the same). */
+int pst_ksp_update_residual(pst_ksp *k, double *x, double a, const double *p, double *r,
+                            const double *q, const double *sc, double *norm2);
 /* y = A x. */
 void pst_ksp_apply(pst_ksp *k, const double *x, double *y);
 /* z = M^-1 r, or z = r without a preconditioner. */

@@ -8,15 +8,6 @@
 
 #define TINY 1e-14 /* relative size of rho, (r^, v) or omega treated as zero */
 
-/* s = r - alpha v, returns ||s||. */
-static double half_step(pst_ksp *k, double alpha, const double *r, const double *v, double *s)
-{
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < k->n; ++i)
-        s[i] = r[i] - alpha * v[i];
-    return sqrt(pst_ksp_dot(k, s, s));
-}
-
 /* One pass from the residual r with the shadow r^ = r (norm rhn): iterations until the
  * recursive residual reaches the target, the limit, or a breakdown (in *b). */
 static void bicg_pass(pst_ksp *k, double rhn, pst_ksp_break *b)
@@ -41,13 +32,15 @@ static void bicg_pass(pst_ksp *k, double rhn, pst_ksp_break *b)
         }
         pst_ksp_prec(k, p, ph);
         pst_ksp_apply(k, ph, v);
-        double rv = pst_ksp_dot(k, rh, v), vn = sqrt(pst_ksp_dot(k, v, v));
+        double rv_vv[2];
+        pst_ksp_mdot(k, 2, (double *[]){rh, v}, v, rv_vv); /* (r^, v) and ||v||^2, one pass */
+        double rv = rv_vv[0], vn = sqrt(rv_vv[1]);
         if ((!(fabs(rv) > TINY * rhn * vn) || !isfinite(rv)) &&
             pst_ksp_broke(b, isfinite(rv) && isfinite(vn), rv, "breakdown: (r^, A p) ~ 0",
                   "non-finite (r^, A p): stopped at the last finite iterate"))
             return;
         alpha = rho / rv;
-        double sn = half_step(k, alpha, r, v, s);
+        double sn = sqrt(pst_ksp_axpy_norm2(k, -alpha, v, r, s)); /* s = r - alpha v */
         if (sn <= k->target) {
             if (!pst_ksp_update(k, x, alpha, ph, 0, NULL))
                 *b = (pst_ksp_break){"non-finite iterate: stopped at the last finite iterate",
@@ -58,7 +51,9 @@ static void bicg_pass(pst_ksp *k, double rhn, pst_ksp_break *b)
         }
         pst_ksp_prec(k, s, sh);
         pst_ksp_apply(k, sh, t);
-        double tt = pst_ksp_dot(k, t, t), ts = pst_ksp_dot(k, t, s);
+        double tt_ts[2];
+        pst_ksp_mdot(k, 2, (double *[]){t, s}, t, tt_ts); /* ||t||^2 and (t, s), one pass */
+        double tt = tt_ts[0], ts = tt_ts[1];
         omega = ts / tt;
         if ((!(fabs(omega) > 0) || !isfinite(omega) || !(fabs(ts) > TINY * sqrt(tt) * sn)) &&
             pst_ksp_broke(b, isfinite(tt) && isfinite(ts), omega, "breakdown: omega ~ 0",
@@ -69,11 +64,8 @@ static void bicg_pass(pst_ksp *k, double rhn, pst_ksp_break *b)
                               PST_STOP_NON_FINITE, 0};
             return;
         }
-#pragma omp parallel for schedule(static)
-        for (size_t i = 0; i < n; ++i)
-            r[i] = s[i] - omega * t[i];
         k->iterations++;
-        double est = sqrt(pst_ksp_dot(k, r, r));
+        double est = sqrt(pst_ksp_axpy_norm2(k, -omega, t, s, r)); /* r = s - omega t */
         if (!isfinite(est)) {
             *b = (pst_ksp_break){"non-finite residual: stopped at the last finite iterate",
                               PST_STOP_NON_FINITE, 0};

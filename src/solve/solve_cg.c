@@ -35,12 +35,6 @@ static void scale(pst_ksp *k, const double *S, double *v)
         v[i] *= S[i];
 }
 
-/* The norm of the unscaled residual from the scaled one. */
-static double unscaled_norm(pst_ksp *k, const double *S, const double *r)
-{
-    return sqrt(S ? pst_ksp_norm2_div(k, r, S) : pst_ksp_dot(k, r, r));
-}
-
 /* A curvature p.Ap or r.z that must be positive, with the step it gives: 0 when both are
  * fine, else 1 with the reason in *b (a non-finite curvature is an overflow, not a breakdown). */
 static int broken(pst_ksp_break *b, double v, double step, const char *breakdown,
@@ -67,14 +61,14 @@ static void cg_pass(pst_ksp *k, const double *S, pst_ksp_break *b)
                    "breakdown: p.Ap <= 0 (the scaled operator is not positive definite)",
                    "non-finite p.Ap: stopped at the last finite iterate"))
             return;
-        if (!pst_ksp_update(k, x, alpha, p, 0, NULL)) {
+        double est2;
+        if (!pst_ksp_update_residual(k, x, alpha, p, r, q, S, &est2)) {
             *b = (pst_ksp_break){"non-finite iterate: stopped at the last finite iterate",
                             PST_STOP_NON_FINITE, 0};
             return;
         }
-        pst_ksp_axpby(k, -alpha, q, 1.0, r);
         k->iterations++;
-        double est = unscaled_norm(k, S, r);
+        double est = sqrt(est2); /* the unscaled residual's norm */
         if (!isfinite(est)) {
             *b = (pst_ksp_break){"non-finite residual: stopped at the last finite iterate",
                             PST_STOP_NON_FINITE, 0};
