@@ -17,7 +17,7 @@ for dim in $dims; do
   if [ "$dim" = 2 ]; then sizes="40000 160000"; else sizes="36000 130000"; fi
   for n in $sizes; do
     for scheme in $schemes; do
-      for setting in "0 0" "1.3 0" "1.6 0" "1.6 1" "2.0 0"; do
+      for setting in "0 0" "1.3 0" "1.6 0" "2.0 0" "1.3 1"; do
         set -- $setting
         row --dim "$dim" --n "$n" --scheme "$scheme" --amg-radius "$1" --amg-aggressive "$2" \
           --max-iter 500

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 pst_lattice_opts bench_box(int dim, double hi, double s0, double jitter, double h_ratio)
 {
@@ -80,4 +81,27 @@ void bench_poisson_rhs(const pst_cloud *c, double *b, double *ue)
         ue[i] = exact(dim, x);
         b[i] = kind[i] == PST_DIRICHLET ? ue[i] : laplacian(dim, x);
     }
+}
+
+void bench_peak_reset(void)
+{
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    if (f) {
+        fputs("5", f);
+        fclose(f);
+    }
+}
+
+double bench_memory(const char *key)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    double kb = 0;
+    size_t len = strlen(key);
+    while (f && fgets(line, sizeof line, f))
+        if (strncmp(line, key, len) == 0 && line[len] == ':')
+            kb = atof(line + len + 1);
+    if (f)
+        fclose(f);
+    return kb * 1024;
 }

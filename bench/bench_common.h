@@ -35,4 +35,12 @@ pst_cloud *bench_poisson_cloud(const char *who, int dim, size_t n, double h_rati
  * sin(2x + 3y + 4z) (3D), b = the exact Laplacian inside and ue on Dirichlet particles. */
 void bench_poisson_rhs(const pst_cloud *c, double *b, double *ue);
 
+/* Reset this process's resident-memory high-water mark to its current resident size (Linux
+ * /proc/self/clear_refs), so that the next bench_memory("VmHWM") is the peak of what runs in
+ * between. */
+void bench_peak_reset(void);
+
+/* A size line of /proc/self/status ("VmRSS", "VmHWM") in bytes; 0 when unreadable. */
+double bench_memory(const char *key);
+
 #endif

@@ -128,35 +128,6 @@ static int parse_options(int argc, char **argv, options *o, int *petsc_first)
     return 0;
 }
 
-/* ---- peak memory of one phase -------------------------------------------------------------- */
-
-/* Reset the kernel's high-water mark of this process to its current resident size (Linux
- * /proc/self/clear_refs), so the next reading is the peak of what runs in between. */
-static void peak_reset(void)
-{
-    FILE *f = fopen("/proc/self/clear_refs", "w");
-    if (f) {
-        fputs("5", f);
-        fclose(f);
-    }
-}
-
-/* VmHWM in MB (0 when unreadable). */
-static double peak_mb(void)
-{
-    FILE *f = fopen("/proc/self/status", "r");
-    char *line = NULL;
-    size_t len = 0;
-    double kb = 0;
-    while (f && getline(&line, &len, f) > 0)
-        if (strncmp(line, "VmHWM:", 6) == 0)
-            kb = atof(line + 6);
-    free(line);
-    if (f)
-        fclose(f);
-    return kb / 1024;
-}
-
 /* ---- the system ---------------------------------------------------------------------------- */
 
 /* ||b - A x|| / ||b|| of the problem as posed, for x with x_D = b_D (then the eliminated
@@ -380,13 +351,13 @@ static PetscErrorCode petsc_run(Mat A, const csr_system *s, const petsc_config *
     PetscCall(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, s->n, s->b, &b));
     PetscCall(VecDuplicate(b, &x));
     PetscCall(VecSet(x, 0.0));
-    peak_reset();
+    bench_peak_reset();
     double t0 = omp_get_wtime();
     PetscCall(KSPSetUp(ksp));
     double t1 = omp_get_wtime();
     PetscCall(KSPSolve(ksp, b, x));
     double t2 = omp_get_wtime();
-    r->peak_mb = peak_mb();
+    r->peak_mb = bench_memory("VmHWM") / (1 << 20);
     PetscInt its;
     KSPConvergedReason why;
     PetscCall(KSPGetIterationNumber(ksp, &its));
@@ -538,9 +509,9 @@ int main(int argc, char **argv)
     double phase[4], med[2] = {0, 0};
     pst_op *op = NULL;
     pst_nlist *nl = NULL;
-    peak_reset();
+    bench_peak_reset();
     pstencil_run(&o, c, b, u, &op, &nl, &r[0], phase);
-    r[0].peak_mb = peak_mb();
+    r[0].peak_mb = bench_memory("VmHWM") / (1 << 20);
 
     csr_system s;
     Mat A;

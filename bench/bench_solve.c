@@ -51,31 +51,6 @@ static double apply_seconds(const pst_op *op, size_t np, int stored, int reps)
     return t;
 }
 
-/* VmRSS or VmHWM of this process in bytes (/proc/self/status), 0 when unreadable. */
-static double status_bytes(const char *key)
-{
-    FILE *f = fopen("/proc/self/status", "r");
-    char line[256];
-    double kb = 0;
-    size_t len = strlen(key);
-    while (f && fgets(line, sizeof line, f))
-        if (strncmp(line, key, len) == 0)
-            kb = atof(line + len + 1);
-    if (f)
-        fclose(f);
-    return kb * 1024;
-}
-
-/* Start a new peak: the kernel resets VmHWM to the current RSS (Linux clear_refs 5). */
-static void reset_peak(void)
-{
-    FILE *f = fopen("/proc/self/clear_refs", "w");
-    if (f) {
-        fputs("5", f);
-        fclose(f);
-    }
-}
-
 static void print_header(void)
 {
     pstb_probes p;
@@ -145,16 +120,16 @@ int main(int argc, char **argv)
         return 1;
     double support = pst_kernel_support(pst_scheme_default_kernel(scheme));
     pst_cloud_morton_sort(c, support * ratio * (1.0 / bench_side(n, dim)), NULL);
-    reset_peak();
-    double t1 = omp_get_wtime(), rss1 = status_bytes("VmRSS");
+    bench_peak_reset();
+    double t1 = omp_get_wtime(), rss1 = bench_memory("VmRSS");
     pst_nlist *nl = NULL;
     if (pst_nlist_build(&nl, c, support, err) != PST_OK) {
         fprintf(stderr, "bench_solve: %s\n", err);
         return 1;
     }
-    double t2 = omp_get_wtime(), nl_peak = status_bytes("VmHWM") - rss1;
-    reset_peak();
-    double rss2 = status_bytes("VmRSS");
+    double t2 = omp_get_wtime(), nl_peak = bench_memory("VmHWM") - rss1;
+    bench_peak_reset();
+    double rss2 = bench_memory("VmRSS");
     pst_op_opts oo;
     pst_op_defaults(&oo);
     oo.scheme = scheme;
@@ -163,7 +138,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "bench_solve: %s\n", err);
         return 1;
     }
-    double t3 = omp_get_wtime(), op_peak = status_bytes("VmHWM") - rss2;
+    double t3 = omp_get_wtime(), op_peak = bench_memory("VmHWM") - rss2;
     if (stored && pst_op_store(op) != PST_OK) {
         fprintf(stderr, "bench_solve: cannot store the weights\n");
         return 1;
@@ -180,11 +155,11 @@ int main(int argc, char **argv)
         so.max_iter = max_iter;
     pst_solve_result r = {0};
     pst_krylov *ks = NULL;
-    reset_peak();
-    double rss0 = status_bytes("VmRSS");
+    bench_peak_reset();
+    double rss0 = bench_memory("VmRSS");
     int st = pst_krylov_create(&ks, op, &so, err);
     /* the set-up's own peak and what it keeps (the preconditioner and the Krylov vectors) */
-    double setup_peak = status_bytes("VmHWM") - rss0, setup_kept = status_bytes("VmRSS") - rss0;
+    double setup_peak = bench_memory("VmHWM") - rss0, setup_kept = bench_memory("VmRSS") - rss0;
     double t45 = omp_get_wtime();
     if (st == PST_OK)
         st = pst_krylov_solve(ks, b, u, &r, err);
