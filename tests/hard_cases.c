@@ -1164,7 +1164,7 @@ static void print_table(FILE *fp)
                 "contribute weight 0), on_degenerate = fall back. Neighbour lists: the scheme's default "
                 "kernel support. Solves: GMRES(50) with a BoomerAMG preconditioner "
                 "built on the Brookshaw operator of the same cloud with the default AMG "
-                "options (PST_PREC_AMG, PST_AMG_BROOKSHAW, pairs within 1.6 h in 2D, 1.3 h in 3D), rtol 1e-8, at most %d iterations, initial guess 0; err is the solution's "
+                "options (PST_PREC_AMG, PST_AMG_BROOKSHAW, pairs within 1.6 h), rtol 1e-8, at most %d iterations, initial guess 0; err is the solution's "
                 "rel. L2 error over the unknowns, res the decade of the solver's true ||b - L u|| / "
                 "||b|| at the iteration limit (b holds the Dirichlet values, so after their "
                 "elimination it can exceed 1); values at rounding level are printed as bounds. "

@@ -266,7 +266,7 @@ static void test_gmres(void)
     }
 }
 
-/* The cut proxy (amg_radius 1.6 h, the 2D default) against the whole list (amg_radius 0) on the
+/* The cut proxy (amg_radius 1.6 h, the default) against the whole list (amg_radius 0) on the
  * qsfdi Poisson problem: under half the entries, no fallback row, and at most 3 more
  * iterations (measured: the same count; docs/solving.md "The AMG matrix"). */
 static void test_cut_proxy(void)

@@ -366,6 +366,39 @@ static void test_parameters(void)
     pst_cloud_destroy(cl);
 }
 
+/* Where memory is short the plan of an AMG solve first takes the tight proxy radius (1.3 h),
+ * then shortens the GMRES restart (not below 20), and each plan fits its budget; the
+ * operator's estimate is the scheme's own per-particle bytes. The budget is set through
+ * limits.memory_fraction as a fraction of the memory the first plan saw. */
+static void test_fit_memory(void)
+{
+    const char *solve[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]", "cloud.spacing=0.1",
+                           "tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\","
+                           "\"operator\":\"matrix_free\"}]",
+                           "fields={}"};
+    pst_scene s = scene(solve, 6);
+    pst_plan p;
+    char err[1024];
+    size_t n = 1000000;
+    CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
+    CHECK(p.task_amg_radius[0] == -1 && p.task_restart[0] == 50); /* room enough: as asked */
+    CHECK(fabs(p.bytes_operators - (double)n * (1 + pst_scheme_data_bytes("qsfdi", 3))) < 1);
+    double loose = p.bytes_total, avail = p.bytes_available;
+    const double cut[2] = {0.9, 0.8};
+    for (int k = 0; k < 2; ++k) {
+        s.memory_fraction = cut[k] * loose / avail;
+        CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
+        CHECK(p.task_amg_radius[0] == 1.3);
+        CHECK(k == 0 ? p.task_restart[0] == 50 : p.task_restart[0] >= 20 && p.task_restart[0] < 50);
+        CHECK(p.bytes_total <= s.memory_fraction * p.bytes_available);
+        printf("budget %.2f of the plan: AMG radius %g h, GMRES(%d), %.0f bytes per particle\n",
+               cut[k], p.task_amg_radius[0], p.task_restart[0], p.bytes_total / (double)n);
+    }
+    s.memory_fraction = 0.5 * loose / avail; /* no shortening reaches it */
+    CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_ENOMEM);
+    pst_scene_free(&s);
+}
+
 int main(void)
 {
     test_mpi_init(); /* the solves' default preconditioner is AMG, which needs MPI */
@@ -374,5 +407,6 @@ int main(void)
     test_solve_plan();
     test_refusals();
     test_parameters();
+    test_fit_memory();
     return check_summary("test_plan");
 }

@@ -20,8 +20,12 @@
 #define AMG_BYTES_PER_ENTRY 36.5
 #define AMG_BYTES_PER_ROW 150.0
 
-/* The shortest GMRES restart the planner chooses to fit the memory (AMG solves). */
+/* The shortest GMRES restart the planner chooses to fit the memory (AMG solves); the AMG
+ * proxy's automatic radius in the library (src/solve/precond_amg.c) and the tighter one the
+ * planner chooses where memory is short, in h. */
 #define PLAN_MIN_RESTART 20
+#define PLAN_AMG_RADIUS 1.6
+#define PLAN_AMG_TIGHT_RADIUS 1.3
 
 /* Bytes the machine can give a run: MemAvailable from /proc/meminfo, else physical memory. */
 static double available_bytes(void)
@@ -117,17 +121,17 @@ static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t
     return PST_OK;
 }
 
-/* Entries per row of the AMG matrix: the Brookshaw proxy's pairs within amg_radius h (or the
- * whole list), or the scheme's own stencil (the list for every scheme but the mixed ones),
+/* Entries per row of task k's AMG matrix: the Brookshaw proxy's pairs within its radius (or
+ * the whole list), or the scheme's own stencil (the list for every scheme but the mixed ones),
  * plus the diagonal. */
-static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, const sc_task *t)
+static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, int k)
 {
-    /* the automatic radius (-1) is 1.6 h in 2D and 1.3 h in 3D, or the whole list for a contrasted mobility, which
+    const sc_task *t = &s->tasks[k];
+    /* the automatic radius (-1) is 1.6 h, or the whole list for a contrasted mobility, which
      * only the cloud shows: with a per-particle mobility the estimate assumes the whole list */
-    double radius = t->amg_radius >= 0 ? t->amg_radius
-                    : p->mobility_ncomp  ? 0
-                    : s->dim == 2        ? 1.6
-                                         : 1.3;
+    double radius = p->task_amg_radius[k] >= 0 ? p->task_amg_radius[k]
+                    : p->mobility_ncomp        ? 0
+                                               : PLAN_AMG_RADIUS;
     double reach = p->support;
     if (t->amg_source == PST_AMG_BROOKSHAW && radius > 0 && radius < reach)
         reach = radius;
@@ -139,9 +143,28 @@ static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, const s
 /* The AMG set-up's peak per row: bytes per AMG matrix entry and per row measured at the peak
  * (hypre's copy of the matrix, its strength graph, interpolation and coarse levels, with
  * pstencil's copy freed), docs/solving.md "Memory". */
-static double amg_bytes_per_row(const pst_plan *p, const pst_scene *s, const sc_task *t)
+static double amg_bytes_per_row(const pst_plan *p, const pst_scene *s)
 {
-    return AMG_BYTES_PER_ENTRY * amg_entries_per_row(p, s, t) + AMG_BYTES_PER_ROW;
+    double most = 0;
+    for (int k = 0; k < s->ntasks; ++k)
+        if (s->tasks[k].type == SC_TASK_SOLVE && p->task_precond[k] == PST_PREC_AMG)
+            most = fmax(most, AMG_BYTES_PER_ENTRY * amg_entries_per_row(p, s, k) +
+                                  AMG_BYTES_PER_ROW);
+    return most;
+}
+
+/* Where the run would not fit in `budget` bytes, the AMG solves with the automatic radius
+ * (and no per-particle mobility, whose contrast may need the whole list) take the tight one:
+ * in 3D 1.3 h keeps about 15 entries per row against 25 at 1.6 h, for the same iterations on
+ * qsfdi and up to 40 % more on lv and lpmps (docs/solving.md). */
+static void fit_amg_radius(pst_plan *p, const pst_scene *s, double other, double budget)
+{
+    double n = (double)p->particles;
+    if (other + n * amg_bytes_per_row(p, s) <= budget || p->mobility_ncomp)
+        return;
+    for (int k = 0; k < s->ntasks; ++k)
+        if (s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].amg_radius < 0)
+            p->task_amg_radius[k] = PLAN_AMG_TIGHT_RADIUS;
 }
 
 /* Vectors of n doubles the largest solve holds: GMRES(m) m + 8 (the basis and the solver's
@@ -187,7 +210,6 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
 
     /* per particle: x, V, normals, id, the fields, the mobility (task outputs below) */
     double doubles = dim + 1 + dim + 1 + s->nfields + p->mobility_ncomp;
-    double amg = 0;
     for (int k = 0; k < s->ntasks; ++k) {
         const sc_task *t = &s->tasks[k];
         int st = check_task(s, k, p->mobility_ncomp > 0, err, errlen);
@@ -215,8 +237,7 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
             p->task_precond[k] = t->precond != SC_PRECOND_AUTO ? t->precond
                                  : pst_have_amg()              ? PST_PREC_AMG
                                                                : PST_PREC_JACOBI;
-            if (p->task_precond[k] == PST_PREC_AMG)
-                amg = fmax(amg, amg_bytes_per_row(p, s, t));
+            p->task_amg_radius[k] = t->amg_radius;
         }
     }
     double n = (double)particles;
@@ -229,7 +250,9 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
     p->bytes_operators = nops * n * (1.0 + pst_scheme_data_bytes(s->op.scheme, dim));
     p->bytes_available = available_bytes();
     double budget = s->memory_fraction * p->bytes_available;
-    double fixed = p->bytes_cloud + p->bytes_neighbours + p->bytes_operators + n * amg;
+    double other = p->bytes_cloud + p->bytes_neighbours + p->bytes_operators;
+    fit_amg_radius(p, s, other + n * 8.0 * solver_vectors(p, s), budget);
+    double amg = amg_bytes_per_row(p, s), fixed = other + n * amg;
     fit_restarts(p, s, budget - fixed);
     p->bytes_solver = n * (8.0 * solver_vectors(p, s) + amg);
     double without = fixed + n * 8.0 * solver_vectors(p, s);
@@ -282,7 +305,10 @@ static void print_solve(FILE *f, const pst_plan *p, int k, const sc_task *t)
     if (p->task_solver[k] == PST_SOLVER_GMRES)
         fprintf(f, "(%d)%s", p->task_restart[k],
                 p->task_restart[k] < t->restart ? " (restart shortened to fit)" : "");
-    fprintf(f, " + %s, rtol %g, %s operator%s", precond_name(p->task_precond[k]), t->rtol,
+    fprintf(f, " + %s", precond_name(p->task_precond[k]));
+    if (p->task_precond[k] == PST_PREC_AMG && p->task_amg_radius[k] != t->amg_radius)
+        fprintf(f, " on pairs within %g h (to fit)", p->task_amg_radius[k]);
+    fprintf(f, ", rtol %g, %s operator%s", t->rtol,
             p->task_stored[k] ? "stored" : "matrix-free", t->ngroups ? ", own boundary groups" : "");
 }
 

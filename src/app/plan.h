@@ -42,6 +42,7 @@ typedef struct {
     int task_solver[SC_MAX_TASKS];  /* pst_solver a solve task will use                        */
     int task_precond[SC_MAX_TASKS]; /* pst_precond a solve task will use                       */
     int task_restart[SC_MAX_TASKS]; /* its GMRES restart (the scene's, shortened to fit)       */
+    double task_amg_radius[SC_MAX_TASKS]; /* its amg_radius (the scene's, or 1.3 h to fit)     */
     /* Memory estimate in bytes. */
     double bytes_cloud, bytes_neighbours, bytes_operators, bytes_weights, bytes_solver;
     double bytes_total, bytes_available;

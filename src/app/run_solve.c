@@ -86,7 +86,7 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     so.solver = r->plan.task_solver[k];
     so.precond = r->plan.task_precond[k];
     so.amg_source = t->amg_source;
-    so.amg_radius = t->amg_radius;
+    so.amg_radius = r->plan.task_amg_radius[k];
     so.amg_aggressive = t->amg_aggressive;
     so.amg_strong = t->amg_strong;
     so.restart = r->plan.task_restart[k];

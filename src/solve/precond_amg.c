@@ -86,10 +86,9 @@ int pst_prec_amg_ready(char *err)
 
 int pst_have_amg(void) { return 1; }
 
-/* The automatic proxy radius (in h; 2D, 3D) and the mobility contrast above which the proxy
- * keeps the whole list (docs/solving.md, "The AMG matrix"). */
-#define PST_AMG_RADIUS_2D 1.6
-#define PST_AMG_RADIUS_3D 1.3
+/* The automatic proxy radius (in h) and the mobility contrast above which the proxy keeps the
+ * whole list (docs/solving.md, "The AMG matrix's stencil"). */
+#define PST_AMG_RADIUS 1.6
 #define PST_AMG_CONTRAST 10.0
 
 /* MPI checked, then hypre initialised (when it is not yet). */
@@ -344,9 +343,7 @@ static double proxy_radius(const pst_op *op, double asked)
 {
     if (asked >= 0)
         return asked;
-    if (mobility_contrast(op->cloud) > PST_AMG_CONTRAST)
-        return 0;
-    return op->dim == 2 ? PST_AMG_RADIUS_2D : PST_AMG_RADIUS_3D;
+    return mobility_contrast(op->cloud) > PST_AMG_CONTRAST ? 0 : PST_AMG_RADIUS;
 }
 
 /* The assembled low-order operator: the operator itself (OWN), or the Brookshaw proxy with the
