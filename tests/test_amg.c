@@ -307,6 +307,32 @@ static void test_cut_proxy(void)
     free_problem(&p);
 }
 
+/* A solve stopped by its iteration limit says what to try next, by its preconditioner. */
+static void test_stall_hints(void)
+{
+    problem p = make_problem("qsfdi", 1.0 / 32);
+    size_t n = p.n;
+    double *b = malloc(n * sizeof *b), *u = calloc(n, sizeof *u);
+    const uint8_t *kind = pst_cloud_kinds_const(p.c);
+    for (size_t i = 0; i < n; ++i)
+        b[i] = kind[i] == PST_DIRICHLET ? 0.0 : 1.0;
+    const int precond[2] = {PST_PREC_JACOBI, PST_PREC_AMG};
+    const char *hint[2] = {"try the AMG preconditioner", "amg_source own"};
+    for (int k = 0; k < 2; ++k) {
+        pst_solve_opts o = gmres_opts(precond[k], PST_AMG_BROOKSHAW, 1e-12, 2);
+        o.stored = 0;
+        pst_solve_result r;
+        char err[PST_ERRLEN] = "";
+        CHECK_INT(pst_solve(p.op, b, u, &o, &r, err), PST_ENUMERIC);
+        CHECK_INT(r.stop, PST_STOP_ITERATION_LIMIT);
+        CHECK(strstr(r.message, hint[k]) != NULL && strstr(err, hint[k]) != NULL);
+        printf("stalled: %s\n", err);
+        pst_solve_result_free(&r);
+    }
+    free(b), free(u);
+    free_problem(&p);
+}
+
 /* Neumann rows: their diagonal is positive (A keeps their sign). Half of the boundary Neumann:
  * AMG-GMRES converges on lv and beats Jacobi; all of it Neumann (A singular, constants in its
  * null space): one apply stays finite and bounded (no huge null-space component from the
@@ -425,6 +451,7 @@ int main(void)
     test_mpi_init();
     test_errors();
     test_cut_proxy();
+    test_stall_hints();
     test_contraction();
     test_threads_and_dirichlet();
     test_gmres();

@@ -303,8 +303,8 @@ static int hypre_setup(amg_ctx *c, int dim, const pst_solve_opts *o, amg_build *
         HYPRE_BoomerAMGSetCycleRelaxType(c->amg, 6, 3);
         HYPRE_BoomerAMGSetCycleNumSweeps(c->amg, 4, 3);
     }
-    /* Aggressive coarsening on the first levels (multipass interpolation there): fewer coarse
-     * points where the proxy's rows are widest, the cheapest set-up of the measured table. */
+    /* Aggressive coarsening on the first amg_aggressive levels (multipass interpolation there):
+     * half the set-up for 4-10 more iterations in the measured table, so off by default. */
     HYPRE_BoomerAMGSetAggNumLevels(c->amg, o->amg_aggressive);
     HYPRE_BoomerAMGSetStrongThreshold(c->amg, o->amg_strong > 0 ? o->amg_strong
                                               : dim == 3     ? 0.5
