@@ -121,6 +121,8 @@ typedef struct {
                               pst_solve_result_free                                          */
     int nhistory;
     double seconds;
+    double setup_seconds;  /* the part of seconds spent setting up (the method's workspace and
+                              the preconditioner: the AMG hierarchy); 0 for pst_krylov_solve */
     char message[PST_ERRLEN]; /* why it stopped, in words, with the numbers                  */
 } pst_solve_result;
 /* Free the history of r and reset it (NULL allowed); the other fields stay readable. */

@@ -163,7 +163,8 @@ static void fit_amg_radius(pst_plan *p, const pst_scene *s, double other, double
     if (other + n * amg_bytes_per_row(p, s) <= budget || p->mobility_ncomp)
         return;
     for (int k = 0; k < s->ntasks; ++k)
-        if (s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].amg_radius < 0)
+        if (s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].amg_radius < 0 &&
+            s->tasks[k].amg_source == PST_AMG_BROOKSHAW)
             p->task_amg_radius[k] = PLAN_AMG_TIGHT_RADIUS;
 }
 

@@ -95,6 +95,7 @@ void report_solve(cJSON *task, const pst_solve_result *res)
     cJSON_AddNumberToObject(s, "iterations", res->iterations);
     cJSON_AddNumberToObject(s, "relative_residual", res->rel_residual);
     cJSON_AddStringToObject(s, "message", res->message);
+    cJSON_AddNumberToObject(s, "setup_seconds", res->setup_seconds);
     if (res->history)
         cJSON_AddItemToObject(s, "history", cJSON_CreateDoubleArray(res->history, res->nhistory));
 }
@@ -312,6 +313,10 @@ void report_summary(FILE *f, const cJSON *report)
             fprintf(f, ": %s", cJSON_GetStringValue(cJSON_GetObjectItem(sv, "message")));
         cJSON_ArrayForEach(nv, cJSON_GetObjectItem(t, "norms"))
             fprintf(f, ", %s %.3e", nv->string, nv->valuedouble);
-        fprintf(f, ", %.3f s\n", cJSON_GetNumberValue(cJSON_GetObjectItem(t, "seconds")));
+        fprintf(f, ", %.3f s", cJSON_GetNumberValue(cJSON_GetObjectItem(t, "seconds")));
+        if (sv)
+            fprintf(f, " (set-up %.3f s)",
+                    cJSON_GetNumberValue(cJSON_GetObjectItem(sv, "setup_seconds")));
+        fprintf(f, "\n");
     }
 }

@@ -69,13 +69,17 @@ int pst_solve(const pst_op *op, const double *b, double *u, const pst_solve_opts
     int st = check_request(op, b, u, o, err);
     if (st == PST_OK)
         st = pst_krylov_build(&s, op, o, &solver, &stop, err);
+    double setup = omp_get_wtime() - t0;
     if (st != PST_OK) {
         r->solver = op && b && u ? solver : 0;
         r->stop = stop;
-        return pst_solve_refused(r, st, err, err_out, t0);
+        st = pst_solve_refused(r, st, err, err_out, t0);
+        r->setup_seconds = setup;
+        return st;
     }
     st = pst_krylov_solve(s, b, u, r, err_out);
     pst_krylov_destroy(s);
     r->seconds = omp_get_wtime() - t0;
+    r->setup_seconds = setup;
     return st;
 }
