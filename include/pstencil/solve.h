@@ -66,8 +66,8 @@ typedef struct {
     int solver;            /* pst_solver (default AUTO)                                       */
     int precond;           /* pst_precond (default JACOBI)                                    */
     int amg_source;        /* pst_amg_source (default BROOKSHAW)                              */
-    /* The AMG matrix's stencil and hypre's coarsening (docs/solving.md, "The AMG matrix"; the
-     * defaults come from the measured table there): */
+    /* The AMG matrix's stencil and hypre's coarsening (docs/solving.md, "The AMG matrix's
+     * stencil"; the defaults come from the measured table there): */
     double amg_radius;     /* BROOKSHAW source: the proxy keeps the pairs closer than
                               amg_radius * h (h of the pair, (h_I + h_J) / 2); 0, or at least
                               the kernel's support, keeps the whole list; -1 (the default):
