@@ -1,4 +1,4 @@
-/* SPE10 reader and grid-to-cloud mobility: the real data files of shared/data/spe10 (their
+/* SPE10 reader and grid-to-cloud mobility: the real data files of data/spe10 (their
  * README statistics, the index layout checked against an independent read), the mapping onto
  * a cell-centred cloud, and the error paths on corrupted copies. */
 #define _POSIX_C_SOURCE 200809L /* access */
@@ -14,13 +14,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#ifndef PSTENCIL_SHARED_DIR
-#error "PSTENCIL_SHARED_DIR must name the shared/ directory (tests/CMakeLists.txt)"
+#ifndef PSTENCIL_DATA_DIR
+#error "PSTENCIL_DATA_DIR must name the repository's data/ directory (tests/CMakeLists.txt)"
 #endif
 
-#define GEOS_DIR PSTENCIL_SHARED_DIR "/data/spe10/geos_layers84_85"
+#define GEOS_DIR PSTENCIL_DATA_DIR "/spe10/geos_layers84_85"
 #define GEOS_X GEOS_DIR "/permx.geos"
-#define TARBERT PSTENCIL_SHARED_DIR "/data/spe10/rtsphem_tarbert_layer/perm.txt"
+#define TARBERT PSTENCIL_DATA_DIR "/spe10/rtsphem_tarbert_layer/perm.txt"
 #define LAYER 13200
 
 static char tmpdir[64];
@@ -379,7 +379,7 @@ static void test_errors(void)
     CHECK_INT(pst_spe10_read(&g, GEOS_X, 85, 0, 0, 0, 10, err), PST_EINVAL);
     CHECK_INT(pst_spe10_read(&g, TARBERT, 0, 59, 219, 2, 1, err), PST_EINVAL);
     CHECK(g.k[0] == NULL);
-    CHECK_INT(pst_spe10_read(&g, PSTENCIL_SHARED_DIR "/no/such/dir/permx.geos", 84, 0, 0, 1, 1,
+    CHECK_INT(pst_spe10_read(&g, PSTENCIL_DATA_DIR "/no/such/dir/permx.geos", 84, 0, 0, 1, 1,
                              err),
               PST_EIO);
     CHECK(strstr(err, "no/such/dir/permx.geos: cannot open") != NULL);
@@ -487,12 +487,12 @@ static void test_operators(void)
 int main(void)
 {
     struct stat sb;
-    if (stat(PSTENCIL_SHARED_DIR "/data/spe10", &sb) != 0 || !S_ISDIR(sb.st_mode)) {
+    if (stat(PSTENCIL_DATA_DIR "/spe10", &sb) != 0 || !S_ISDIR(sb.st_mode)) {
         /* A missing data directory must fail loudly: the checks below are the point. */
         fprintf(stderr,
-                "test_spe10: FAIL: the SPE10 data directory %s/data/spe10 does not exist "
-                "(the shared/ checkout must sit beside the repository)\n",
-                PSTENCIL_SHARED_DIR);
+                "test_spe10: FAIL: the SPE10 data directory %s/spe10 does not exist "
+                "(it is part of the repository: data/spe10)\n",
+                PSTENCIL_DATA_DIR);
         CHECK(0);
         return check_summary("test_spe10");
     }

@@ -16,10 +16,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifndef PSTENCIL_SHARED_DIR
-#error "PSTENCIL_SHARED_DIR must name the shared/ directory (tests/CMakeLists.txt)"
+#ifndef PSTENCIL_DATA_DIR
+#error "PSTENCIL_DATA_DIR must name the repository's data/ directory (tests/CMakeLists.txt)"
 #endif
-#define GEOS_X PSTENCIL_SHARED_DIR "/data/spe10/geos_layers84_85/permx.geos"
+#define GEOS_X PSTENCIL_DATA_DIR "/spe10/geos_layers84_85/permx.geos"
 
 static double linear(void *ctx, int side, const double x[3])
 {

@@ -1,5 +1,5 @@
 /* SPE10 model 2 permeability: reading one 60x220 layer (GEOS voxel files or the RTSPHEM
- * Tarbert text, layouts in shared/data/spe10/README.md and docs/spe10.md) into a
+ * Tarbert text, layouts in docs/spe10.md, provenance in data/spe10/README.md) into a
  * Cartesian grid, and setting a cloud's mobility from the grid cell under each particle. */
 #include "cloud_layout.h"
 #include "check.h"
