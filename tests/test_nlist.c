@@ -355,6 +355,43 @@ static void test_errors(void)
     pst_cloud_destroy(c);
 }
 
+/* The half list of nl (pst_nlist_halve) keeps row i's neighbours above i, for 1 and 2 threads;
+ * its cut at `cut` is the whole list's entry for entry, fallback rows included, and its cut at
+ * 1 is nl again. */
+static void check_half(const pst_cloud *c, const pst_nlist *nl, double cut)
+{
+    int saved = omp_get_max_threads();
+    pst_nlist *half[2] = {NULL, NULL}, *hc[2] = {NULL, NULL}, *back = NULL;
+    size_t full[2] = {0, 0}, fw = 0, fb = 0;
+    for (int t = 0; t < 2; ++t) {
+        omp_set_num_threads(t + 1);
+        CHECK_INT(pst_nlist_halve(&half[t], nl, NULL), PST_OK);
+        CHECK_INT(pst_nlist_cut(&hc[t], c, half[t], cut, &full[t], NULL), PST_OK);
+    }
+    omp_set_num_threads(saved);
+    size_t n = nl->n, bad = 0;
+    for (size_t i = 0; i < n; ++i) {
+        int64_t q = half[0]->offset[i];
+        for (int64_t e = nl->offset[i]; e < nl->offset[i + 1]; ++e)
+            if (nl->index[e] > i)
+                bad += q >= half[0]->offset[i + 1] || half[0]->index[q++] != nl->index[e];
+        bad += q != half[0]->offset[i + 1];
+    }
+    CHECK(bad == 0 && half[0]->half && 2 * pst_nlist_pairs(half[0]) == pst_nlist_pairs(nl));
+    CHECK(same_nlists(half[0], half[1]) && same_nlists(hc[0], hc[1]) && full[0] == full[1]);
+    pst_nlist *wc = NULL;
+    CHECK_INT(pst_nlist_cut(&wc, c, nl, cut, &fw, NULL), PST_OK);
+    CHECK(wc && same_nlists(hc[0], wc) && full[0] == fw && !hc[0]->half);
+    CHECK_INT(pst_nlist_cut(&back, c, half[0], 1.0, &fb, NULL), PST_OK);
+    CHECK(same_nlists(back, nl) && fb == 0);
+    for (int t = 0; t < 2; ++t) {
+        pst_nlist_destroy(half[t]);
+        pst_nlist_destroy(hc[t]);
+    }
+    pst_nlist_destroy(wc);
+    pst_nlist_destroy(back);
+}
+
 /* The cut list (pst_nlist_cut, the AMG proxy's stencil) is the list of the cut radius: the same
  * rows as a list built with support cut * support, for any thread count; a row with no pair
  * inside the cut keeps its whole row and is counted; a bad cut is refused. */
@@ -376,6 +413,7 @@ static void test_cut(void)
             CHECK(cut[0] && same_list(cut[0], r, pst_cloud_size(c)));
             CHECK(cut[0] && cut[1] && same_nlists(cut[0], cut[1]));
             CHECK(cut[0] && pst_nlist_support(cut[0]) == 3.0 && cut[0]->cut == 0.55);
+            check_half(c, nl, 0.55);
             free(r.off);
             free(r.idx);
             pst_nlist_destroy(cut[0]);
@@ -393,6 +431,7 @@ static void test_cut(void)
     size_t full = 0;
     CHECK_INT(pst_nlist_cut(&cut, c, nl, 0.3, &full, NULL), PST_OK);
     CHECK(full == 81 && cut && same_nlists(cut, nl));
+    check_half(c, nl, 0.3);
     pst_nlist_destroy(cut);
     CHECK_INT(pst_nlist_cut(&cut, c, nl, 0.5, &full, NULL), PST_OK);
     CHECK(full == 0 && cut && cut->offset[41] - cut->offset[40] == 4);

@@ -36,7 +36,19 @@ void pst_nlist_destroy(pst_nlist *nl);
 size_t pst_nlist_rows(const pst_nlist *nl);
 const int64_t *pst_nlist_offsets(const pst_nlist *nl);   /* rows + 1 entries */
 const uint32_t *pst_nlist_indices(const pst_nlist *nl);
-int64_t pst_nlist_pairs(const pst_nlist *nl);            /* total entries (each pair twice) */
+int64_t pst_nlist_pairs(const pst_nlist *nl);  /* total entries (each pair twice; once in a
+                                                   half list)                                 */
+
+/* The upper half of a list: row i keeps its neighbours j > i, in increasing order, so each
+ * pair is stored once (8 bytes per row + 4 per pair instead of 8 per pair). It serves the
+ * matrix-free apply of the largest clouds (pst_op_use_half_list) and the AMG proxy built from
+ * it; operators cannot be created on it (their precompute reads whole rows). nl is unchanged;
+ * destroy it when nothing else reads it. The same for every thread count. PST_EINVAL (nl is
+ * already half), PST_ENOMEM (message in err). */
+int pst_nlist_halve(pst_nlist **out, const pst_nlist *nl, char *err);
+
+/* 1 when nl is a half list (pst_nlist_halve), else 0. */
+int pst_nlist_is_half(const pst_nlist *nl);
 
 /* The support (radius in units of h) the list was built with. */
 double pst_nlist_support(const pst_nlist *nl);

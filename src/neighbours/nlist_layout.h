@@ -10,6 +10,7 @@ struct pst_nlist {
     double support;      /* radius in units of h the list was built with */
     double cut;          /* fraction of that radius the pairs lie within: 1 for a built list,
                             < 1 for a cut one (pst_nlist_cut)                               */
+    int half;            /* 1: row i holds only its neighbours j > i (pst_nlist_halve)      */
     int64_t *offset;     /* n + 1 */
     uint32_t *index;     /* offset[n] */
 };
@@ -20,12 +21,14 @@ struct pst_nlist {
 int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t m,
                           double radius, int64_t **off, uint32_t **idx, char *err);
 
-/* The pairs of nl (a list of cloud c) that lie within a fraction of their radius:
+/* The pairs of nl (a list of cloud c, whole or half) that lie within a fraction of their radius:
  * d_ij < cut * support * (h_i + h_j) / 2, a symmetric rule, so the cut list is symmetric. A row
  * left with no pair keeps all of nl's (a documented fallback: an operator row with no neighbour
  * would have a zero diagonal); *full_rows counts them. The cut list keeps nl's support (an
  * operator built on it sees the kernel cut at that radius) and records the cut. 0 < cut <= 1.
- * PST_EINVAL, PST_ENOMEM (message in err). Identical for every thread count. */
+ * The cut list is always whole: from a half list it is the one the whole list would give, entry
+ * for entry (so cut = 1 restores the whole list). PST_EINVAL, PST_ENOMEM (message in err).
+ * Identical for every thread count. */
 int pst_nlist_cut(pst_nlist **out, const pst_cloud *c, const pst_nlist *nl, double cut,
                   size_t *full_rows, char *err);
 
