@@ -5,6 +5,9 @@
  *   op_precompute_<scheme>_<dim>d   pst_op_create (per-particle data, one threaded pass)
  *   op_apply_<scheme>_<dim>d        pst_op_apply (matrix-free: pair weights recomputed)
  *   op_stored_<scheme>_<dim>d       pst_op_apply_stored (weights stored once, untimed)
+ *   op_half_<scheme>_<dim>d         pst_op_apply on a half list (pst_op_use_half_list; the
+ *                                   operator, the half list and the switch untimed), for the
+ *                                   schemes that have one
  *   csr_{1sum,4sums}_lv_<dim>d      the assembled lv matrix times a vector, one or four partial
  *                                   sums per row (is the stored apply memory- or latency-bound?)
  * plus a STREAM-like triad a = b + s c (3 x 80 MB and 3 x 400 MB arrays) and a read-only
@@ -135,7 +138,7 @@ static void common_counters(pstb_state *st, const setup *s)
 
 /* ---- the three benchmarks ---------------------------------------------------------------- */
 
-enum { MODE_PRECOMPUTE, MODE_APPLY, MODE_STORED };
+enum { MODE_PRECOMPUTE, MODE_APPLY, MODE_STORED, MODE_HALF };
 
 /* Bytes moved by one stored apply (the model of bench/README.md): per pair 8 (weight) + 4
  * (index); per row 8 (offset) + 8 (u_I) + 8 (y_I written); u_J gathers counted once per
@@ -173,6 +176,28 @@ static double apply_flops_per_pair(int scheme, int dim)
         if (strcmp(flop_models[m].scheme, scheme_name(scheme)) == 0)
             return flop_models[m].flops[dim == 3];
     return 0;
+}
+
+/* The half-list apply: a second operator of the scheme switched to a half list of the setup's
+ * list (both untimed), then the same applies as MODE_APPLY; pairs/s counts the whole list's
+ * pairs, so it compares with op_apply's directly. */
+static void run_half(pstb_state *st, const setup *s, int scheme)
+{
+    char err[PST_ERRLEN] = "";
+    pst_op *op = NULL;
+    pst_nlist *half = NULL;
+    if (create_op(&op, s, scheme, err) != PST_OK || pst_nlist_halve(&half, s->nl, err) != PST_OK ||
+        pst_op_use_half_list(op, half, err) != PST_OK) {
+        pstb_skip(st, err[0] ? err : "cannot build the half-list operator");
+    } else {
+        while (pstb_keep_running(st))
+            pst_op_apply(op, s->u, s->y);
+        common_counters(st, s);
+        pstb_counter(st, "pairs/s", (double)s->st.pairs, 1);
+        pstb_counter(st, "colours", pst_op_half_colours(op), 0);
+    }
+    pst_op_destroy(op);
+    pst_nlist_destroy(half);
 }
 
 /* The probes of the run's context, at 1 thread ([0]) and at all threads ([1]). */
@@ -230,6 +255,11 @@ static void run(pstb_state *st, int scheme, int dim, int mode)
         omp_set_num_threads(saved);
         return;
     }
+    if (mode == MODE_HALF) {
+        run_half(st, s, scheme);
+        omp_set_num_threads(saved);
+        return;
+    }
     pst_op *op = get_op(s, scheme, dim, err);
     if (!op) {
         pstb_skip(st, err[0] ? err : "pst_op_create failed");
@@ -283,13 +313,16 @@ static void run(pstb_state *st, int scheme, int dim, int mode)
 #define OP_BENCH(SI, D)                                                                       \
     static void pre_##SI##_##D(pstb_state *st) { run(st, SI, D, MODE_PRECOMPUTE); }          \
     static void app_##SI##_##D(pstb_state *st) { run(st, SI, D, MODE_APPLY); }               \
-    static void sto_##SI##_##D(pstb_state *st) { run(st, SI, D, MODE_STORED); }
+    static void sto_##SI##_##D(pstb_state *st) { run(st, SI, D, MODE_STORED); }              \
+    static void hal_##SI##_##D(pstb_state *st) { run(st, SI, D, MODE_HALF); }
 #define OP_BENCH2(SI) OP_BENCH(SI, 2) OP_BENCH(SI, 3)
 OP_BENCH2(0) OP_BENCH2(1) OP_BENCH2(2) OP_BENCH2(3) OP_BENCH2(4) OP_BENCH2(5) OP_BENCH2(6)
 OP_BENCH2(7) OP_BENCH2(8) OP_BENCH2(9) OP_BENCH2(10) OP_BENCH2(11) OP_BENCH2(12) OP_BENCH2(13)
 OP_BENCH2(14) OP_BENCH2(15)
-#define FNS(SI) {{pre_##SI##_2, app_##SI##_2, sto_##SI##_2}, {pre_##SI##_3, app_##SI##_3, sto_##SI##_3}}
-static const pstb_fn op_fns[MAX_SCHEMES][2][3] = {
+#define FNS(SI)                                                                                \
+    {{pre_##SI##_2, app_##SI##_2, sto_##SI##_2, hal_##SI##_2},                                 \
+     {pre_##SI##_3, app_##SI##_3, sto_##SI##_3, hal_##SI##_3}}
+static const pstb_fn op_fns[MAX_SCHEMES][2][4] = {
     FNS(0), FNS(1), FNS(2),  FNS(3),  FNS(4),  FNS(5),  FNS(6),  FNS(7),
     FNS(8), FNS(9), FNS(10), FNS(11), FNS(12), FNS(13), FNS(14), FNS(15),
 };
@@ -458,8 +491,10 @@ void pstb_register_all(void)
     pstb_register_iters("triad_3x400MB", triad_400mb, threads, 2, ITERS_TRIAD);
     pstb_register_iters("read_dot_2x400MB", read_dot, threads, 2, ITERS_TRIAD);
     /* per (dim, scheme): precompute (which leaves its operator cached), matrix-free apply,
-     * stored apply, so every operator is built by the timed precompute only */
-    static const char *const mode_names[3] = {"op_precompute_", "op_apply_", "op_stored_"};
+     * stored apply, so every operator is built by the timed precompute only; then the
+     * half-list apply (its own operator) */
+    static const char *const mode_names[4] = {"op_precompute_", "op_apply_", "op_stored_",
+                                              "op_half_"};
     int ns = pst_scheme_count(), lv = lv_index();
     if (ns > MAX_SCHEMES) {
         fprintf(stderr, "bench_operators: %d schemes, only the first %d benchmarked\n", ns,
@@ -469,11 +504,11 @@ void pstb_register_all(void)
     for (int dim = 2; dim <= 3; ++dim) {
         for (int k = 0; k < ns; ++k) {
             int wide = scheme_supp(k) > 0;
-            int iters[3] = {wide ? ITERS_PRECOMPUTE_WIDE : ITERS_PRECOMPUTE,
-                            wide ? (dim == 2 ? ITERS_APPLY_WIDE_2D : ITERS_APPLY_WIDE_3D)
-                                 : ITERS_APPLY,
-                            wide ? ITERS_STORED_WIDE : ITERS_STORED};
-            for (int m = 0; m < 3; ++m) {
+            int apply = wide ? (dim == 2 ? ITERS_APPLY_WIDE_2D : ITERS_APPLY_WIDE_3D) : ITERS_APPLY;
+            int iters[4] = {wide ? ITERS_PRECOMPUTE_WIDE : ITERS_PRECOMPUTE, apply,
+                            wide ? ITERS_STORED_WIDE : ITERS_STORED, apply};
+            int modes = pst_scheme_supports(pst_scheme_name(k), PST_SUPPORTS_HALF_LIST) ? 4 : 3;
+            for (int m = 0; m < modes; ++m) {
                 char name[96];
                 snprintf(name, sizeof name, "%s%s_%dd", mode_names[m], pst_scheme_name(k), dim);
                 pstb_register_iters(name, op_fns[k][dim - 2][m], threads, 2, iters[m]);

@@ -165,14 +165,32 @@ PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, si
                  neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, H, i, j));
 }
 
+/* Row i of a half list (operator.h, half_rows), for constant D, G, T, H: both weights of each
+ * pair as apply computes them (each from its own row's data: the pair gradient uses the row's
+ * own C, so the geometry is not shared). */
+PST_KHOT void half_row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
+                         const double *u, double *y, int D, int G, int T, int H)
+{
+    const uint8_t *kind = k->c.kind;
+    int neumann = kind[i] == PST_NEUMANN;
+    PST_HALF_LOOP(off, idx, kind, i, u, y, j, (void)0,
+                  neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, H, i, j),
+                  kind[j] == PST_NEUMANN ? neumann_weight(k, D, G, j, i)
+                                         : row_weight(k, D, G, T, H, j, i));
+}
+
+/* Row i: of the whole list (apply, emission) or, with half = 1, of a half list. */
 typedef void (*row_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t,
-                       const double *, double *, double *);
+                       const double *, double *, double *, int half);
 #define LV_ROW(D, G, T, H)                                                                     \
     static void row_##D##_##G##_##T##_##H(const lv_ctx *k, const int64_t *off,                 \
                                           const uint32_t *idx, size_t i, const double *u,      \
-                                          double *y, double *w)                                \
+                                          double *y, double *w, int half)                      \
     {                                                                                          \
-        row_t(k, off, idx, i, u, y, w, D, G, T, H);                                            \
+        if (half)                                                                              \
+            half_row_t(k, off, idx, i, u, y, D, G, T, H);                                      \
+        else                                                                                   \
+            row_t(k, off, idx, i, u, y, w, D, G, T, H);                                        \
     }
 #define LV_ROWS_H(D, G) LV_ROW(D, G, 0, 0) LV_ROW(D, G, 0, 1) LV_ROW(D, G, 1, 0) LV_ROW(D, G, 1, 1)
 #define LV_ROWS_G(D) LV_ROWS_H(D, 1) LV_ROWS_H(D, 2) LV_ROWS_H(D, 3) LV_ROWS_H(D, 4)
@@ -415,13 +433,22 @@ static void lv_apply(const pst_op *op, const double *u, double *y)
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < op->n; ++i)
         if (k.c.kind[i] != PST_DIRICHLET)
-            row(&k, off, idx, i, u, y, NULL);
+            row(&k, off, idx, i, u, y, NULL, 0);
+}
+
+static void lv_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
+                         size_t i1, const double *u, double *y)
+{
+    lv_ctx k = make_ctx(op);
+    row_fn row = row_for(&k);
+    for (size_t i = i0; i < i1; ++i)
+        row(&k, off, idx, i, u, y, NULL, 1);
 }
 
 static void lv_emit_row(const pst_op *op, size_t i, double *w)
 {
     lv_ctx k = make_ctx(op);
-    row_for(&k)(&k, pst_nlist_offsets(op->nl), pst_nlist_indices(op->nl), i, NULL, NULL, w);
+    row_for(&k)(&k, pst_nlist_offsets(op->nl), pst_nlist_indices(op->nl), i, NULL, NULL, w, 0);
 }
 
 static double lv_scale(const pst_op *op, size_t i)
@@ -518,6 +545,7 @@ static void lv_degrade(pst_op *op, size_t i)
                            .min_neighbours = MIN,                                             \
                            .precompute = PRE,                                                 \
                            .apply = lv_apply,                                                 \
+                           .half_rows = lv_half_rows,                                         \
                            .emit_row = lv_emit_row,                                           \
                            .scale = lv_scale,                                                 \
                            .gradient = GRAD,                                                  \

@@ -696,6 +696,23 @@ PST_KHOT double qs_row_weight(const qs_ctx *k, int D, const double xi[3], double
     return qs_weight(D, r, o2, o4, kap);
 }
 
+/* The weight of row j for its neighbour i (the reverse of a pair, from row j's own data). */
+PST_KHOT double qs_weight_to(const qs_ctx *k, const qs_data *d, int D, size_t j, size_t i)
+{
+    double xj[3] = {0, 0, 0};
+    for (int a = 0; a < D; ++a)
+        xj[a] = k->c.x[a][j];
+    return qs_row_weight(k, D, xj, 1.0 / pst_h(&k->c, j), d->kap + (size_t)QS_NK(D) * j, i);
+}
+
+/* -r into m (negation is exact); returns m. */
+PST_KHOT const double *qs_neg(int D, const double r[3], double m[3])
+{
+    for (int a = 0; a < D; ++a)
+        m[a] = -r[a];
+    return m;
+}
+
 /* Row i into y (apply) or its weights into w (emission), for constant D. */
 PST_KHOT void qs_row_t(const qs_ctx *k, const qs_data *d, const int64_t *off, const uint32_t *idx,
                      size_t i, const double *u, double *y, double *w, int D)
@@ -728,6 +745,44 @@ static void qs_apply(const pst_op *op, const double *u, double *y)
             if (k.c.kind[i] != PST_DIRICHLET)
                 qs_row_t(&k, d, off, idx, i, u, y, NULL, 3);
     }
+}
+
+/* Rows [i0, i1) of a half list (operator.h, half_rows), for constant D. With one h for the
+ * cloud a pair's geometry serves both of its weights (r_JI = -r_IJ exactly, the same omegas):
+ * one sqrt and one division for two weights, each bit for bit apply's. With per-particle h each
+ * direction is computed as apply computes it. Compute-bound like apply: two kappa dot products
+ * per pair, 4 bytes of index, x_J, u_J and kappa_J gathered and y_J written back. */
+PST_KHOT void qs_half_t(const qs_ctx *k, const qs_data *d, const int64_t *off,
+                        const uint32_t *idx, size_t i0, size_t i1, const double *u, double *y,
+                        int D)
+{
+    const int nk = QS_NK(D);
+    const uint8_t *kind = k->c.kind;
+    for (size_t i = i0; i < i1; ++i) {
+        double xi[3] = {0, 0, 0}, ih = 1.0 / pst_h(&k->c, i);
+        const double *kap = d->kap + (size_t)nk * i;
+        for (int a = 0; a < D; ++a)
+            xi[a] = k->c.x[a][i];
+        if (k->c.h) {
+            PST_HALF_LOOP(off, idx, kind, i, u, y, j, (void)0,
+                          qs_row_weight(k, D, xi, ih, kap, j), qs_weight_to(k, d, D, j, i));
+        } else {
+            double r[3] = {0, 0, 0}, m[3] = {0, 0, 0}, o2, o4;
+            PST_HALF_LOOP(off, idx, kind, i, u, y, j, qs_pair(k, D, xi, ih, j, r, &o2, &o4),
+                          qs_weight(D, r, o2, o4, kap),
+                          qs_weight(D, qs_neg(D, r, m), o2, o4, d->kap + (size_t)nk * j));
+        }
+    }
+}
+
+static void qs_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
+                         size_t i1, const double *u, double *y)
+{
+    qs_ctx k = make_ctx(op);
+    if (k.c.dim == 2)
+        qs_half_t(&k, op->data, off, idx, i0, i1, u, y, 2);
+    else
+        qs_half_t(&k, op->data, off, idx, i0, i1, u, y, 3);
 }
 
 static void qs_emit_row(const pst_op *op, size_t i, double *w)
@@ -926,6 +981,7 @@ const pst_scheme pst_scheme_qsfdi = {
     .degree = 2,
     .degree_lattice = 2,
     .min_neighbours = qs_min,
+    .half_rows = qs_half_rows,
     .precompute = qs_precompute,
     .apply = qs_apply,
     .emit_row = qs_emit_row,

@@ -328,17 +328,64 @@ PST_KHOT void centre_of(const wls_ctx *k, int D, size_t i, double xc[3])
         xc[a] = k->c.x[a][i];
 }
 
-/* a_Ij of row i for neighbour j: shared by apply and emit_row (bit-identical weights). */
-PST_KHOT double row_weight(const wls_ctx *k, int D, int B, pst_kernel K, const double *xc,
-                          double ih, const double *lam, size_t j)
+/* w lam . p(xh): the weight of a pair with scaled offset xh and kernel weight w in the row of
+ * coefficients lam. */
+PST_KHOT double basis_weight(int D, int B, double w, const double xh[3], const double *lam)
 {
-    double xh[3], p[WLS_NBMAX];
-    double w = pair_weight(k, D, K, xc, j, ih, xh);
+    double p[WLS_NBMAX];
     basis(D, B, xh, p);
     double s = 0;
     for (int e = 0; e < D + D * (D + 1) / 2 + B; ++e)
         s += lam[e] * p[e];
     return w * s;
+}
+
+/* a_Ij of row i for neighbour j: shared by apply and emit_row (bit-identical weights). */
+PST_KHOT double row_weight(const wls_ctx *k, int D, int B, pst_kernel K, const double *xc,
+                          double ih, const double *lam, size_t j)
+{
+    double xh[3];
+    double w = pair_weight(k, D, K, xc, j, ih, xh);
+    return basis_weight(D, B, w, xh, lam);
+}
+
+/* a_Ji: row j's weight for its neighbour i, from row j's own centre, h and coefficients. */
+PST_KHOT double reverse_weight(const wls_ctx *k, int D, int B, pst_kernel K, size_t j, size_t i)
+{
+    const int nb = D + D * (D + 1) / 2 + B;
+    double xc[3];
+    centre_of(k, D, j, xc);
+    return row_weight(k, D, B, K, xc, 1.0 / pst_h(&k->c, j), k->d->lam + (size_t)nb * j, i);
+}
+
+/* -x into m (negation is exact); returns m. */
+PST_KHOT const double *negated(int D, const double x[3], double m[3])
+{
+    for (int a = 0; a < D; ++a)
+        m[a] = -x[a];
+    return m;
+}
+
+/* Row i of a half list (operator.h, half_rows). With one h for the cloud the pair's offset and
+ * kernel weight serve both directions (x^_JI = -x^_IJ exactly): one sqrt for two weights, each
+ * bit for bit apply's; with per-particle h each direction is computed as apply does. */
+PST_KHOT void half_row_t(const wls_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
+                         const double *u, double *y, int D, int B, pst_kernel K)
+{
+    const int nb = D + D * (D + 1) / 2 + B;
+    const uint8_t *kind = k->c.kind;
+    double xc[3], ih = 1.0 / pst_h(&k->c, i);
+    const double *lam = k->d->lam + (size_t)nb * i, *lam0 = k->d->lam;
+    centre_of(k, D, i, xc);
+    if (k->c.h) {
+        PST_HALF_LOOP(off, idx, kind, i, u, y, j, (void)0,
+                      row_weight(k, D, B, K, xc, ih, lam, j), reverse_weight(k, D, B, K, j, i));
+    } else {
+        double xh[3] = {0, 0, 0}, m[3] = {0, 0, 0}, w;
+        PST_HALF_LOOP(off, idx, kind, i, u, y, j, w = pair_weight(k, D, K, xc, j, ih, xh),
+                      basis_weight(D, B, w, xh, lam),
+                      basis_weight(D, B, w, negated(D, xh, m), lam0 + (size_t)nb * j));
+    }
 }
 
 /* Row i into y (apply) or its weights into w (emission). Compute-bound: per neighbour one
@@ -669,12 +716,18 @@ void pst_wls_degrade(pst_op *op, size_t i)
 
 /* ---- apply and emission ------------------------------------------------------------------- */
 
-typedef void (*row_fn)(const wls_ctx *, size_t, const double *, double *, double *);
+/* Row i: of the whole list (apply, emission) or, with off != NULL, of the half list (off,
+ * idx). */
+typedef void (*row_fn)(const wls_ctx *, size_t, const double *, double *, double *,
+                       const int64_t *off, const uint32_t *idx);
 #define WLS_ROW(D, B, K)                                                                       \
     static void row_##D##_##B##_##K(const wls_ctx *k, size_t i, const double *u, double *y,     \
-                                    double *w)                                                 \
+                                    double *w, const int64_t *off, const uint32_t *idx)        \
     {                                                                                          \
-        row_t(k, i, u, y, w, D, B, (pst_kernel)K);                                             \
+        if (off)                                                                               \
+            half_row_t(k, off, idx, i, u, y, D, B, (pst_kernel)K);                             \
+        else                                                                                   \
+            row_t(k, i, u, y, w, D, B, (pst_kernel)K);                                         \
     }
 #define WLS_ROW_K(D, B) WLS_ROW(D, B, 0) WLS_ROW(D, B, 1) WLS_ROW(D, B, 2) WLS_ROW(D, B, 3)
 WLS_ROW_K(2, 0)
@@ -698,13 +751,22 @@ void pst_wls_apply(const pst_op *op, const double *u, double *y)
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < op->n; ++i)
         if (k.c.kind[i] != PST_DIRICHLET)
-            row(&k, i, u, y, NULL);
+            row(&k, i, u, y, NULL, NULL, NULL);
+}
+
+void pst_wls_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
+                       size_t i1, const double *u, double *y)
+{
+    wls_ctx k = make_ctx(op);
+    row_fn row = row_for(&k);
+    for (size_t i = i0; i < i1; ++i)
+        row(&k, i, u, y, NULL, off, idx);
 }
 
 void pst_wls_emit_row(const pst_op *op, size_t i, double *w)
 {
     wls_ctx k = make_ctx(op);
-    row_for(&k)(&k, i, NULL, NULL, w);
+    row_for(&k)(&k, i, NULL, NULL, w, NULL, NULL);
 }
 
 /* ---- the fit at the particles: gradient and Hessian --------------------------------------- */

@@ -17,6 +17,8 @@ int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn
 int pst_wls_min_neighbours(int dim);
 void pst_wls_apply(const pst_op *op, const double *u, double *y);
 void pst_wls_emit_row(const pst_op *op, size_t i, double *w);
+void pst_wls_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
+                       size_t i1, const double *u, double *y);
 void pst_wls_gradient(const pst_op *op, const double *u, double *const grad[3]);
 void pst_wls_hessian(const pst_op *op, const double *u, double *const hess[6]);
 int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,
@@ -39,6 +41,7 @@ void pst_wls_msums(int dim, int deg, int n, const double *r, int stride, const d
     .fallback = PST_WLS_FALLBACK, .default_kernel = PST_KERNEL_QUINTIC, .degree = 2,          \
     .degree_lattice = 2,                                                                       \
     .min_neighbours = pst_wls_min_neighbours, .apply = pst_wls_apply,                          \
+    .half_rows = pst_wls_half_rows,                                                            \
     .emit_row = pst_wls_emit_row, .gradient = pst_wls_gradient, .hessian = pst_wls_hessian,    \
     .interpolate = pst_wls_interpolate, .degrade = pst_wls_degrade, .free_data = pst_wls_free, \
     .data_bytes = {49, 81} /* lam: nb doubles (6 / 10 with type B) and a level byte */

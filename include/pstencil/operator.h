@@ -135,13 +135,15 @@ enum {
     PST_SUPPORTS_INTERPOLATE,      /* pst_op_interpolate                                       */
     PST_SUPPORTS_MOBILITY,         /* a per-particle mobility: div(M grad u)                   */
     PST_SUPPORTS_SYMMETRIC,        /* CG through a symmetric scaling (with G1, no Neumann rows) */
-    PST_SUPPORTS_DERIVATIVES_ONLY  /* derivatives without the rows (opts.laplacian = 0)        */
+    PST_SUPPORTS_DERIVATIVES_ONLY, /* derivatives without the rows (opts.laplacian = 0)        */
+    PST_SUPPORTS_HALF_LIST         /* the matrix-free apply on a half list (pst_op_use_half_list) */
 };
 int pst_scheme_supports(const char *name, int what);
 
 /* Build an operator: validate the inputs, precompute the per-particle data (one threaded
  * pass), classify every row. The cloud and the list must outlive the operator and must not
- * change. The list's support must cover the kernel's (pst_kernel_support), else PST_EINVAL.
+ * change (pst_op_use_half_list replaces the list). The list must be whole (not a half list)
+ * and its support must cover the kernel's (pst_kernel_support), else PST_EINVAL.
  * No output of an operator is ever NaN: degenerate rows fall back and are counted. */
 int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o,
                   char *err);
@@ -151,6 +153,24 @@ void pst_op_destroy(pst_op *op);
  * data. u and y have one value per particle (cloud order) and must not alias. PST_EINVAL for
  * an operator built without rows (opts.laplacian = 0). */
 int pst_op_apply(const pst_op *op, const double *u, double *y);
+
+/* The low-memory layout of the largest clouds (docs/operators.md, "The half-list apply"):
+ * from now on op's matrix-free apply reads `half`, the half (pst_nlist_halve) of the list op
+ * was built on, so the caller may destroy that whole list once this returns; `half` must
+ * outlive op. The list then costs 4 bytes per pair instead of 8. Each stored pair is visited
+ * once per apply: its two weights (those of pst_op_apply) are scattered to both rows, in an
+ * order fixed by a colouring of fixed-size blocks of rows, so the result is the same for every
+ * thread count and agrees with the whole-list apply to rounding. The diagonal is taken here,
+ * from the whole rows. Afterwards pst_op_apply, pst_op_diagonal, pst_op_scale, the status,
+ * option and timer queries work, and an AMG proxy (pst_krylov_create) is built from `half`;
+ * pst_op_store, pst_op_assemble, the audits, pst_op_gradient, pst_op_hessian and
+ * pst_op_interpolate return PST_EINVAL. Schemes: pst_scheme_supports(name,
+ * PST_SUPPORTS_HALF_LIST) (the LV family, qsfdi, lpmps, lsmps). PST_EINVAL (no such apply, no
+ * rows, stored weights, a list that is not op's half), PST_ENOMEM (message in err). */
+int pst_op_use_half_list(pst_op *op, const pst_nlist *half, char *err);
+/* Colours of op's half-list schedule (the applies' sequential steps); 0 before
+ * pst_op_use_half_list. */
+int pst_op_half_colours(const pst_op *op);
 
 /* 1 when the operator has its rows (see pst_op_opts.laplacian); its scheme's name; its kernel
  * (a pst_kernel). */

@@ -95,6 +95,7 @@ int pst_scheme_supports(const char *name, int what)
     case PST_SUPPORTS_MOBILITY: return s->mobility;
     case PST_SUPPORTS_SYMMETRIC: return pst_scheme_symmetrisable(s);
     case PST_SUPPORTS_DERIVATIVES_ONLY: return s->derivatives_standalone;
+    case PST_SUPPORTS_HALF_LIST: return s->half_rows != NULL;
     default: return 0;
     }
 }
@@ -197,6 +198,9 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
               "%s discretises the plain Laplacian only: it has no heterogeneous form, so the "
               "cloud must have no mobility (it has %d components)",
               (*scheme)->name, c->mob_ncomp);
+    PST_CHECK(pst_nlist_is_half(nl), PST_EINVAL, err,
+              "an operator needs the whole neighbour list: a half list (pst_nlist_halve) serves "
+              "an operator already built, through pst_op_use_half_list");
     PST_CHECK(pst_nlist_rows(nl) != c->n, PST_EINVAL, err,
               "the neighbour list has %zu rows for a cloud of %zu particles", pst_nlist_rows(nl),
               c->n);
@@ -302,6 +306,8 @@ void pst_op_destroy(pst_op *op)
     pst_free(op->w);
     pst_free(op->own_poff);
     pst_free(op->own_pidx);
+    pst_half_schedule_free(op->half);
+    pst_free(op->half_diag);
     free(op);
 }
 
@@ -333,7 +339,10 @@ int pst_op_apply(const pst_op *op, const double *u, double *y)
     if (!op->rows)
         return PST_EINVAL;
     double t0 = omp_get_wtime();
-    op->scheme->apply(op, u, y);
+    if (op->half)
+        pst_op_apply_half(op, u, y);
+    else
+        op->scheme->apply(op, u, y);
     dirichlet_rows(op, u, y);
     record_apply(op, t0);
     return PST_OK;
@@ -352,6 +361,8 @@ void pst_op_options(const pst_op *op, pst_op_opts *o)
 /* A wide pattern not built yet is counted (offsets only, no index). */
 int64_t pst_op_pattern_pairs(const pst_op *op)
 {
+    if (op->half)
+        return 2 * pst_nlist_pairs(op->nl);
     if (op->poff)
         return op->poff[op->n];
     int64_t *off;
@@ -387,7 +398,7 @@ static void drop_own_pattern(pst_op *op)
 
 int pst_op_store(pst_op *op)
 {
-    if (!op->rows)
+    if (!op->rows || op->half)
         return PST_EINVAL;
     if (op->w)
         return PST_OK;
@@ -521,6 +532,10 @@ int pst_op_diagonal(const pst_op *op, double *diag)
 {
     if (!op->rows)
         return PST_EINVAL;
+    if (op->half_diag) {
+        memcpy(diag, op->half_diag, op->n * sizeof *diag);
+        return PST_OK;
+    }
     pattern_view v;
     const pst_op *p = pattern_view_of(op, &v);
     int st = p ? diagonal_rows(p, diag) : PST_ENOMEM;
@@ -599,7 +614,7 @@ static int assemble_rows(const pst_op *op, pst_csr *a)
 
 int pst_op_assemble(const pst_op *op, pst_csr *a)
 {
-    if (!op->rows)
+    if (!op->rows || op->half)
         return PST_EINVAL;
     memset(a, 0, sizeof *a);
     pattern_view v;
@@ -706,7 +721,7 @@ static int audit_rows(const pst_op *op, uint8_t *flags, pst_op_audit *a)
 
 static int audit(const pst_op *op, uint8_t *flags, pst_op_audit *a)
 {
-    if (!op->rows)
+    if (!op->rows || op->half)
         return PST_EINVAL;
     pattern_view v;
     const pst_op *p = pattern_view_of(op, &v);
@@ -725,7 +740,7 @@ int pst_op_audit_flags(const pst_op *op, uint8_t *flags) { return audit(op, flag
 
 int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
 {
-    if (!op->scheme->gradient)
+    if (!op->scheme->gradient || op->half)
         return PST_EINVAL;
     op->scheme->gradient(op, u, grad);
     return PST_OK;
@@ -733,7 +748,7 @@ int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
 
 int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6])
 {
-    if (!op->scheme->hessian)
+    if (!op->scheme->hessian || op->half)
         return PST_EINVAL;
     op->scheme->hessian(op, u, hess);
     return PST_OK;
@@ -744,6 +759,8 @@ int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, c
 {
     PST_CHECK(!op->scheme->interpolate, PST_EINVAL, err, "scheme %s has no interpolation",
               op->scheme->name);
+    PST_CHECK(op->half, PST_EINVAL, err,
+              "the operator uses a half list: interpolation needs the whole one");
     size_t none = 0;
     return op->scheme->interpolate(op, pts, m, u, value, lap, fallbacks ? fallbacks : &none,
                                    err);

@@ -49,6 +49,12 @@ typedef struct pst_scheme {
     int (*wide_pattern)(const pst_op *op, int64_t **poff, uint32_t **pidx, char *err);
     /* y_I = sum_J w_IJ (u_J - u_I) for every non-Dirichlet row I (threaded). */
     void (*apply)(const pst_op *op, const double *u, double *y);
+    /* The apply on a half list (hoff, hidx: row I holds its neighbours J > I), rows I in
+     * [i0, i1): for each pair, y_I += w_IJ (u_J - u_I) unless I is a Dirichlet row and
+     * y_J += w_JI (u_I - u_J) unless J is, with the weights of apply (operator_half.c schedules
+     * the blocks so that no two threads write one y). NULL: no half-list apply. */
+    void (*half_rows)(const pst_op *op, const int64_t *hoff, const uint32_t *hidx, size_t i0,
+                      size_t i1, const double *u, double *y);
     /* The weights w_IJ of non-Dirichlet row i, in the order of the row's pattern. */
     void (*emit_row)(const pst_op *op, size_t i, double *w);
     /* s_I of the scheme (NULL: 1 everywhere). */
@@ -94,7 +100,17 @@ struct pst_op {
     uint32_t *own_pidx;
     double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
     int rows;              /* 1 when the Laplacian rows were precomputed (opts.laplacian)     */
+    /* After pst_op_use_half_list: the schedule of the half-list apply and the diagonal, taken
+     * from the whole rows before the switch (NULL before). */
+    struct pst_half_schedule *half;
+    double *half_diag;
 };
+
+/* The half-list apply (operator_half.c): y = L u through scheme->half_rows. */
+void pst_op_apply_half(const pst_op *op, const double *u, double *y);
+
+/* Free op's half-list schedule. */
+void pst_half_schedule_free(struct pst_half_schedule *h);
 
 /* Flag interior rows whose live neighbours are flat (on one line in 2D, one plane in 3D):
  * rank-deficient and degraded (scheme->degrade) when the condition of their centred second

@@ -357,14 +357,17 @@ static int low_order_matrix(const pst_op *op, const pst_solve_opts *so, pst_csr 
     double support = pst_nlist_support(op->nl), radius = proxy_radius(op, so->amg_radius);
     double cut = radius > 0 && radius < support ? radius / support : 1;
     int own = so->amg_source == PST_AMG_OWN ||
-              (strcmp(op->scheme->name, "brookshaw") == 0 && cut == 1);
+              (strcmp(op->scheme->name, "brookshaw") == 0 && cut == 1 && !op->half);
+    PST_CHECK(own && op->half, PST_EINVAL, err,
+              "the scheme's own AMG matrix needs the whole neighbour list, and the operator uses "
+              "a half list (pst_op_use_half_list): use the Brookshaw matrix");
     if (own) {
         int st = pst_op_assemble(op, a);
         PST_CHECK(st != PST_OK, st, err, "cannot assemble the AMG matrix of %zu rows", op->n);
         return PST_OK;
     }
     pst_nlist *list = NULL;
-    if (cut < 1)
+    if (cut < 1 || op->half) /* a half list's cut is whole, even at cut 1 */
         PST_TRY(pst_nlist_cut(&list, op->cloud, op->nl, cut, full_rows, err));
     pst_op_opts o = op->opts;
     o.scheme = "brookshaw";
