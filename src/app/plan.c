@@ -191,6 +191,60 @@ static void fit_restarts(pst_plan *p, const pst_scene *s, double room)
             p->task_restart[k] = fits > PLAN_MIN_RESTART ? fits : PLAN_MIN_RESTART;
 }
 
+/* The half list (pst_op_use_half_list) serves a run whose one operator feeds only matrix-free
+ * solves and Laplacian or divergence applies, of a scheme with a half-list apply, AMG solves
+ * on the Brookshaw matrix (the scheme's own matrix needs whole rows). */
+static int half_list_serves(const pst_plan *p, const pst_scene *s, int nops)
+{
+    if (nops != 1 || (p->base_operator && !p->base_laplacian) ||
+        !pst_scheme_supports(s->op.scheme, PST_SUPPORTS_HALF_LIST))
+        return 0;
+    for (int k = 0; k < s->ntasks; ++k) {
+        const sc_task *t = &s->tasks[k];
+        if (t->type == SC_TASK_SOLVE) {
+            if (p->task_stored[k] ||
+                (p->task_precond[k] == PST_PREC_AMG && t->amg_source != PST_AMG_BROOKSHAW))
+                return 0;
+        } else if (t->type != SC_TASK_LAPLACIAN && t->type != SC_TASK_DIVERGENCE) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* Fit the solves into `budget` with a list of `list` bytes resident during them: the AMG
+ * radius, the restarts and (when may_store) the stored weights, from the scene's own settings.
+ * Fills bytes_solver and bytes_weights; returns the bytes of the solve phase. */
+static double fit_solves(pst_plan *p, const pst_scene *s, double list, double budget,
+                         int may_store)
+{
+    double n = (double)p->particles;
+    for (int k = 0; k < s->ntasks; ++k) {
+        p->task_restart[k] = s->tasks[k].restart;
+        p->task_amg_radius[k] = s->tasks[k].amg_radius;
+    }
+    double other = p->bytes_cloud + list + p->bytes_operators;
+    fit_amg_radius(p, s, other + n * 8.0 * solver_vectors(p, s), budget);
+    double amg = amg_bytes_per_row(p, s), fixed = other + n * amg;
+    fit_restarts(p, s, budget - fixed);
+    p->bytes_solver = n * (8.0 * solver_vectors(p, s) + amg);
+    double without = fixed + n * 8.0 * solver_vectors(p, s);
+    /* Weights pay off for solves (hundreds of applies); a single apply is cheaper without. */
+    p->bytes_weights = 0;
+    for (int k = 0; k < s->ntasks; ++k) {
+        const sc_task *t = &s->tasks[k];
+        if (t->type != SC_TASK_SOLVE)
+            continue;
+        double w = 8.0 * n * p->neighbours;
+        p->task_stored[k] = !may_store ? 0
+                            : t->stored >= 0 ? t->stored
+                                             : without + p->bytes_weights + w <= budget;
+        if (p->task_stored[k])
+            p->bytes_weights += w;
+    }
+    return without + p->bytes_weights;
+}
+
 int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
@@ -234,11 +288,9 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
             p->task_solver[k] = t->solver != PST_SOLVER_AUTO ? t->solver
                                 : symmetric                  ? PST_SOLVER_CG
                                                              : PST_SOLVER_GMRES;
-            p->task_restart[k] = t->restart;
             p->task_precond[k] = t->precond != SC_PRECOND_AUTO ? t->precond
                                  : pst_have_amg()              ? PST_PREC_AMG
                                                                : PST_PREC_JACOBI;
-            p->task_amg_radius[k] = t->amg_radius;
         }
     }
     double n = (double)particles;
@@ -251,31 +303,24 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
     p->bytes_operators = nops * n * (1.0 + pst_scheme_data_bytes(s->op.scheme, dim));
     p->bytes_available = available_bytes();
     double budget = s->memory_fraction * p->bytes_available;
-    double other = p->bytes_cloud + p->bytes_neighbours + p->bytes_operators;
-    fit_amg_radius(p, s, other + n * 8.0 * solver_vectors(p, s), budget);
-    double amg = amg_bytes_per_row(p, s), fixed = other + n * amg;
-    fit_restarts(p, s, budget - fixed);
-    p->bytes_solver = n * (8.0 * solver_vectors(p, s) + amg);
-    double without = fixed + n * 8.0 * solver_vectors(p, s);
-    /* Weights pay off for solves (hundreds of applies); a single apply is cheaper without. */
-    for (int k = 0; k < s->ntasks; ++k) {
-        const sc_task *t = &s->tasks[k];
-        if (t->type != SC_TASK_SOLVE)
-            continue;
-        double w = 8.0 * n * p->neighbours;
-        p->task_stored[k] = t->stored >= 0 ? t->stored : without + p->bytes_weights + w <= budget;
-        if (p->task_stored[k])
-            p->bytes_weights += w;
+    p->bytes_total = fit_solves(p, s, p->bytes_neighbours, budget, 1);
+    if (half_list_serves(p, s, nops)) {
+        /* matrix-free: the half list is smaller and its apply no slower; the whole list lives
+         * through the precompute and the copy only */
+        p->half_list = 1;
+        p->bytes_half_list = n * (8.0 + 2.0 * p->neighbours);
+        double solves = fit_solves(p, s, p->bytes_half_list, budget, 0);
+        p->bytes_total = fmax(solves, p->bytes_cloud + p->bytes_neighbours +
+                                          p->bytes_half_list + p->bytes_operators);
     }
-    p->bytes_total = without + p->bytes_weights;
     if (p->bytes_total > budget) {
         snprintf(err, errlen, "the run needs about %.2f GB (cloud %.2f, neighbours %.2f, "
-                              "operators %.2f, weights %.2f, solver %.2f), more than %.0f %% of "
-                              "the %.2f GB available (limits.memory_fraction); use a coarser "
-                              "spacing or fewer tasks",
+                              "half list %.2f, operators %.2f, weights %.2f, solver %.2f), more "
+                              "than %.0f %% of the %.2f GB available (limits.memory_fraction); "
+                              "use a coarser spacing or fewer tasks",
                  p->bytes_total * 1e-9, p->bytes_cloud * 1e-9, p->bytes_neighbours * 1e-9,
-                 p->bytes_operators * 1e-9, p->bytes_weights * 1e-9, p->bytes_solver * 1e-9,
-                 100 * s->memory_fraction, p->bytes_available * 1e-9);
+                 p->bytes_half_list * 1e-9, p->bytes_operators * 1e-9, p->bytes_weights * 1e-9,
+                 p->bytes_solver * 1e-9, 100 * s->memory_fraction, p->bytes_available * 1e-9);
         return PST_ENOMEM;
     }
     return PST_OK;
@@ -325,8 +370,9 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
         fprintf(f, "  mobility   constant %g: a factor on L, no per-particle array\n",
                 p->mobility_factor);
     if (p->need_neighbours)
-        fprintf(f, "  neighbours kernel %s, support %gh, about %.0f per particle\n",
-                pst_kernel_name(p->kernel), p->support, p->neighbours);
+        fprintf(f, "  neighbours kernel %s, support %gh, about %.0f per particle%s\n",
+                pst_kernel_name(p->kernel), p->support, p->neighbours,
+                p->half_list ? "; a half list (each pair once) after the precompute" : "");
     if (p->base_operator)
         fprintf(f, "  operator   %s%s\n", s->op.scheme,
                 p->base_laplacian ? "" : ", derivatives only (no Laplacian rows)");
@@ -344,9 +390,11 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
     /* GB for big runs, MB for small ones, so that no part prints as 0.00 */
     int gb = p->bytes_total >= 1e9;
     double unit = gb ? 1e-9 : 1e-6;
-    fprintf(f, "  memory     about %.2f %s (cloud %.2f, neighbours %.2f, operators %.2f, "
-               "weights %.2f, solver %.2f) of %.2f GB available\n",
-            p->bytes_total * unit, gb ? "GB" : "MB", p->bytes_cloud * unit,
-            p->bytes_neighbours * unit, p->bytes_operators * unit, p->bytes_weights * unit,
-            p->bytes_solver * unit, p->bytes_available * 1e-9);
+    fprintf(f, "  memory     about %.2f %s (cloud %.2f, neighbours %.2f", p->bytes_total * unit,
+            gb ? "GB" : "MB", p->bytes_cloud * unit, p->bytes_neighbours * unit);
+    if (p->half_list)
+        fprintf(f, ", half list %.2f", p->bytes_half_list * unit);
+    fprintf(f, ", operators %.2f, weights %.2f, solver %.2f) of %.2f GB available\n",
+            p->bytes_operators * unit, p->bytes_weights * unit, p->bytes_solver * unit,
+            p->bytes_available * 1e-9);
 }

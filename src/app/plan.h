@@ -17,6 +17,7 @@ typedef struct {
     long laplacian_precomputes; /* operators whose Laplacian rows were precomputed            */
     long derivative_operators;  /* operators built for derivatives only (no Laplacian rows)   */
     long stored_weights;      /* pst_op_store calls                                           */
+    long half_lists;          /* operators switched to a half list (pst_op_use_half_list)     */
     long applies;             /* L u outside solves                                           */
     long gradients, hessians, interpolations, solves;
     long norms;
@@ -38,14 +39,19 @@ typedef struct {
      * gradients, Hessians and interpolation is built without Laplacian rows. */
     int base_operator;        /* 1 when some task needs it                                     */
     int base_laplacian;       /* 1 when it needs Laplacian rows                                */
+    /* 1: the one operator switches to a half neighbour list after its precompute
+     * (pst_op_use_half_list): matrix-free solves and applies only */
+    int half_list;
     int task_stored[SC_MAX_TASKS];  /* 1: stored weights, 0: matrix-free                      */
     int task_solver[SC_MAX_TASKS];  /* pst_solver a solve task will use                        */
     int task_precond[SC_MAX_TASKS]; /* pst_precond a solve task will use                       */
     int task_restart[SC_MAX_TASKS]; /* its GMRES restart (the scene's, shortened to fit)       */
     double task_amg_radius[SC_MAX_TASKS]; /* its amg_radius (the scene's, or 1.3 h to fit)     */
-    /* Memory estimate in bytes. */
-    double bytes_cloud, bytes_neighbours, bytes_operators, bytes_weights, bytes_solver;
-    double bytes_total, bytes_available;
+    /* Memory estimate in bytes: the parts, and the total, the larger of the precompute phase
+     * (cloud, list, half list, operators) and the solve phase (the half list instead of the
+     * whole one where half_list). */
+    double bytes_cloud, bytes_neighbours, bytes_half_list, bytes_operators, bytes_weights;
+    double bytes_solver, bytes_total, bytes_available;
 } pst_plan;
 
 /* Make the plan of scene `s` for a cloud of `particles` particles (pst_plan_particles gives

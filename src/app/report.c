@@ -123,8 +123,10 @@ void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt
     add_numbers(pl, plan, sizeof plan / sizeof plan[0]);
     cJSON_AddBoolToObject(pl, "base_operator", p->base_operator);
     cJSON_AddBoolToObject(pl, "base_laplacian_rows", p->base_laplacian);
+    cJSON_AddBoolToObject(pl, "half_list", p->half_list);
     const named_number memory[] = {{"cloud", p->bytes_cloud},
                                    {"neighbours", p->bytes_neighbours},
+                                   {"half_list", p->bytes_half_list},
                                    {"operators", p->bytes_operators},
                                    {"weights", p->bytes_weights},
                                    {"solver", p->bytes_solver},
@@ -138,6 +140,7 @@ void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt
                                      {"laplacian_precomputes", (double)cnt->laplacian_precomputes},
                                      {"derivative_operators", (double)cnt->derivative_operators},
                                      {"stored_weights", (double)cnt->stored_weights},
+                                     {"half_lists", (double)cnt->half_lists},
                                      {"applies", (double)cnt->applies},
                                      {"gradients", (double)cnt->gradients},
                                      {"hessians", (double)cnt->hessians},

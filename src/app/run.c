@@ -38,6 +38,25 @@ void pst_scene_op_opts(const pst_scene *s, pst_op_opts *oo)
     oo->mobility_mean = s->op.mobility_mean;
 }
 
+/* The plan's low-memory layout: the run's one operator switches to the half of the list, and
+ * the whole list is freed before the solves allocate anything (docs/running.md). */
+static int use_half_list(run_state *r, pst_op *op)
+{
+    char msg[PST_ERRLEN];
+    pst_nlist *half = NULL;
+    int st = pst_nlist_halve(&half, r->nl, msg);
+    if (st == PST_OK)
+        st = pst_op_use_half_list(op, half, msg);
+    if (st != PST_OK) {
+        pst_nlist_destroy(half);
+        return run_fail(r, st, "%s: half neighbour list: %s", r->s->path, msg);
+    }
+    pst_nlist_destroy(r->nl);
+    r->nl = half;
+    r->cnt.half_lists++;
+    return PST_OK;
+}
+
 int run_make_operator(run_state *r, int laplacian, const run_boundary *bnd, pst_op **op)
 {
     pst_op_opts oo;
@@ -60,7 +79,7 @@ int run_make_operator(run_state *r, int laplacian, const run_boundary *bnd, pst_
     else
         r->cnt.derivative_operators++;
     report_operator(r->report, *op);
-    return PST_OK;
+    return r->plan.half_list ? use_half_list(r, *op) : PST_OK;
 }
 
 /* User + system CPU time of the process: with the wall-clock total it shows the parallel
@@ -220,6 +239,7 @@ int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, p
     int st = pst_plan_make(&r.plan, s, pst_plan_particles(s), err, errlen);
     r.report = report_begin(s);
     r.plan.need_neighbours = 1;
+    r.plan.half_list = 0; /* the caller reads the whole rows (the analysis assembles them) */
     if (st == PST_OK)
         st = build(&r);
     if (st == PST_OK && !r.nl)
