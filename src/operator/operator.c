@@ -432,19 +432,25 @@ int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
     const int64_t *off = op->poff;
     const uint32_t *idx = op->pidx;
     const double *w = op->w;
+    const uint8_t *kind = op->kind;
     /* Bound: per-core load throughput (12 bytes of w and idx per pair plus the u gather), not
      * the machine's bandwidth on 2 cores (bench/README.md). The simd reduction splits the row
      * sum into independent partial sums, so consecutive pairs no longer wait on one add chain:
-     * about 20 % faster than the sequential sum, and still deterministic for any thread count. */
+     * about 20 % faster than the sequential sum, and still deterministic for any thread count.
+     * Dirichlet rows (their stored weights are zeros) are the identity and skip the stream: a
+     * boundary layer is 6 % of the rows of a 100^3 cloud and 17 % of a 33^3 one. */
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < op->n; ++i) {
+        if (kind[i] == PST_DIRICHLET) {
+            y[i] = u[i];
+            continue;
+        }
         double ui = u[i], s = 0;
 #pragma omp simd reduction(+ : s)
         for (int64_t k = off[i]; k < off[i + 1]; ++k)
             s += w[k] * (u[idx[k]] - ui);
         y[i] = s;
     }
-    dirichlet_rows(op, u, y);
     record_apply(op, t0);
     return PST_OK;
 }
