@@ -167,7 +167,7 @@ static void test_example(void)
         CHECK(strcmp(t[5].groups[1].value, "x^2 + y^2") == 0);
         CHECK_INT(t[5].solver, PST_SOLVER_GMRES);
         CHECK_INT(t[5].precond, PST_PREC_JACOBI);
-        CHECK_INT(t[5].amg_source, PST_AMG_BROOKSHAW);
+        CHECK_INT(t[5].amg_source, PST_AMG_AUTO);
         CHECK_INT(t[5].restart, 50);
         CHECK_INT(t[5].max_iter, 2000);
         CHECK(t[5].rtol == 1e-10);
@@ -198,6 +198,10 @@ static void test_tasks(void)
     CHECK_INT(s.tasks[3].solver, PST_SOLVER_AUTO);
     CHECK_INT(s.tasks[3].precond, SC_PRECOND_AUTO);
     CHECK(s.tasks[3].amg_radius == -1 && s.tasks[3].amg_aggressive == 0);
+    CHECK_INT(s.tasks[3].amg_source, PST_AMG_AUTO);
+    CHECK_INT(s.tasks[3].amg_coarsen, PST_AMG_HMIS);
+    CHECK_INT(s.tasks[3].amg_interp, PST_AMG_EXT_I);
+    CHECK_INT(s.tasks[3].amg_pmax, 4);
     CHECK_INT(s.tasks[3].stored, -1);
     CHECK_INT(s.tasks[3].restart, 50);
     CHECK_INT(s.tasks[3].max_iter, 5000);

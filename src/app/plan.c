@@ -121,19 +121,27 @@ static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t
     return PST_OK;
 }
 
+/* 1 when task k's AMG matrix is the Brookshaw proxy (amg_source brookshaw, or auto on a scheme
+ * that does not name its own matrix), 0 for the scheme's own stencil. */
+static int amg_uses_proxy(const pst_scene *s, int k)
+{
+    int source = s->tasks[k].amg_source;
+    return source == PST_AMG_BROOKSHAW ||
+           (source == PST_AMG_AUTO && !pst_scheme_amg_own(s->op.scheme));
+}
+
 /* Entries per row of task k's AMG matrix: the Brookshaw proxy's pairs within its radius (or
  * the whole list), or the scheme's own stencil (the list for every scheme but the mixed ones),
  * plus the diagonal. */
 static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, int k)
 {
-    const sc_task *t = &s->tasks[k];
     /* the automatic radius (-1) is 1.6 h, or the whole list for a contrasted mobility, which
      * only the cloud shows: with a per-particle mobility the estimate assumes the whole list */
     double radius = p->task_amg_radius[k] >= 0 ? p->task_amg_radius[k]
                     : p->mobility_ncomp        ? 0
                                                : PLAN_AMG_RADIUS;
     double reach = p->support;
-    if (t->amg_source == PST_AMG_BROOKSHAW && radius > 0 && radius < reach)
+    if (amg_uses_proxy(s, k) && radius > 0 && radius < reach)
         reach = radius;
     reach *= s->cloud.h_ratio; /* in spacings */
     double pairs = s->dim == 2 ? PLAN_PI * reach * reach : 4.0 / 3.0 * PLAN_PI * pow(reach, 3);
@@ -164,7 +172,7 @@ static void fit_amg_radius(pst_plan *p, const pst_scene *s, double other, double
         return;
     for (int k = 0; k < s->ntasks; ++k)
         if (s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].amg_radius < 0 &&
-            s->tasks[k].amg_source == PST_AMG_BROOKSHAW)
+            amg_uses_proxy(s, k))
             p->task_amg_radius[k] = PLAN_AMG_TIGHT_RADIUS;
 }
 

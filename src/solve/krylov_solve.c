@@ -100,7 +100,7 @@ static const char *stall_hint(const pst_krylov *s)
         return "";
     if (s->o.precond != PST_PREC_AMG)
         return pst_have_amg() ? "; try the AMG preconditioner (precond amg)" : "";
-    return s->o.amg_source == PST_AMG_BROOKSHAW
+    return !pst_amg_uses_own(s->op, &s->o)
                ? "; try the scheme's own matrix for AMG (amg_source own), a wider AMG matrix "
                  "(amg_radius 0) or a longer GMRES restart"
                : "; try a longer GMRES restart, or BiCGSTAB";

@@ -15,14 +15,18 @@
 #include <stdio.h>
 #include <string.h>
 
+int pst_amg_uses_own(const pst_op *op, const pst_solve_opts *o)
+{
+    return o->amg_source == PST_AMG_OWN || (o->amg_source == PST_AMG_AUTO && op->scheme->amg_own);
+}
+
 #ifndef PSTENCIL_HAVE_HYPRE
 
 int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
 {
     (void)op;
+    (void)o;
     *p = (pst_prec){0};
-    PST_CHECK(o->amg_source != PST_AMG_BROOKSHAW && o->amg_source != PST_AMG_OWN, PST_EINVAL,
-              err, "unknown AMG source %d (brookshaw = 0, own = 1)", o->amg_source);
     pst_set_err(err, "pstencil was built without hypre: the AMG preconditioner is unavailable");
     return PST_EINVAL;
 }
@@ -281,12 +285,14 @@ static int hypre_setup(amg_ctx *c, int dim, const pst_solve_opts *o, amg_build *
     HYPRE_BoomerAMGSetLogging(c->amg, 0);
     HYPRE_BoomerAMGSetMaxIter(c->amg, 1);
     HYPRE_BoomerAMGSetTol(c->amg, 0.0);
-    /* HMIS coarsening with extended+i interpolation truncated to 4 entries per row: the
-     * low-complexity pairing recommended for 2D/3D unstructured diffusion (Brookshaw rows have
-     * 20-60 neighbours, so classical Ruge-Stueben coarsening grows the complexity fast). */
-    HYPRE_BoomerAMGSetCoarsenType(c->amg, 10);
-    HYPRE_BoomerAMGSetInterpType(c->amg, 6);
-    HYPRE_BoomerAMGSetPMaxElmts(c->amg, 4);
+    /* Coarsening, interpolation and its truncation: amg_coarsen, amg_interp, amg_pmax, the
+     * defaults chosen from the measured table (docs/solving.md, "hypre's coarsening and
+     * interpolation"). The option values index these hypre codes. */
+    static const HYPRE_Int coarsen_type[] = {10, 8, 6}; /* HMIS, PMIS, Falgout */
+    static const HYPRE_Int interp_type[] = {6, 0, 3, 14}; /* ext+i, classical, direct, ext */
+    HYPRE_BoomerAMGSetCoarsenType(c->amg, coarsen_type[o->amg_coarsen]);
+    HYPRE_BoomerAMGSetInterpType(c->amg, interp_type[o->amg_interp]);
+    HYPRE_BoomerAMGSetPMaxElmts(c->amg, o->amg_pmax);
     /* Hybrid symmetric Gauss-Seidel (forward then backward; plain SSOR(1) on one process),
      * lexicographic order, one sweep down and one up: a symmetric cycle, so M is symmetric
      * whenever A_II is (usable inside CG). hypre here is serial: deterministic. */
@@ -356,7 +362,7 @@ static int low_order_matrix(const pst_op *op, const pst_solve_opts *so, pst_csr 
     *full_rows = 0;
     double support = pst_nlist_support(op->nl), radius = proxy_radius(op, so->amg_radius);
     double cut = radius > 0 && radius < support ? radius / support : 1;
-    int own = so->amg_source == PST_AMG_OWN ||
+    int own = pst_amg_uses_own(op, so) ||
               (strcmp(op->scheme->name, "brookshaw") == 0 && cut == 1);
     if (own) {
         int st = pst_op_assemble(op, a);
@@ -497,8 +503,7 @@ static int fill_entries(amg_ctx *c, amg_build *t, const pst_op *op, char *err)
 int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
 {
     *p = (pst_prec){0};
-    PST_CHECK(o->amg_source != PST_AMG_BROOKSHAW && o->amg_source != PST_AMG_OWN, PST_EINVAL,
-              err, "unknown AMG source %d (brookshaw = 0, own = 1)", o->amg_source);
+    PST_TRY(pst_solve_check_opts(o, NULL, err));
     PST_CHECK(op->n > (size_t)INT_MAX, PST_EINVAL, err,
               "%zu particles exceed hypre's 32-bit indices", op->n);
     PST_TRY(runtime_ready(err));
