@@ -366,6 +366,37 @@ static void test_parameters(void)
     pst_cloud_destroy(cl);
 }
 
+/* The AMG matrix the plan counts is the one the solve builds: with amg_source auto, lsmps's own
+ * matrix (the whole list: more bytes than its Brookshaw proxy at 1.6 h, and never cut to fit)
+ * and qsfdi's proxy (the same bytes as amg_source brookshaw). */
+static void test_amg_matrix_memory(void)
+{
+    const char *const schemes[] = {"operator.scheme=lsmps", "operator.scheme=qsfdi"};
+    const char *const sources[] = {"\"auto\"", "\"brookshaw\""};
+    double bytes[2][2];
+    for (int k = 0; k < 2; ++k)
+        for (int a = 0; a < 2; ++a) {
+            char task[256];
+            snprintf(task, sizeof task,
+                     "tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\","
+                     "\"precond\":\"amg\",\"amg_source\":%s}]",
+                     sources[a]);
+            const char *ov[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]",
+                                "cloud.spacing=0.1", task, "fields={}", schemes[k]};
+            pst_scene s = scene(ov, 7);
+            pst_plan p;
+            char err[1024];
+            CHECK_INT(pst_plan_make(&p, &s, 1000000, err, sizeof err), PST_OK);
+            bytes[k][a] = p.bytes_solver;
+            pst_scene_free(&s);
+        }
+    printf("AMG solver bytes per particle at 10^6: lsmps auto %.0f, brookshaw %.0f; qsfdi auto "
+           "%.0f, brookshaw %.0f\n", bytes[0][0] / 1e6, bytes[0][1] / 1e6, bytes[1][0] / 1e6,
+           bytes[1][1] / 1e6);
+    CHECK(bytes[0][0] > 2 * bytes[0][1]);
+    CHECK(bytes[1][0] == bytes[1][1]);
+}
+
 /* Where memory is short the plan of an AMG solve first takes the tight proxy radius (1.3 h),
  * then shortens the GMRES restart (not below 20), and each plan fits its budget; the
  * operator's estimate is the scheme's own per-particle bytes. The budget is set through
@@ -408,5 +439,6 @@ int main(void)
     test_refusals();
     test_parameters();
     test_fit_memory();
+    test_amg_matrix_memory();
     return check_summary("test_plan");
 }
