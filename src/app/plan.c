@@ -123,9 +123,9 @@ static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t
 
 /* 1 when task k's AMG matrix is the Brookshaw proxy (amg_source brookshaw, or auto on a scheme
  * that does not name its own matrix), 0 for the scheme's own stencil. */
-static int amg_uses_proxy(const pst_scene *s, int k)
+static int amg_uses_proxy(const pst_plan *p, const pst_scene *s, int k)
 {
-    int source = s->tasks[k].amg_source;
+    int source = p->task_amg_source[k];
     return source == PST_AMG_BROOKSHAW ||
            (source == PST_AMG_AUTO && !pst_scheme_amg_own(s->op.scheme));
 }
@@ -141,7 +141,7 @@ static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, int k)
                     : p->mobility_ncomp        ? 0
                                                : PLAN_AMG_RADIUS;
     double reach = p->support;
-    if (amg_uses_proxy(s, k) && radius > 0 && radius < reach)
+    if (amg_uses_proxy(p, s, k) && radius > 0 && radius < reach)
         reach = radius;
     reach *= s->cloud.h_ratio; /* in spacings */
     double pairs = s->dim == 2 ? PLAN_PI * reach * reach : 4.0 / 3.0 * PLAN_PI * pow(reach, 3);
@@ -161,18 +161,24 @@ static double amg_bytes_per_row(const pst_plan *p, const pst_scene *s)
     return most;
 }
 
-/* Where the run would not fit in `budget` bytes, the AMG solves with the automatic radius
- * (and no per-particle mobility, whose contrast may need the whole list) take the tight one:
- * in 3D 1.3 h keeps about 15 entries per row against 25 at 1.6 h, for the same iterations on
- * qsfdi and up to 40 % more on lv and lpmps (docs/solving.md). */
+/* Where the run would not fit in `budget` bytes, the AMG solves with amg_source auto on the
+ * scheme's own matrix (lsmps: the whole list, about 160 entries per row in 3D) take the
+ * Brookshaw proxy; where it still does not fit, those with the automatic radius (and no
+ * per-particle mobility, whose contrast may need the whole list) take the tight one: in 3D
+ * 1.3 h keeps about 15 entries per row against 25 at 1.6 h, for the same iterations on qsfdi
+ * and up to 40 % more on lv and lpmps (docs/solving.md). */
 static void fit_amg_radius(pst_plan *p, const pst_scene *s, double other, double budget)
 {
     double n = (double)p->particles;
+    for (int k = 0; k < s->ntasks; ++k)
+        if (other + n * amg_bytes_per_row(p, s) > budget && s->tasks[k].type == SC_TASK_SOLVE &&
+            p->task_amg_source[k] == PST_AMG_AUTO && !amg_uses_proxy(p, s, k))
+            p->task_amg_source[k] = PST_AMG_BROOKSHAW;
     if (other + n * amg_bytes_per_row(p, s) <= budget || p->mobility_ncomp)
         return;
     for (int k = 0; k < s->ntasks; ++k)
         if (s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].amg_radius < 0 &&
-            amg_uses_proxy(s, k))
+            amg_uses_proxy(p, s, k))
             p->task_amg_radius[k] = PLAN_AMG_TIGHT_RADIUS;
 }
 
@@ -247,6 +253,7 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
                                  : pst_have_amg()              ? PST_PREC_AMG
                                                                : PST_PREC_JACOBI;
             p->task_amg_radius[k] = t->amg_radius;
+            p->task_amg_source[k] = t->amg_source;
         }
     }
     double n = (double)particles;
@@ -315,6 +322,8 @@ static void print_solve(FILE *f, const pst_plan *p, int k, const sc_task *t)
         fprintf(f, "(%d)%s", p->task_restart[k],
                 p->task_restart[k] < t->restart ? " (restart shortened to fit)" : "");
     fprintf(f, " + %s", precond_name(p->task_precond[k]));
+    if (p->task_precond[k] == PST_PREC_AMG && p->task_amg_source[k] != t->amg_source)
+        fprintf(f, " on the Brookshaw proxy (to fit)");
     if (p->task_precond[k] == PST_PREC_AMG && p->task_amg_radius[k] != t->amg_radius)
         fprintf(f, " on pairs within %g h (to fit)", p->task_amg_radius[k]);
     fprintf(f, ", rtol %g, %s operator%s", t->rtol,
