@@ -3,18 +3,19 @@
 # matrix per scheme"): bench_solve (GMRES + BoomerAMG, stored operator, rtol 1e-8) on the
 # manufactured Poisson problem at two sizes per dimension. Part "qsfdi" varies one setting at a
 # time around the library's defaults (coarsening, interpolation, P_max, strong threshold) and
-# then runs the combination given in CHOSEN; part "schemes" runs lpmps, lsmps and lv with the
-# defaults and with CHOSEN; part "source" runs qsfdi, lpmps, lsmps and lv on the Brookshaw proxy
-# and on their own matrix. Every configuration runs PASSES times, passes outermost (the load of
-# the machine spreads over all of them); the times are the medians, the iterations and entries
-# do not depend on the load. One process per run, so each run's peak memory is its own.
+# then the combinations listed in CHOSEN; part "schemes" runs lpmps, lsmps and lv with the
+# defaults and with each combination of CHOSEN; part "source" runs qsfdi, lpmps, lsmps and lv on
+# the Brookshaw proxy and on their own matrix, with the defaults. Every configuration runs
+# PASSES times, passes outermost (the load of the machine spreads over all of them); the times
+# are the medians, the iterations and entries do not depend on the load. One process per run, so each run's peak memory is its own.
 # usage: bench/amg_hypre_table.sh BUILD_DIR [PARTS] [DIMS]
-#        env CHOSEN="--amg-pmax 4 ..." (default: none, the defaults), PASSES (default 3)
+#        env CHOSEN="--amg-coarsen pmis;--amg-pmax 6" (';'-separated, default none),
+#            PASSES (default 3)
 set -uo pipefail
 build=${1:?usage: amg_hypre_table.sh BUILD_DIR [PARTS] [DIMS]}
 parts=${2:-"qsfdi schemes source"}
 dims=${3:-"2 3"}
-chosen=${CHOSEN:-}
+IFS=';' read -ra chosen <<< "${CHOSEN:-}"
 passes=${PASSES:-3}
 export OMP_WAIT_POLICY=PASSIVE
 bin="$build/bench/bench_solve"
@@ -26,8 +27,6 @@ variations() {
   echo "--amg-coarsen pmis"
   echo "--amg-coarsen falgout"
   echo "--amg-interp classical"
-  echo "--amg-interp direct"
-  echo "--amg-interp extended"
   for p in 0 2 6; do echo "--amg-pmax $p"; done
   if [ "$1" = 2 ]; then echo "--amg-strong 0.5"; else
     echo "--amg-strong 0.25"
@@ -42,16 +41,16 @@ for dim in $dims; do
       case $part in
         qsfdi)
           while IFS= read -r v; do configs+=("$dim $n qsfdi|$v"); done < <(variations "$dim")
-          [ -n "$chosen" ] && configs+=("$dim $n qsfdi|$chosen") ;;
+          for c in "${chosen[@]}"; do configs+=("$dim $n qsfdi|$c"); done ;;
         schemes)
           for s in lpmps lsmps lv; do
             configs+=("$dim $n $s|")
-            [ -n "$chosen" ] && configs+=("$dim $n $s|$chosen")
+            for c in "${chosen[@]}"; do configs+=("$dim $n $s|$c"); done
           done ;;
         source)
           for s in qsfdi lpmps lsmps lv; do
-            configs+=("$dim $n $s|--amg-source brookshaw $chosen")
-            configs+=("$dim $n $s|--amg-source own $chosen")
+            configs+=("$dim $n $s|--amg-source brookshaw")
+            configs+=("$dim $n $s|--amg-source own")
           done ;;
       esac
     done

@@ -10,7 +10,7 @@
  *                    [--h-ratio F] [--max-iter N] [--restart M] [--amg-radius F]
  *                    [--amg-aggressive L] [--amg-strong T] [--amg-source brookshaw|own|auto]
  *                    [--amg-coarsen hmis|pmis|falgout]
- *                    [--amg-interp ext_i|classical|direct|extended] [--amg-pmax P] [--header]
+ *                    [--amg-interp ext_i|classical] [--amg-pmax P] [--header]
  *
  * "setup s" is the preconditioner's set-up (pst_krylov_create), "solve s" the iterations
  * (pst_krylov_solve); "AMG nnz/row" the entries per row of the matrix handed to hypre;
@@ -72,7 +72,7 @@ static void print_header(void)
 /* The names of the AMG options' values, in their enums' order. */
 static const char *const sources[] = {"brookshaw", "own", "auto", NULL};
 static const char *const coarsenings[] = {"hmis", "pmis", "falgout", NULL};
-static const char *const interps[] = {"ext_i", "classical", "direct", "extended", NULL};
+static const char *const interps[] = {"ext_i", "classical", NULL};
 
 /* The index of `name` in the NULL-terminated `names`; an unknown name ends the program. */
 static int name_index(const char *name, const char *const *names)

@@ -67,16 +67,14 @@ typedef enum {
 /* hypre's coarsening (one process: the serial forms of its parallel algorithms). */
 typedef enum {
     PST_AMG_HMIS = 0,      /* HMIS (hypre CoarsenType 10)                                    */
-    PST_AMG_PMIS = 1,      /* PMIS (CoarsenType 8): the sparsest coarse grids                 */
-    PST_AMG_FALGOUT = 2    /* Falgout (CoarsenType 6): Ruge-Stueben with a CLJP fallback      */
+    PST_AMG_PMIS = 1,      /* PMIS (CoarsenType 8)                                           */
+    PST_AMG_FALGOUT = 2    /* Falgout (CoarsenType 6): classical Ruge-Stueben on one process */
 } pst_amg_coarsen;
 
 /* hypre's interpolation. */
 typedef enum {
     PST_AMG_EXT_I = 0,     /* extended+i (hypre InterpType 6)                                */
-    PST_AMG_CLASSICAL = 1, /* classical modified (InterpType 0)                              */
-    PST_AMG_DIRECT = 2,    /* direct with separation of weights (InterpType 3)               */
-    PST_AMG_EXTENDED = 3   /* extended (InterpType 14)                                       */
+    PST_AMG_CLASSICAL = 1  /* classical modified (InterpType 0)                              */
 } pst_amg_interp;
 
 typedef struct {
@@ -84,8 +82,9 @@ typedef struct {
     int precond;           /* pst_precond (default JACOBI)                                    */
     int amg_source;        /* pst_amg_source (default AUTO)                                   */
     /* The AMG matrix's stencil and hypre's coarsening (docs/solving.md, "The AMG matrix's
-     * stencil"; the defaults come from the measured table there): */
-    double amg_radius;     /* BROOKSHAW source: the proxy keeps the pairs closer than
+     * stencil" and "hypre's coarsening and interpolation"; the defaults come from the
+     * measured tables there): */
+    double amg_radius;     /* the Brookshaw proxy keeps the pairs closer than
                               amg_radius * h (h of the pair, (h_I + h_J) / 2); 0, or at least
                               the kernel's support, keeps the whole list; -1 (the default):
                               1.6 h, or the whole list where the mobility's max / min over

@@ -22,9 +22,8 @@ int pst_solve_check_opts(const pst_solve_opts *o, const pst_op *op, char *err)
               err, "unknown AMG source %d (BROOKSHAW, OWN or AUTO)", o->amg_source);
     PST_CHECK(o->amg_coarsen < PST_AMG_HMIS || o->amg_coarsen > PST_AMG_FALGOUT, PST_EINVAL,
               err, "unknown AMG coarsening %d (HMIS, PMIS or FALGOUT)", o->amg_coarsen);
-    PST_CHECK(o->amg_interp < PST_AMG_EXT_I || o->amg_interp > PST_AMG_EXTENDED, PST_EINVAL,
-              err, "unknown AMG interpolation %d (EXT_I, CLASSICAL, DIRECT or EXTENDED)",
-              o->amg_interp);
+    PST_CHECK(o->amg_interp < PST_AMG_EXT_I || o->amg_interp > PST_AMG_CLASSICAL, PST_EINVAL,
+              err, "unknown AMG interpolation %d (EXT_I or CLASSICAL)", o->amg_interp);
     PST_CHECK(o->amg_pmax < 0 || o->amg_pmax > 100, PST_EINVAL, err,
               "amg_pmax must be in [0, 100] (interpolation entries per row, 0 = no truncation; "
               "got %d)",

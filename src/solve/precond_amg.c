@@ -289,7 +289,7 @@ static int hypre_setup(amg_ctx *c, int dim, const pst_solve_opts *o, amg_build *
      * defaults chosen from the measured table (docs/solving.md, "hypre's coarsening and
      * interpolation"). The option values index these hypre codes. */
     static const HYPRE_Int coarsen_type[] = {10, 8, 6}; /* HMIS, PMIS, Falgout */
-    static const HYPRE_Int interp_type[] = {6, 0, 3, 14}; /* ext+i, classical, direct, ext */
+    static const HYPRE_Int interp_type[] = {6, 0}; /* extended+i, classical modified */
     HYPRE_BoomerAMGSetCoarsenType(c->amg, coarsen_type[o->amg_coarsen]);
     HYPRE_BoomerAMGSetInterpType(c->amg, interp_type[o->amg_interp]);
     HYPRE_BoomerAMGSetPMaxElmts(c->amg, o->amg_pmax);
