@@ -398,6 +398,46 @@ static void test_auto_source(void)
           pst_scheme_amg_own("no such scheme") == 0);
 }
 
+/* Where lsmps's own matrix has a row without a positive diagonal (a hole in the cloud: the
+ * stability table's case 12), OWN is refused and AUTO falls back to the Brookshaw proxy: the
+ * proxy's entries, amg_own 0, a converged solve. On the plain lattice AUTO reports amg_own 1. */
+static void test_auto_fallback(void)
+{
+    pst_cloud *full = test_lattice(2, 0, 1, 1.0 / 24, 1.2, 0.3, 17, 1);
+    problem p = {test_cut_hole(full, 0.2), NULL, NULL, 0};
+    pst_cloud_destroy(full);
+    p.nl = test_nlist(p.c, pst_kernel_support(pst_scheme_default_kernel("lsmps")));
+    p.op = test_op(p.c, p.nl, "lsmps", PST_GRAD_G1, 0);
+    p.n = pst_cloud_size(p.c);
+    CHECK_INT(pst_op_store(p.op), PST_OK);
+    pst_prec m;
+    char err[PST_ERRLEN] = "";
+    CHECK_INT(pst_prec_amg(&m, p.op, amg_of(PST_AMG_OWN, -1, 0), err), PST_ENUMERIC);
+    CHECK(strstr(err, "diagonal") != NULL);
+    long long entries[2];
+    int proxy = amg_solve(&p, *amg_of(PST_AMG_BROOKSHAW, -1, 0), &entries[0]);
+    int automatic = amg_solve(&p, *amg_of(PST_AMG_AUTO, -1, 0), &entries[1]);
+    printf("lsmps with a hole, N = %zu: own matrix refused (%s); auto on the proxy: %d "
+           "iterations\n", p.n, err, automatic);
+    CHECK(automatic > 0 && automatic == proxy && entries[1] == entries[0]);
+    pst_krylov *ks = NULL;
+    pst_krylov_stats st = {0};
+    pst_solve_opts o = gmres_opts(PST_PREC_AMG, PST_AMG_AUTO, 1e-8, 10);
+    CHECK_INT(pst_krylov_create(&ks, p.op, &o, err), PST_OK);
+    pst_krylov_get_stats(ks, &st);
+    CHECK_INT(st.amg_own, 0);
+    pst_krylov_destroy(ks);
+    free_problem(&p);
+
+    problem q = make_problem("lsmps", 1.0 / 16);
+    CHECK_INT(pst_op_store(q.op), PST_OK);
+    CHECK_INT(pst_krylov_create(&ks, q.op, &o, err), PST_OK);
+    pst_krylov_get_stats(ks, &st);
+    CHECK_INT(st.amg_own, 1);
+    pst_krylov_destroy(ks);
+    free_problem(&q);
+}
+
 /* hypre's coarsening, interpolation and P_max reach it: on a fixed qsfdi problem each change
  * from the defaults changes the preconditioned vector (bits) and the solve still converges in
  * a handful of iterations more or less; the defaults (HMIS, extended+i, P_max 4) are the
@@ -589,6 +629,7 @@ int main(void)
     test_bad_settings();
     test_cut_proxy();
     test_auto_source();
+    test_auto_fallback();
     test_hypre_settings();
     test_stall_hints();
     test_contraction();

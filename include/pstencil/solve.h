@@ -208,6 +208,9 @@ typedef struct {
     size_t amg_full_rows;  /* rows of the cut proxy that had no pair within amg_radius and
                               kept their full support (the fallback)                          */
     double amg_setup_seconds; /* the AMG matrix and hypre's set-up, last set-up               */
+    int amg_own;           /* 1 when the AMG matrix was the scheme's own, 0 the Brookshaw
+                              proxy (AUTO falls back to the proxy where the own matrix has a
+                              row without a positive diagonal)                               */
 } pst_krylov_stats;
 /* The counters of s (all 0 for NULL). */
 void pst_krylov_get_stats(const pst_krylov *s, pst_krylov_stats *st);

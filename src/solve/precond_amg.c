@@ -15,11 +15,6 @@
 #include <stdio.h>
 #include <string.h>
 
-int pst_amg_uses_own(const pst_op *op, const pst_solve_opts *o)
-{
-    return o->amg_source == PST_AMG_OWN || (o->amg_source == PST_AMG_AUTO && op->scheme->amg_own);
-}
-
 #ifndef PSTENCIL_HAVE_HYPRE
 
 int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
@@ -126,6 +121,7 @@ typedef struct {
     HYPRE_ParVector pB, pX;
     HYPRE_Solver amg;
     long long entries;     /* of A_II, for pst_krylov_get_stats                               */
+    int own;               /* 1: the scheme's own matrix, 0: the Brookshaw proxy               */
     size_t full_rows;      /* rows of the cut proxy that kept their full support              */
     double seconds;        /* of the set-up                                                   */
 } amg_ctx;
@@ -356,15 +352,13 @@ static double proxy_radius(const pst_op *op, double asked)
  * operator's kernel (and mobility and boundary rows) on the operator's list cut to amg_radius h
  * (the whole list when that reaches the list's support: a Brookshaw operator is then its own
  * proxy). */
-static int low_order_matrix(const pst_op *op, const pst_solve_opts *so, pst_csr *a,
+static int low_order_matrix(const pst_op *op, const pst_solve_opts *so, int own, pst_csr *a,
                             size_t *full_rows, char *err)
 {
     *full_rows = 0;
     double support = pst_nlist_support(op->nl), radius = proxy_radius(op, so->amg_radius);
     double cut = radius > 0 && radius < support ? radius / support : 1;
-    int own = pst_amg_uses_own(op, so) ||
-              (strcmp(op->scheme->name, "brookshaw") == 0 && cut == 1);
-    if (own) {
+    if (own || (strcmp(op->scheme->name, "brookshaw") == 0 && cut == 1)) {
         int st = pst_op_assemble(op, a);
         PST_CHECK(st != PST_OK, st, err, "cannot assemble the AMG matrix of %zu rows", op->n);
         return PST_OK;
@@ -500,23 +494,21 @@ static int fill_entries(amg_ctx *c, amg_build *t, const pst_op *op, char *err)
     return PST_OK;
 }
 
-int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
+/* The preconditioner on the scheme's own matrix (own = 1) or the Brookshaw proxy. */
+static int prec_amg_on(pst_prec *p, const pst_op *op, const pst_solve_opts *o, int own,
+                       char *err)
 {
-    *p = (pst_prec){0};
-    PST_TRY(pst_solve_check_opts(o, NULL, err));
-    PST_CHECK(op->n > (size_t)INT_MAX, PST_EINVAL, err,
-              "%zu particles exceed hypre's 32-bit indices", op->n);
-    PST_TRY(runtime_ready(err));
     double t0 = omp_get_wtime();
     amg_build t = {0};
     size_t full_rows;
-    PST_TRY(low_order_matrix(op, o, &t.a, &full_rows, err));
+    PST_TRY(low_order_matrix(op, o, own, &t.a, &full_rows, err));
     int st = PST_OK;
     amg_ctx *c = calloc(1, sizeof *c);
     PST_CHECK_GOTO(!c, st, PST_ENOMEM, fail, err, "cannot allocate the AMG matrix of %zu rows",
                    op->n);
     c->n = op->n;
     c->full_rows = full_rows;
+    c->own = own;
     PST_TRY_GOTO(st, amg_layout(c, op->kind, &t, err), fail);
     PST_TRY_GOTO(st, count_entries(c, &t, err), fail);
     PST_TRY_GOTO(st, fill_entries(c, &t, op, err), fail);
@@ -543,6 +535,26 @@ fail:
     return st;
 }
 
+int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
+{
+    *p = (pst_prec){0};
+    PST_TRY(pst_solve_check_opts(o, NULL, err));
+    PST_CHECK(op->n > (size_t)INT_MAX, PST_EINVAL, err,
+              "%zu particles exceed hypre's 32-bit indices", op->n);
+    PST_TRY(runtime_ready(err));
+    int automatic = o->amg_source == PST_AMG_AUTO;
+    int own = o->amg_source == PST_AMG_OWN || (automatic && op->scheme->amg_own);
+    int st = prec_amg_on(p, op, o, own, err);
+    /* AUTO's own matrix is not an M-matrix: on a rough cloud a row may lose its positive
+     * diagonal (lsmps on a free surface), and then the proxy, which always has one, serves. */
+    if (st == PST_ENUMERIC && own && automatic) {
+        if (err)
+            err[0] = '\0';
+        st = prec_amg_on(p, op, o, 0, err);
+    }
+    return st;
+}
+
 void pst_prec_amg_stats(const pst_prec *p, pst_krylov_stats *st)
 {
     const amg_ctx *c = p->lin.ctx;
@@ -551,6 +563,7 @@ void pst_prec_amg_stats(const pst_prec *p, pst_krylov_stats *st)
     st->amg_entries = c->entries;
     st->amg_full_rows = c->full_rows;
     st->amg_setup_seconds = c->seconds;
+    st->amg_own = c->own;
 }
 
 #endif

@@ -26,9 +26,6 @@ int pst_prec_jacobi(pst_prec *p, const pst_linop *A, char *err);
  * z = A^-1 (S r). Dirichlet rows are eliminated inside (they give z = r). The caller must have
  * initialised MPI: PST_EINVAL saying so when it has not (or has finalised it). */
 int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err);
-/* 1 when o's AMG matrix for op is the scheme's own (OWN, or AUTO on a scheme that names its
- * own), 0 for the Brookshaw proxy. */
-int pst_amg_uses_own(const pst_op *op, const pst_solve_opts *o);
 /* The AMG fields of st (amg_*) from an AMG preconditioner p. */
 void pst_prec_amg_stats(const pst_prec *p, pst_krylov_stats *st);
 /* PST_OK when hypre may run now: MPI initialised and not finalised, and, from a thread other
