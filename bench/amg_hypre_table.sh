@@ -5,9 +5,12 @@
 # time around the library's defaults (coarsening, interpolation, P_max, strong threshold) and
 # then the combinations listed in CHOSEN; part "schemes" runs lpmps, lsmps and lv with the
 # defaults and with each combination of CHOSEN; part "source" runs qsfdi, lpmps, lsmps and lv on
-# the Brookshaw proxy and on their own matrix, with the defaults. Every configuration runs
-# PASSES times, passes outermost (the load of the machine spreads over all of them); the times
-# are the medians, the iterations and entries do not depend on the load. One process per run, so each run's peak memory is its own.
+# the Brookshaw proxy and on their own matrix, with the defaults; part "growth" runs qsfdi with
+# the defaults and with classical interpolation at a third size (2D 640 000, 3D 500 000), where
+# the two interpolations' iteration counts part. Every configuration runs PASSES times, passes
+# outermost (the load of the machine spreads over all of them); the times are the medians, the
+# iterations and entries do not depend on the load. One process per run, so each run's peak
+# memory is its own.
 # usage: bench/amg_hypre_table.sh BUILD_DIR [PARTS] [DIMS]
 #        env CHOSEN="--amg-coarsen pmis;--amg-pmax 6" (';'-separated, default none),
 #            PASSES (default 3)
@@ -55,6 +58,10 @@ for dim in $dims; do
       esac
     done
   done
+  if [[ " $parts " == *" growth "* ]]; then
+    if [ "$dim" = 2 ]; then n=640000; else n=500000; fi
+    configs+=("$dim $n qsfdi|" "$dim $n qsfdi|--amg-interp classical")
+  fi
 done
 
 out=$(mktemp -d)
