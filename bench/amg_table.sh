@@ -2,7 +2,8 @@
 # The AMG settings table of docs/solving.md ("The AMG matrix"): GMRES + BoomerAMG on the
 # manufactured Poisson problem of bench_solve (stored operator, rtol 1e-8) for qsfdi, lpmps,
 # lsmps and lv in 2D and 3D at two sizes, over the proxy's radius (in h; 0 = the whole list),
-# aggressive coarsening levels and, for qsfdi, the scheme's own matrix. One process per row,
+# aggressive coarsening levels (on the Brookshaw proxy, also for lsmps, whose default is its own
+# matrix) and, for qsfdi, the scheme's own matrix. One process per row,
 # so each row's peak memory is its own. Prints a markdown table.
 # usage: bench/amg_table.sh BUILD_DIR [DIMS] [SCHEMES]       e.g. bench/amg_table.sh build "2 3"
 set -uo pipefail
@@ -19,8 +20,8 @@ for dim in $dims; do
     for scheme in $schemes; do
       for setting in "0 0" "1.3 0" "1.6 0" "2.0 0" "1.3 1"; do
         set -- $setting
-        row --dim "$dim" --n "$n" --scheme "$scheme" --amg-radius "$1" --amg-aggressive "$2" \
-          --max-iter 500
+        row --dim "$dim" --n "$n" --scheme "$scheme" --amg-source brookshaw --amg-radius "$1" \
+          --amg-aggressive "$2" --max-iter 500
       done
       [ "$scheme" = qsfdi ] && row --dim "$dim" --n "$n" --scheme "$scheme" --amg-source own \
         --amg-aggressive 0 --max-iter 500

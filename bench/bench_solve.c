@@ -8,12 +8,15 @@
  *
  * usage: bench_solve [--dim 2|3] [--n N] [--scheme S] [--precond jacobi|amg] [--stored 0|1]
  *                    [--h-ratio F] [--max-iter N] [--restart M] [--amg-radius F]
- *                    [--amg-aggressive L] [--amg-strong T] [--amg-source brookshaw|own] [--header]
+ *                    [--amg-aggressive L] [--amg-strong T] [--amg-source brookshaw|own|auto]
+ *                    [--amg-coarsen hmis|pmis|falgout]
+ *                    [--amg-interp ext_i|classical] [--amg-pmax P] [--header]
  *
  * "setup s" is the preconditioner's set-up (pst_krylov_create), "solve s" the iterations
  * (pst_krylov_solve); "AMG nnz/row" the entries per row of the matrix handed to hypre;
  * "setup peak" and "setup kept" the set-up's resident memory above what was there before it,
- * at its peak and after it (Linux /proc/self/status, the peak reset first).
+ * at its peak and after it (Linux /proc/self/status; the freed heap trimmed and the peak reset
+ * first).
  *
  * --header prints "# machine: <cpu, topology, caches>; flags: <compiler flags>; triad ...,
  * FP64 peak ..." (src/machine.h, peak.h: probes run in this process) and the table header.
@@ -24,6 +27,7 @@
 #include "stream.h"
 #include "support.h"
 
+#include <malloc.h>
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
@@ -65,6 +69,21 @@ static void print_header(void)
            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
 }
 
+/* The names of the AMG options' values, in their enums' order. */
+static const char *const sources[] = {"brookshaw", "own", "auto", NULL};
+static const char *const coarsenings[] = {"hmis", "pmis", "falgout", NULL};
+static const char *const interps[] = {"ext_i", "classical", NULL};
+
+/* The index of `name` in the NULL-terminated `names`; an unknown name ends the program. */
+static int name_index(const char *name, const char *const *names)
+{
+    for (int k = 0; names[k]; ++k)
+        if (strcmp(name, names[k]) == 0)
+            return k;
+    fprintf(stderr, "bench_solve: unknown AMG option value %s\n", name);
+    exit(1);
+}
+
 int main(int argc, char **argv)
 {
     test_mpi_init();
@@ -102,7 +121,13 @@ int main(int argc, char **argv)
         else if (strcmp(argv[i], "--amg-strong") == 0)
             so.amg_strong = atof(argv[i + 1]);
         else if (strcmp(argv[i], "--amg-source") == 0)
-            so.amg_source = strcmp(argv[i + 1], "own") == 0 ? PST_AMG_OWN : PST_AMG_BROOKSHAW;
+            so.amg_source = name_index(argv[i + 1], sources);
+        else if (strcmp(argv[i], "--amg-coarsen") == 0)
+            so.amg_coarsen = name_index(argv[i + 1], coarsenings);
+        else if (strcmp(argv[i], "--amg-interp") == 0)
+            so.amg_interp = name_index(argv[i + 1], interps);
+        else if (strcmp(argv[i], "--amg-pmax") == 0)
+            so.amg_pmax = atoi(argv[i + 1]);
         else {
             fprintf(stderr, "bench_solve: unknown option %s\n", argv[i]);
             return 1;
@@ -155,6 +180,9 @@ int main(int argc, char **argv)
         so.max_iter = max_iter;
     pst_solve_result r = {0};
     pst_krylov *ks = NULL;
+    /* Freed heap pages (the cloud's set-up, the precompute's scratch) are handed back first:
+     * reused, they would hide the set-up's peak below 10^6 rows. */
+    malloc_trim(0);
     bench_peak_reset();
     double rss0 = bench_memory("VmRSS");
     int st = pst_krylov_create(&ks, op, &so, err);
@@ -189,11 +217,16 @@ int main(int argc, char **argv)
             setup_peak / (double)np);
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
-    char pc[96] = "Jacobi";
+    char pc[160] = "Jacobi";
     if (precond == PST_PREC_AMG)
-        snprintf(pc, sizeof pc, "AMG %s r %g agg %d thr %g",
-                 so.amg_source == PST_AMG_OWN ? "own" : "proxy", so.amg_radius, so.amg_aggressive,
-                 so.amg_strong > 0 ? so.amg_strong : dim == 3 ? 0.5 : 0.25);
+        snprintf(pc, sizeof pc, "AMG %s r %g agg %d thr %g %s %s pmax %d",
+                 so.amg_source == PST_AMG_OWN ||
+                         (so.amg_source == PST_AMG_AUTO && pst_scheme_amg_own(scheme))
+                     ? "own"
+                     : "proxy",
+                 so.amg_radius, so.amg_aggressive,
+                 so.amg_strong > 0 ? so.amg_strong : dim == 3 ? 0.5 : 0.25,
+                 coarsenings[so.amg_coarsen], interps[so.amg_interp], so.amg_pmax);
     printf("| %dD | %zu | %.1f | %s | %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %d%s | %.1e "
            "| %.2e | %.1f | %s | %.1f | %.0f | %.0f | %.1f | %.2f |\n",
            dim, np, pairs / (double)np, scheme, pc,

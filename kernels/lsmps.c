@@ -49,4 +49,5 @@ const pst_scheme pst_scheme_lsmps = {
                    "(QSFDI sec. 2.5)",
     .variants = 2,
     .precompute = lsmps_precompute,
+    .amg_own = 1,
     PST_WLS_ENTRY_POINTS};

@@ -1086,26 +1086,8 @@ static void case_hole(void)
     set_case("12 hole r=0.2");
     const double s0 = 1.0 / 24, R = 0.2;
     pst_cloud *full = test_lattice(2, 0, 1, s0, 1.2, 0.3, 17, 1);
-    size_t nf = pst_cloud_size(full), n = 0;
-    for (size_t i = 0; i < nf; ++i) {
-        double x = pst_cloud_coord_const(full, 0)[i] - 0.5,
-               y = pst_cloud_coord_const(full, 1)[i] - 0.5;
-        n += x * x + y * y >= R * R;
-    }
-    pst_cloud *c = NULL;
-    must(pst_cloud_create(&c, 2, n, NULL), "cloud", NULL);
-    size_t k = 0;
-    for (size_t i = 0; i < nf; ++i) {
-        double x = pst_cloud_coord_const(full, 0)[i], y = pst_cloud_coord_const(full, 1)[i];
-        if ((x - 0.5) * (x - 0.5) + (y - 0.5) * (y - 0.5) < R * R)
-            continue;
-        pst_cloud_coord(c, 0)[k] = x;
-        pst_cloud_coord(c, 1)[k] = y;
-        pst_cloud_volume(c)[k] = pst_cloud_volume_const(full)[i];
-        pst_cloud_kinds(c)[k] = pst_cloud_kinds_const(full)[i];
-        ++k;
-    }
-    must(pst_cloud_set_h_uniform(c, pst_cloud_h_uniform(full), NULL), "h", NULL);
+    pst_cloud *c = test_cut_hole(full, R);
+    size_t n = pst_cloud_size(c);
     pst_cloud_destroy(full);
     uint8_t *near = calloc(n, 1), *away = calloc(n, 1);
     for (int q = 0; q < pst_scheme_count(); ++q) {
@@ -1163,8 +1145,9 @@ static void print_table(FILE *fp)
                 "min_pair_distance = %.0e (pairs closer than that times the smoothing length "
                 "contribute weight 0), on_degenerate = fall back. Neighbour lists: the scheme's default "
                 "kernel support. Solves: GMRES(50) with a BoomerAMG preconditioner "
-                "built on the Brookshaw operator of the same cloud with the default AMG "
-                "options (PST_PREC_AMG, PST_AMG_BROOKSHAW, pairs within 1.6 h), rtol 1e-8, at most %d iterations, initial guess 0; err is the solution's "
+                "with the default AMG options (PST_PREC_AMG, PST_AMG_AUTO: built on the "
+                "Brookshaw operator of the same cloud on pairs within 1.6 h, for lsmps on its "
+                "own matrix; HMIS, extended+i, P_max 4), rtol 1e-8, at most %d iterations, initial guess 0; err is the solution's "
                 "rel. L2 error over the unknowns, res the decade of the solver's true ||b - L u|| / "
                 "||b|| at the iteration limit (b holds the Dirichlet values, so after their "
                 "elimination it can exceed 1); values at rounding level are printed as bounds. "

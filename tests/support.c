@@ -40,6 +40,31 @@ pst_cloud *test_lattice_rotated(int dim, double lo, double hi, double s0, double
     return test_lattice_of(&o);
 }
 
+pst_cloud *test_cut_hole(const pst_cloud *full, double r)
+{
+    size_t nf = pst_cloud_size(full), n = 0;
+    const double *x = pst_cloud_coord_const(full, 0), *y = pst_cloud_coord_const(full, 1);
+    for (size_t i = 0; i < nf; ++i)
+        n += (x[i] - 0.5) * (x[i] - 0.5) + (y[i] - 0.5) * (y[i] - 0.5) >= r * r;
+    pst_cloud *c = NULL;
+    if (pst_cloud_create(&c, 2, n, NULL) != PST_OK) {
+        fprintf(stderr, "test_cut_hole: cannot create the cloud\n");
+        exit(1);
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < nf; ++i) {
+        if ((x[i] - 0.5) * (x[i] - 0.5) + (y[i] - 0.5) * (y[i] - 0.5) < r * r)
+            continue;
+        pst_cloud_coord(c, 0)[k] = x[i];
+        pst_cloud_coord(c, 1)[k] = y[i];
+        pst_cloud_volume(c)[k] = pst_cloud_volume_const(full)[i];
+        pst_cloud_kinds(c)[k] = pst_cloud_kinds_const(full)[i];
+        ++k;
+    }
+    pst_cloud_set_h_uniform(c, pst_cloud_h_uniform(full), NULL);
+    return c;
+}
+
 pst_cloud *test_lattice_of(const pst_lattice_opts *o)
 {
     pst_cloud *c = NULL;

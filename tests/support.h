@@ -24,6 +24,10 @@ pst_cloud *test_lattice_rotated(int dim, double lo, double hi, double s0, double
 /* The lattice of any options. Exits on failure. */
 pst_cloud *test_lattice_of(const pst_lattice_opts *o);
 
+/* A copy of the 2D cloud c without the particles closer than r to (0.5, 0.5): a hole whose edge
+ * particles keep their kinds (an internal free surface). Exits on failure. */
+pst_cloud *test_cut_hole(const pst_cloud *c, double r);
+
 /* The neighbour list of radius support * h. Exits on failure. */
 pst_nlist *test_nlist(const pst_cloud *c, double support);
 

@@ -200,6 +200,33 @@ static void test_errors(void)
     free_problem(&iso);
 }
 
+/* The AMG options out of range are refused by name: the source, the coarsening, the
+ * interpolation and P_max. */
+static void test_bad_settings(void)
+{
+    problem p = make_problem("brookshaw", 1.0 / 16);
+    struct {
+        int field, value;
+        const char *says;
+    } bad[] = {{0, 3, "unknown AMG source 3"},     {1, 3, "unknown AMG coarsening 3"},
+               {1, -1, "unknown AMG coarsening -1"}, {2, 2, "unknown AMG interpolation 2"},
+               {3, -1, "amg_pmax must be in [0, 100]"}, {3, 101, "amg_pmax must be in [0, 100]"}};
+    for (size_t k = 0; k < sizeof bad / sizeof *bad; ++k) {
+        pst_solve_opts o = *amg_of(PST_AMG_AUTO, -1, 0);
+        int *field[] = {&o.amg_source, &o.amg_coarsen, &o.amg_interp, &o.amg_pmax};
+        *field[bad[k].field] = bad[k].value;
+        pst_prec m;
+        pst_krylov *ks = NULL;
+        char err[PST_ERRLEN] = "", err2[PST_ERRLEN] = "";
+        CHECK_INT(pst_prec_amg(&m, p.op, &o, err), PST_EINVAL);
+        CHECK(strstr(err, bad[k].says) != NULL);
+        o.precond = PST_PREC_AMG;
+        CHECK_INT(pst_krylov_create(&ks, p.op, &o, err2), PST_EINVAL);
+        CHECK(ks == NULL && strstr(err2, bad[k].says) != NULL);
+    }
+    free_problem(&p);
+}
+
 /* GMRES with the stored weights (cheaper applies for the wide qsfdi stencils). */
 static pst_solve_opts gmres_opts(int precond, int source, double rtol, int max_iter)
 {
@@ -304,6 +331,155 @@ static void test_cut_proxy(void)
     CHECK(2 * entries[1] < entries[0]);
     CHECK(iterations[1] <= iterations[0] + 3);
     free(b), free(u);
+    free_problem(&p);
+}
+
+/* One AMG-GMRES solve of p (b = 1 inside, u = 0 on the Dirichlet layer, rtol 1e-8) with the
+ * options o: its iterations (-1 when it did not converge) and the AMG matrix's entries. */
+static int amg_solve(const problem *p, pst_solve_opts o, long long *entries)
+{
+    size_t n = p->n;
+    double *b = malloc(n * sizeof *b), *u = calloc(n, sizeof *u);
+    const uint8_t *kind = pst_cloud_kinds_const(p->c);
+    for (size_t i = 0; i < n; ++i)
+        b[i] = kind[i] == PST_DIRICHLET ? 0.0 : 1.0;
+    o.precond = PST_PREC_AMG;
+    o.solver = PST_SOLVER_GMRES;
+    o.rtol = 1e-8;
+    o.max_iter = 500;
+    pst_krylov *ks = NULL;
+    pst_solve_result r = {0};
+    char err[PST_ERRLEN] = "";
+    int st = pst_krylov_create(&ks, p->op, &o, err);
+    if (st == PST_OK)
+        st = pst_krylov_solve(ks, b, u, &r, err);
+    if (st != PST_OK)
+        fprintf(stderr, "amg_solve: %s\n", err);
+    pst_krylov_stats ksst = {0};
+    pst_krylov_get_stats(ks, &ksst);
+    *entries = ksst.amg_entries;
+    int it = st == PST_OK ? r.iterations : -1;
+    pst_solve_result_free(&r);
+    pst_krylov_destroy(ks);
+    free(b), free(u);
+    return it;
+}
+
+/* amg_source AUTO takes the scheme's own matrix for lsmps (its entries are OWN's, the whole
+ * list, and it converges in far fewer iterations than on the proxy) and the Brookshaw proxy
+ * for qsfdi (its entries are the cut proxy's, fewer than the own matrix's). */
+static void test_auto_source(void)
+{
+    static const char *const schemes[] = {"lsmps", "qsfdi"};
+    for (int s = 0; s < 2; ++s) {
+        problem p = make_problem(schemes[s], 1.0 / 64);
+        CHECK_INT(pst_op_store(p.op), PST_OK);
+        pst_solve_opts o = *amg_of(PST_AMG_AUTO, -1, 0);
+        long long entries[3];
+        int it[3];
+        for (int src = PST_AMG_BROOKSHAW; src <= PST_AMG_AUTO; ++src) {
+            o.amg_source = src;
+            it[src] = amg_solve(&p, o, &entries[src]);
+            printf("%s N = %zu, AMG source %s: %.1f entries per row, %d iterations\n",
+                   schemes[s], p.n, src == PST_AMG_AUTO ? "auto" : src ? "own" : "brookshaw",
+                   (double)entries[src] / (double)p.n, it[src]);
+            CHECK(it[src] > 0);
+        }
+        int own = s == 0; /* lsmps names its own matrix */
+        CHECK(pst_scheme_amg_own(schemes[s]) == own);
+        CHECK(entries[PST_AMG_AUTO] == entries[own ? PST_AMG_OWN : PST_AMG_BROOKSHAW]);
+        CHECK(it[PST_AMG_AUTO] == it[own ? PST_AMG_OWN : PST_AMG_BROOKSHAW]);
+        CHECK(2 * entries[PST_AMG_BROOKSHAW] < entries[PST_AMG_OWN]);
+        if (own)
+            CHECK(2 * it[PST_AMG_OWN] < it[PST_AMG_BROOKSHAW]);
+        free_problem(&p);
+    }
+    CHECK(pst_scheme_amg_own("brookshaw") == 0 && pst_scheme_amg_own("lv") == 0 &&
+          pst_scheme_amg_own("no such scheme") == 0);
+}
+
+/* Where lsmps's own matrix has a row without a positive diagonal (a hole in the cloud: the
+ * stability table's case 12), OWN is refused and AUTO falls back to the Brookshaw proxy: the
+ * proxy's entries, amg_own 0, a converged solve. On the plain lattice AUTO reports amg_own 1. */
+static void test_auto_fallback(void)
+{
+    pst_cloud *full = test_lattice(2, 0, 1, 1.0 / 24, 1.2, 0.3, 17, 1);
+    problem p = {test_cut_hole(full, 0.2), NULL, NULL, 0};
+    pst_cloud_destroy(full);
+    p.nl = test_nlist(p.c, pst_kernel_support(pst_scheme_default_kernel("lsmps")));
+    p.op = test_op(p.c, p.nl, "lsmps", PST_GRAD_G1, 0);
+    p.n = pst_cloud_size(p.c);
+    CHECK_INT(pst_op_store(p.op), PST_OK);
+    pst_prec m;
+    char err[PST_ERRLEN] = "";
+    CHECK_INT(pst_prec_amg(&m, p.op, amg_of(PST_AMG_OWN, -1, 0), err), PST_ENUMERIC);
+    CHECK(strstr(err, "diagonal") != NULL);
+    long long entries[2];
+    int proxy = amg_solve(&p, *amg_of(PST_AMG_BROOKSHAW, -1, 0), &entries[0]);
+    int automatic = amg_solve(&p, *amg_of(PST_AMG_AUTO, -1, 0), &entries[1]);
+    printf("lsmps with a hole, N = %zu: own matrix refused (%s); auto on the proxy: %d "
+           "iterations\n", p.n, err, automatic);
+    CHECK(automatic > 0 && automatic == proxy && entries[1] == entries[0]);
+    pst_krylov *ks = NULL;
+    pst_krylov_stats st = {0};
+    pst_solve_opts o = gmres_opts(PST_PREC_AMG, PST_AMG_AUTO, 1e-8, 10);
+    CHECK_INT(pst_krylov_create(&ks, p.op, &o, err), PST_OK);
+    pst_krylov_get_stats(ks, &st);
+    CHECK_INT(st.amg_own, 0);
+    pst_krylov_destroy(ks);
+    free_problem(&p);
+
+    problem q = make_problem("lsmps", 1.0 / 16);
+    CHECK_INT(pst_op_store(q.op), PST_OK);
+    CHECK_INT(pst_krylov_create(&ks, q.op, &o, err), PST_OK);
+    pst_krylov_get_stats(ks, &st);
+    CHECK_INT(st.amg_own, 1);
+    pst_krylov_destroy(ks);
+    free_problem(&q);
+}
+
+/* hypre's coarsening, interpolation and P_max reach it: on a fixed qsfdi problem each change
+ * from the defaults changes the preconditioned vector (bits) and the solve still converges in
+ * a handful of iterations more or less; the defaults (HMIS, extended+i, P_max 4) are the
+ * library's. */
+static void test_hypre_settings(void)
+{
+    problem p = make_problem("qsfdi", 1.0 / 64);
+    CHECK_INT(pst_op_store(p.op), PST_OK);
+    size_t n = p.n;
+    double *r = malloc(n * sizeof *r), *z0 = malloc(n * sizeof *z0), *z = malloc(n * sizeof *z);
+    for (size_t i = 0; i < n; ++i)
+        r[i] = pst_rng_symmetric(17, i, 0);
+    const pst_solve_opts *d = amg_of(PST_AMG_AUTO, -1, 0);
+    CHECK(d->amg_coarsen == PST_AMG_HMIS && d->amg_interp == PST_AMG_EXT_I && d->amg_pmax == 4);
+    struct {
+        int coarsen, interp, pmax;
+    } set[] = {{PST_AMG_HMIS, PST_AMG_EXT_I, 4},     {PST_AMG_PMIS, PST_AMG_EXT_I, 4},
+               {PST_AMG_FALGOUT, PST_AMG_EXT_I, 4},  {PST_AMG_HMIS, PST_AMG_CLASSICAL, 4},
+               {PST_AMG_HMIS, PST_AMG_EXT_I, 0},     {PST_AMG_HMIS, PST_AMG_EXT_I, 2},
+               {PST_AMG_HMIS, PST_AMG_EXT_I, 6}};
+    int it0 = 0;
+    for (size_t k = 0; k < sizeof set / sizeof *set; ++k) {
+        pst_solve_opts o = *d;
+        o.amg_coarsen = set[k].coarsen;
+        o.amg_interp = set[k].interp;
+        o.amg_pmax = set[k].pmax;
+        pst_prec m;
+        char err[PST_ERRLEN] = "";
+        CHECK_INT(pst_prec_amg(&m, p.op, &o, err), PST_OK);
+        m.lin.apply(m.lin.ctx, r, k ? z : z0);
+        pst_prec_free(&m);
+        long long entries;
+        int it = amg_solve(&p, o, &entries);
+        printf("qsfdi N = %zu, coarsening %d, interpolation %d, P_max %d: %d iterations\n", n,
+               o.amg_coarsen, o.amg_interp, o.amg_pmax, it);
+        if (k == 0)
+            it0 = it;
+        else
+            CHECK(memcmp(z, z0, n * sizeof *z) != 0);
+        CHECK(it > 0 && it <= it0 + 10);
+    }
+    free(r), free(z0), free(z);
     free_problem(&p);
 }
 
@@ -450,7 +626,11 @@ int main(void)
 {
     test_mpi_init();
     test_errors();
+    test_bad_settings();
     test_cut_proxy();
+    test_auto_source();
+    test_auto_fallback();
+    test_hypre_settings();
     test_stall_hints();
     test_contraction();
     test_threads_and_dirichlet();

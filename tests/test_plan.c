@@ -366,6 +366,72 @@ static void test_parameters(void)
     pst_cloud_destroy(cl);
 }
 
+/* The AMG matrix the plan counts is the one the solve builds: with amg_source auto, lsmps's own
+ * matrix (the whole list: more bytes than its Brookshaw proxy at 1.6 h, and never cut to fit)
+ * and qsfdi's proxy (the same bytes as amg_source brookshaw). */
+static void test_amg_matrix_memory(void)
+{
+    const char *const schemes[] = {"operator.scheme=lsmps", "operator.scheme=qsfdi"};
+    const char *const sources[] = {"\"auto\"", "\"brookshaw\""};
+    double bytes[2][2];
+    for (int k = 0; k < 2; ++k)
+        for (int a = 0; a < 2; ++a) {
+            char task[256];
+            snprintf(task, sizeof task,
+                     "tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\","
+                     "\"precond\":\"amg\",\"amg_source\":%s}]",
+                     sources[a]);
+            const char *ov[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]",
+                                "cloud.spacing=0.1", task, "fields={}", schemes[k]};
+            pst_scene s = scene(ov, 7);
+            pst_plan p;
+            char err[1024];
+            CHECK_INT(pst_plan_make(&p, &s, 1000000, err, sizeof err), PST_OK);
+            bytes[k][a] = p.bytes_solver;
+            pst_scene_free(&s);
+        }
+    printf("AMG solver bytes per particle at 10^6: lsmps auto %.0f, brookshaw %.0f; qsfdi auto "
+           "%.0f, brookshaw %.0f\n", bytes[0][0] / 1e6, bytes[0][1] / 1e6, bytes[1][0] / 1e6,
+           bytes[1][1] / 1e6);
+    CHECK(bytes[0][0] > 2 * bytes[0][1]);
+    CHECK(bytes[1][0] == bytes[1][1]);
+}
+
+/* Where lsmps's own AMG matrix (amg_source auto) does not fit, the plan takes the Brookshaw
+ * proxy at the automatic radius first, and says so. */
+static void test_amg_source_to_fit(void)
+{
+    const char *ov[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]", "cloud.spacing=0.1",
+                        "tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\","
+                        "\"precond\":\"amg\",\"operator\":\"matrix_free\"}]",
+                        "fields={}", "operator.scheme=lsmps"};
+    pst_scene s = scene(ov, 7);
+    pst_plan p;
+    char err[1024];
+    size_t n = 1000000;
+    CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
+    CHECK_INT(p.task_amg_source[0], PST_AMG_AUTO);
+    double own = p.bytes_total, solver = p.bytes_solver;
+    s.memory_fraction = 0.8 * own / p.bytes_available;
+    CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
+    CHECK_INT(p.task_amg_source[0], PST_AMG_BROOKSHAW);
+    CHECK(p.task_amg_radius[0] == -1 && p.task_restart[0] == 50);
+    CHECK(p.bytes_total <= s.memory_fraction * p.bytes_available && p.bytes_solver < solver);
+    char text[4096] = "";
+    FILE *f = tmpfile();
+    CHECK(f != NULL);
+    if (f) {
+        pst_plan_print(f, &p, &s);
+        rewind(f);
+        text[fread(text, 1, sizeof text - 1, f)] = '\0';
+        fclose(f);
+    }
+    CHECK(strstr(text, "on the Brookshaw proxy (to fit)") != NULL);
+    printf("lsmps at 10^6 in 80%% of the plan: AMG on the proxy, %.0f bytes per particle\n",
+           p.bytes_total / (double)n);
+    pst_scene_free(&s);
+}
+
 /* Where memory is short the plan of an AMG solve first takes the tight proxy radius (1.3 h),
  * then shortens the GMRES restart (not below 20), and each plan fits its budget; the
  * operator's estimate is the scheme's own per-particle bytes. The budget is set through
@@ -464,5 +530,7 @@ int main(void)
     test_parameters();
     test_fit_memory();
     test_half_list();
+    test_amg_matrix_memory();
+    test_amg_source_to_fit();
     return check_summary("test_plan");
 }

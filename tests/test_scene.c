@@ -167,7 +167,7 @@ static void test_example(void)
         CHECK(strcmp(t[5].groups[1].value, "x^2 + y^2") == 0);
         CHECK_INT(t[5].solver, PST_SOLVER_GMRES);
         CHECK_INT(t[5].precond, PST_PREC_JACOBI);
-        CHECK_INT(t[5].amg_source, PST_AMG_BROOKSHAW);
+        CHECK_INT(t[5].amg_source, PST_AMG_AUTO);
         CHECK_INT(t[5].restart, 50);
         CHECK_INT(t[5].max_iter, 2000);
         CHECK(t[5].rtol == 1e-10);
@@ -198,11 +198,27 @@ static void test_tasks(void)
     CHECK_INT(s.tasks[3].solver, PST_SOLVER_AUTO);
     CHECK_INT(s.tasks[3].precond, SC_PRECOND_AUTO);
     CHECK(s.tasks[3].amg_radius == -1 && s.tasks[3].amg_aggressive == 0);
+    CHECK_INT(s.tasks[3].amg_source, PST_AMG_AUTO);
+    CHECK_INT(s.tasks[3].amg_coarsen, PST_AMG_HMIS);
+    CHECK_INT(s.tasks[3].amg_interp, PST_AMG_EXT_I);
+    CHECK_INT(s.tasks[3].amg_pmax, 4);
     CHECK_INT(s.tasks[3].stored, -1);
     CHECK_INT(s.tasks[3].restart, 50);
     CHECK_INT(s.tasks[3].max_iter, 5000);
     CHECK(s.tasks[3].rtol == 1e-10);
     CHECK_INT(s.tasks[3].ngroups, 0);
+    pst_scene_free(&s);
+
+    /* hypre's settings reach the task */
+    CHECK_INT(parse(&s, "{\"tasks\": [{\"type\": \"solve\", \"rhs\": \"0\", \"exact\": "
+                        "\"x\", \"amg_source\": \"own\", \"amg_coarsen\": \"falgout\", "
+                        "\"amg_interp\": \"classical\", \"amg_pmax\": 0}]}",
+                    NULL, 0),
+              PST_OK);
+    CHECK_INT(s.tasks[0].amg_source, PST_AMG_OWN);
+    CHECK_INT(s.tasks[0].amg_coarsen, PST_AMG_FALGOUT);
+    CHECK_INT(s.tasks[0].amg_interp, PST_AMG_CLASSICAL);
+    CHECK_INT(s.tasks[0].amg_pmax, 0);
     pst_scene_free(&s);
 
     /* 3D Hessian: six entries; constant and SPE10 mobility; a file cloud */
@@ -338,6 +354,9 @@ static void test_errors(void)
                  "t.json:1:13: key 'limits.memory_fraction': must be in (0, 1], got 0");
     EXPECT_ERROR("{\"cloud\": {\"seed\": -1}}",
                  "t.json:1:12: key 'cloud.seed': must be >= 0, got -1");
+    EXPECT_ERROR("{\"tasks\": [{\"type\": \"solve\", \"rhs\": \"0\", \"exact\": \"x\", "
+                 "\"amg_pmax\": 101}]}",
+                 "t.json:1:56: key 'tasks.0.amg_pmax': must be in [0, 100], got 101");
     EXPECT_ERROR("{\"tasks\": [{\"type\": \"solve\", \"rhs\": \"1\", \"exact\": \"0\",\n"
                  "  \"rtol\": 1.5}]}",
                  "t.json:2:3: key 'tasks.0.rtol': must be in (0, 1), got 1.5");

@@ -128,6 +128,11 @@ int pst_scheme_variants(const char *name);
  * (1): what a memory plan counts. 0 for an unknown name or dimension. */
 int pst_scheme_data_bytes(const char *name, int dim);
 
+/* 1 when a scheme's own assembled matrix serves AMG better than the Brookshaw proxy (lsmps;
+ * measured in docs/solving.md, "The AMG matrix per scheme"): the matrix pst_solve_opts
+ * amg_source PST_AMG_AUTO takes. 0 for the other schemes and an unknown name. */
+int pst_scheme_amg_own(const char *name);
+
 /* What a scheme can do, for planning before an operator exists (0 for an unknown name). */
 enum {
     PST_SUPPORTS_GRADIENT = 0,     /* pst_op_gradient                                          */

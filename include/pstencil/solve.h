@@ -59,16 +59,32 @@ typedef enum {
 
 typedef enum {
     PST_AMG_BROOKSHAW = 0, /* the Brookshaw operator on the same cloud (an M-matrix)          */
-    PST_AMG_OWN = 1        /* the scheme's own assembled stencil                             */
+    PST_AMG_OWN = 1,       /* the scheme's own assembled stencil                             */
+    PST_AMG_AUTO = 2       /* the one the scheme names (pst_scheme_amg_own): own for lsmps,
+                              Brookshaw for the others (docs/solving.md, measured)           */
 } pst_amg_source;
+
+/* hypre's coarsening (one process: the serial forms of its parallel algorithms). */
+typedef enum {
+    PST_AMG_HMIS = 0,      /* HMIS (hypre CoarsenType 10)                                    */
+    PST_AMG_PMIS = 1,      /* PMIS (CoarsenType 8)                                           */
+    PST_AMG_FALGOUT = 2    /* Falgout (CoarsenType 6): classical Ruge-Stueben on one process */
+} pst_amg_coarsen;
+
+/* hypre's interpolation. */
+typedef enum {
+    PST_AMG_EXT_I = 0,     /* extended+i (hypre InterpType 6)                                */
+    PST_AMG_CLASSICAL = 1  /* classical modified (InterpType 0)                              */
+} pst_amg_interp;
 
 typedef struct {
     int solver;            /* pst_solver (default AUTO)                                       */
     int precond;           /* pst_precond (default JACOBI)                                    */
-    int amg_source;        /* pst_amg_source (default BROOKSHAW)                              */
+    int amg_source;        /* pst_amg_source (default AUTO)                                   */
     /* The AMG matrix's stencil and hypre's coarsening (docs/solving.md, "The AMG matrix's
-     * stencil"; the defaults come from the measured table there): */
-    double amg_radius;     /* BROOKSHAW source: the proxy keeps the pairs closer than
+     * stencil" and "hypre's coarsening and interpolation"; the defaults come from the
+     * measured tables there): */
+    double amg_radius;     /* the Brookshaw proxy keeps the pairs closer than
                               amg_radius * h (h of the pair, (h_I + h_J) / 2); 0, or at least
                               the kernel's support, keeps the whole list; -1 (the default):
                               1.6 h, or the whole list where the mobility's max / min over
@@ -76,6 +92,10 @@ typedef struct {
     int amg_aggressive;    /* levels of aggressive coarsening, 0-10 (default 0)              */
     double amg_strong;     /* strong threshold in (0, 1); 0 = by dimension (0.25 in 2D, 0.5
                               in 3D, the default)                                            */
+    int amg_coarsen;       /* pst_amg_coarsen (default HMIS)                                  */
+    int amg_interp;        /* pst_amg_interp (default EXT_I)                                  */
+    int amg_pmax;          /* interpolation entries kept per row, 0-100; 0 = no truncation
+                              (default 4)                                                    */
     int restart;           /* GMRES restart length m (default 50)                             */
     int max_iter;          /* iteration limit (default 5000)                                  */
     double rtol;           /* stop when ||b - L u|| <= rtol ||b|| (2-norms, default 1e-10)      */
@@ -188,6 +208,9 @@ typedef struct {
     size_t amg_full_rows;  /* rows of the cut proxy that had no pair within amg_radius and
                               kept their full support (the fallback)                          */
     double amg_setup_seconds; /* the AMG matrix and hypre's set-up, last set-up               */
+    int amg_own;           /* 1 when the AMG matrix was the scheme's own, 0 the Brookshaw
+                              proxy (AUTO falls back to the proxy where the own matrix has a
+                              row without a positive diagonal)                               */
 } pst_krylov_stats;
 /* The counters of s (all 0 for NULL). */
 void pst_krylov_get_stats(const pst_krylov *s, pst_krylov_stats *st);

@@ -121,19 +121,27 @@ static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t
     return PST_OK;
 }
 
+/* 1 when task k's AMG matrix is the Brookshaw proxy (amg_source brookshaw, or auto on a scheme
+ * that does not name its own matrix), 0 for the scheme's own stencil. */
+static int amg_uses_proxy(const pst_plan *p, const pst_scene *s, int k)
+{
+    int source = p->task_amg_source[k];
+    return source == PST_AMG_BROOKSHAW ||
+           (source == PST_AMG_AUTO && !pst_scheme_amg_own(s->op.scheme));
+}
+
 /* Entries per row of task k's AMG matrix: the Brookshaw proxy's pairs within its radius (or
  * the whole list), or the scheme's own stencil (the list for every scheme but the mixed ones),
  * plus the diagonal. */
 static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, int k)
 {
-    const sc_task *t = &s->tasks[k];
     /* the automatic radius (-1) is 1.6 h, or the whole list for a contrasted mobility, which
      * only the cloud shows: with a per-particle mobility the estimate assumes the whole list */
     double radius = p->task_amg_radius[k] >= 0 ? p->task_amg_radius[k]
                     : p->mobility_ncomp        ? 0
                                                : PLAN_AMG_RADIUS;
     double reach = p->support;
-    if (t->amg_source == PST_AMG_BROOKSHAW && radius > 0 && radius < reach)
+    if (amg_uses_proxy(p, s, k) && radius > 0 && radius < reach)
         reach = radius;
     reach *= s->cloud.h_ratio; /* in spacings */
     double pairs = s->dim == 2 ? PLAN_PI * reach * reach : 4.0 / 3.0 * PLAN_PI * pow(reach, 3);
@@ -153,18 +161,24 @@ static double amg_bytes_per_row(const pst_plan *p, const pst_scene *s)
     return most;
 }
 
-/* Where the run would not fit in `budget` bytes, the AMG solves with the automatic radius
- * (and no per-particle mobility, whose contrast may need the whole list) take the tight one:
- * in 3D 1.3 h keeps about 15 entries per row against 25 at 1.6 h, for the same iterations on
- * qsfdi and up to 40 % more on lv and lpmps (docs/solving.md). */
+/* Where the run would not fit in `budget` bytes, the AMG solves with amg_source auto on the
+ * scheme's own matrix (lsmps: the whole list, about 160 entries per row in 3D) take the
+ * Brookshaw proxy; where it still does not fit, those with the automatic radius (and no
+ * per-particle mobility, whose contrast may need the whole list) take the tight one: in 3D
+ * 1.3 h keeps about 15 entries per row against 25 at 1.6 h, for the same iterations on qsfdi
+ * and up to 40 % more on lv and lpmps (docs/solving.md). */
 static void fit_amg_radius(pst_plan *p, const pst_scene *s, double other, double budget)
 {
     double n = (double)p->particles;
+    for (int k = 0; k < s->ntasks; ++k)
+        if (other + n * amg_bytes_per_row(p, s) > budget && s->tasks[k].type == SC_TASK_SOLVE &&
+            p->task_amg_source[k] == PST_AMG_AUTO && !amg_uses_proxy(p, s, k))
+            p->task_amg_source[k] = PST_AMG_BROOKSHAW;
     if (other + n * amg_bytes_per_row(p, s) <= budget || p->mobility_ncomp)
         return;
     for (int k = 0; k < s->ntasks; ++k)
         if (s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].amg_radius < 0 &&
-            s->tasks[k].amg_source == PST_AMG_BROOKSHAW)
+            amg_uses_proxy(p, s, k))
             p->task_amg_radius[k] = PLAN_AMG_TIGHT_RADIUS;
 }
 
@@ -192,8 +206,9 @@ static void fit_restarts(pst_plan *p, const pst_scene *s, double room)
 }
 
 /* The half list (pst_op_use_half_list) serves a run whose one operator feeds only matrix-free
- * solves and Laplacian or divergence applies, of a scheme with a half-list apply, AMG solves
- * on the Brookshaw matrix (the scheme's own matrix needs whole rows). */
+ * solves and Laplacian or divergence applies, of a scheme with a half-list apply, and whose AMG
+ * solves use the Brookshaw proxy in the whole-list plan (the scheme's own matrix needs whole
+ * rows, and where it fits it serves better than any list layout: lsmps). */
 static int half_list_serves(const pst_plan *p, const pst_scene *s, int nops)
 {
     if (nops != 1 || (p->base_operator && !p->base_laplacian) ||
@@ -203,7 +218,7 @@ static int half_list_serves(const pst_plan *p, const pst_scene *s, int nops)
         const sc_task *t = &s->tasks[k];
         if (t->type == SC_TASK_SOLVE) {
             if (p->task_stored[k] ||
-                (p->task_precond[k] == PST_PREC_AMG && t->amg_source != PST_AMG_BROOKSHAW))
+                (p->task_precond[k] == PST_PREC_AMG && !amg_uses_proxy(p, s, k)))
                 return 0;
         } else if (t->type != SC_TASK_LAPLACIAN && t->type != SC_TASK_DIVERGENCE) {
             return 0;
@@ -213,15 +228,18 @@ static int half_list_serves(const pst_plan *p, const pst_scene *s, int nops)
 }
 
 /* Fit the solves into `budget` with a list of `list` bytes resident during them: the AMG
- * radius, the restarts and (when may_store) the stored weights, from the scene's own settings.
- * Fills bytes_solver and bytes_weights; returns the bytes of the solve phase. */
-static double fit_solves(pst_plan *p, const pst_scene *s, double list, double budget,
-                         int may_store)
+ * matrix and radius, the restarts and the stored weights, from the scene's own settings. On a
+ * half list (half = 1) no weights are stored and AMG AUTO takes the Brookshaw proxy, as the
+ * library does. Fills bytes_solver and bytes_weights; returns the bytes of the solve phase. */
+static double fit_solves(pst_plan *p, const pst_scene *s, double list, double budget, int half)
 {
     double n = (double)p->particles;
     for (int k = 0; k < s->ntasks; ++k) {
         p->task_restart[k] = s->tasks[k].restart;
         p->task_amg_radius[k] = s->tasks[k].amg_radius;
+        p->task_amg_source[k] = half && s->tasks[k].amg_source == PST_AMG_AUTO
+                                    ? PST_AMG_BROOKSHAW
+                                    : s->tasks[k].amg_source;
     }
     double other = p->bytes_cloud + list + p->bytes_operators;
     fit_amg_radius(p, s, other + n * 8.0 * solver_vectors(p, s), budget);
@@ -236,9 +254,9 @@ static double fit_solves(pst_plan *p, const pst_scene *s, double list, double bu
         if (t->type != SC_TASK_SOLVE)
             continue;
         double w = 8.0 * n * p->neighbours;
-        p->task_stored[k] = !may_store ? 0
-                            : t->stored >= 0 ? t->stored
-                                             : without + p->bytes_weights + w <= budget;
+        p->task_stored[k] = half              ? 0
+                            : t->stored >= 0  ? t->stored
+                                              : without + p->bytes_weights + w <= budget;
         if (p->task_stored[k])
             p->bytes_weights += w;
     }
@@ -303,13 +321,13 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
     p->bytes_operators = nops * n * (1.0 + pst_scheme_data_bytes(s->op.scheme, dim));
     p->bytes_available = available_bytes();
     double budget = s->memory_fraction * p->bytes_available;
-    p->bytes_total = fit_solves(p, s, p->bytes_neighbours, budget, 1);
+    p->bytes_total = fit_solves(p, s, p->bytes_neighbours, budget, 0);
     if (half_list_serves(p, s, nops)) {
         /* matrix-free: the half list is smaller and its apply no slower; the whole list lives
          * through the precompute and the copy only */
         p->half_list = 1;
         p->bytes_half_list = n * (8.0 + 2.0 * p->neighbours);
-        double solves = fit_solves(p, s, p->bytes_half_list, budget, 0);
+        double solves = fit_solves(p, s, p->bytes_half_list, budget, 1);
         p->bytes_total = fmax(solves, p->bytes_cloud + p->bytes_neighbours +
                                           p->bytes_half_list + p->bytes_operators);
     }
@@ -352,6 +370,8 @@ static void print_solve(FILE *f, const pst_plan *p, int k, const sc_task *t)
         fprintf(f, "(%d)%s", p->task_restart[k],
                 p->task_restart[k] < t->restart ? " (restart shortened to fit)" : "");
     fprintf(f, " + %s", precond_name(p->task_precond[k]));
+    if (p->task_precond[k] == PST_PREC_AMG && p->task_amg_source[k] != t->amg_source)
+        fprintf(f, " on the Brookshaw proxy (to fit)");
     if (p->task_precond[k] == PST_PREC_AMG && p->task_amg_radius[k] != t->amg_radius)
         fprintf(f, " on pairs within %g h (to fit)", p->task_amg_radius[k]);
     fprintf(f, ", rtol %g, %s operator%s", t->rtol,

@@ -47,6 +47,7 @@ typedef struct {
     int task_precond[SC_MAX_TASKS]; /* pst_precond a solve task will use                       */
     int task_restart[SC_MAX_TASKS]; /* its GMRES restart (the scene's, shortened to fit)       */
     double task_amg_radius[SC_MAX_TASKS]; /* its amg_radius (the scene's, or 1.3 h to fit)     */
+    int task_amg_source[SC_MAX_TASKS];    /* its amg_source (the scene's, or brookshaw to fit)  */
     /* Memory estimate in bytes: the parts, and the total, the larger of the precompute phase
      * (cloud, list, half list, operators) and the solve phase (the half list instead of the
      * whole one where half_list). */

@@ -85,10 +85,13 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     pst_solve_defaults(&so);
     so.solver = r->plan.task_solver[k];
     so.precond = r->plan.task_precond[k];
-    so.amg_source = t->amg_source;
+    so.amg_source = r->plan.task_amg_source[k];
     so.amg_radius = r->plan.task_amg_radius[k];
     so.amg_aggressive = t->amg_aggressive;
     so.amg_strong = t->amg_strong;
+    so.amg_coarsen = t->amg_coarsen;
+    so.amg_interp = t->amg_interp;
+    so.amg_pmax = t->amg_pmax;
     so.restart = r->plan.task_restart[k];
     so.max_iter = t->max_iter;
     so.rtol = t->rtol;

@@ -93,7 +93,7 @@ typedef struct {
     int solver, amg_source, restart, max_iter;
     int precond;             /* a pst_precond, or SC_PRECOND_AUTO (the planner decides)         */
     double amg_radius, amg_strong;
-    int amg_aggressive;
+    int amg_aggressive, amg_coarsen, amg_interp, amg_pmax; /* pst_solve_opts' fields       */
     double rtol;
     int stored;              /* -1 auto (the planner decides), 0 matrix-free, 1 stored          */
     /* errors */

@@ -303,6 +303,9 @@ static int read_task(ctx *c, const cJSON *o, pst_scene *s, sc_task *t)
     t->amg_radius = scene_get_real(o, "tasks[].amg_radius");
     t->amg_aggressive = (int)scene_get_real(o, "tasks[].amg_aggressive");
     t->amg_strong = scene_get_real(o, "tasks[].amg_strong");
+    t->amg_coarsen = scene_get_enum(o, "tasks[].amg_coarsen");
+    t->amg_interp = scene_get_enum(o, "tasks[].amg_interp");
+    t->amg_pmax = (int)scene_get_real(o, "tasks[].amg_pmax");
     t->restart = (int)scene_get_real(o, "tasks[].restart");
     t->max_iter = (int)scene_get_real(o, "tasks[].max_iter");
     t->rtol = scene_get_real(o, "tasks[].rtol");

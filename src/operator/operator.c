@@ -130,6 +130,12 @@ int pst_scheme_data_bytes(const char *name, int dim)
     return s && (dim == 2 || dim == 3) ? s->data_bytes[dim - 2] : 0;
 }
 
+int pst_scheme_amg_own(const char *name)
+{
+    const pst_scheme *s = find_scheme(name);
+    return s ? s->amg_own : 0;
+}
+
 /* The boundary override of opts (kinds, normals): known kinds, finite Neumann normals. */
 static int check_boundary(const pst_op_opts *o, const pst_cloud *c, char *err)
 {

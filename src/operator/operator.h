@@ -73,6 +73,9 @@ typedef struct pst_scheme {
     void (*degrade)(pst_op *op, size_t i);
     /* Lemma 3 diagnostics of row i into the two counters, or NULL (not applicable). */
     void (*lemma3)(const pst_op *op, size_t i, int *sign_mixed, int *xi_large);
+    /* 1 when the scheme's own assembled matrix is its better AMG matrix (measured,
+     * docs/solving.md): amg_source AUTO takes it; 0: the Brookshaw proxy (pst_scheme_amg_own) */
+    int amg_own;
     void (*free_data)(void *data);
 } pst_scheme;
 

@@ -18,8 +18,16 @@ int pst_solve_check_opts(const pst_solve_opts *o, const pst_op *op, char *err)
               "unknown solver %d (AUTO, CG, GMRES or BICGSTAB)", o->solver);
     PST_CHECK(o->precond < PST_PREC_NONE || o->precond > PST_PREC_AMG, PST_EINVAL, err,
               "unknown preconditioner %d (NONE, JACOBI or AMG)", o->precond);
-    PST_CHECK(o->amg_source != PST_AMG_BROOKSHAW && o->amg_source != PST_AMG_OWN, PST_EINVAL,
-              err, "unknown AMG source %d (BROOKSHAW or OWN)", o->amg_source);
+    PST_CHECK(o->amg_source < PST_AMG_BROOKSHAW || o->amg_source > PST_AMG_AUTO, PST_EINVAL,
+              err, "unknown AMG source %d (BROOKSHAW, OWN or AUTO)", o->amg_source);
+    PST_CHECK(o->amg_coarsen < PST_AMG_HMIS || o->amg_coarsen > PST_AMG_FALGOUT, PST_EINVAL,
+              err, "unknown AMG coarsening %d (HMIS, PMIS or FALGOUT)", o->amg_coarsen);
+    PST_CHECK(o->amg_interp < PST_AMG_EXT_I || o->amg_interp > PST_AMG_CLASSICAL, PST_EINVAL,
+              err, "unknown AMG interpolation %d (EXT_I or CLASSICAL)", o->amg_interp);
+    PST_CHECK(o->amg_pmax < 0 || o->amg_pmax > 100, PST_EINVAL, err,
+              "amg_pmax must be in [0, 100] (interpolation entries per row, 0 = no truncation; "
+              "got %d)",
+              o->amg_pmax);
     PST_CHECK(!(o->amg_radius >= -1 && o->amg_radius <= 1e3), PST_EINVAL, err,
               "amg_radius must be in [-1, 1000] (in units of h; 0 for the whole list, -1 for "
               "the automatic choice; got %g)",

@@ -100,10 +100,16 @@ static const char *stall_hint(const pst_krylov *s)
         return "";
     if (s->o.precond != PST_PREC_AMG)
         return pst_have_amg() ? "; try the AMG preconditioner (precond amg)" : "";
-    return s->o.amg_source == PST_AMG_BROOKSHAW
-               ? "; try the scheme's own matrix for AMG (amg_source own), a wider AMG matrix "
-                 "(amg_radius 0) or a longer GMRES restart"
-               : "; try a longer GMRES restart, or BiCGSTAB";
+    pst_krylov_stats st = {0};
+    pst_prec_amg_stats(&s->prec, &st);
+    if (st.amg_own)
+        return "; try a longer GMRES restart, or BiCGSTAB";
+    /* AUTO on a scheme that names its own matrix is on the proxy only where the own one has
+     * no positive diagonal somewhere: asking for it again would fail */
+    return s->o.amg_source == PST_AMG_AUTO && s->op->scheme->amg_own
+               ? "; try a wider AMG matrix (amg_radius 0) or a longer GMRES restart"
+               : "; try the scheme's own matrix for AMG (amg_source own), a wider AMG matrix "
+                 "(amg_radius 0) or a longer GMRES restart";
 }
 
 int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result *r,

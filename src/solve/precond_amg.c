@@ -20,9 +20,8 @@
 int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
 {
     (void)op;
+    (void)o;
     *p = (pst_prec){0};
-    PST_CHECK(o->amg_source != PST_AMG_BROOKSHAW && o->amg_source != PST_AMG_OWN, PST_EINVAL,
-              err, "unknown AMG source %d (brookshaw = 0, own = 1)", o->amg_source);
     pst_set_err(err, "pstencil was built without hypre: the AMG preconditioner is unavailable");
     return PST_EINVAL;
 }
@@ -122,6 +121,7 @@ typedef struct {
     HYPRE_ParVector pB, pX;
     HYPRE_Solver amg;
     long long entries;     /* of A_II, for pst_krylov_get_stats                               */
+    int own;               /* 1: the scheme's own matrix, 0: the Brookshaw proxy               */
     size_t full_rows;      /* rows of the cut proxy that kept their full support              */
     double seconds;        /* of the set-up                                                   */
 } amg_ctx;
@@ -281,12 +281,14 @@ static int hypre_setup(amg_ctx *c, int dim, const pst_solve_opts *o, amg_build *
     HYPRE_BoomerAMGSetLogging(c->amg, 0);
     HYPRE_BoomerAMGSetMaxIter(c->amg, 1);
     HYPRE_BoomerAMGSetTol(c->amg, 0.0);
-    /* HMIS coarsening with extended+i interpolation truncated to 4 entries per row: the
-     * low-complexity pairing recommended for 2D/3D unstructured diffusion (Brookshaw rows have
-     * 20-60 neighbours, so classical Ruge-Stueben coarsening grows the complexity fast). */
-    HYPRE_BoomerAMGSetCoarsenType(c->amg, 10);
-    HYPRE_BoomerAMGSetInterpType(c->amg, 6);
-    HYPRE_BoomerAMGSetPMaxElmts(c->amg, 4);
+    /* Coarsening, interpolation and its truncation: amg_coarsen, amg_interp, amg_pmax, the
+     * defaults chosen from the measured table (docs/solving.md, "hypre's coarsening and
+     * interpolation"). The option values index these hypre codes. */
+    static const HYPRE_Int coarsen_type[] = {10, 8, 6}; /* HMIS, PMIS, Falgout */
+    static const HYPRE_Int interp_type[] = {6, 0}; /* extended+i, classical modified */
+    HYPRE_BoomerAMGSetCoarsenType(c->amg, coarsen_type[o->amg_coarsen]);
+    HYPRE_BoomerAMGSetInterpType(c->amg, interp_type[o->amg_interp]);
+    HYPRE_BoomerAMGSetPMaxElmts(c->amg, o->amg_pmax);
     /* Hybrid symmetric Gauss-Seidel (forward then backward; plain SSOR(1) on one process),
      * lexicographic order, one sweep down and one up: a symmetric cycle, so M is symmetric
      * whenever A_II is (usable inside CG). hypre here is serial: deterministic. */
@@ -350,18 +352,16 @@ static double proxy_radius(const pst_op *op, double asked)
  * operator's kernel (and mobility and boundary rows) on the operator's list cut to amg_radius h
  * (the whole list when that reaches the list's support: a Brookshaw operator is then its own
  * proxy). */
-static int low_order_matrix(const pst_op *op, const pst_solve_opts *so, pst_csr *a,
+static int low_order_matrix(const pst_op *op, const pst_solve_opts *so, int own, pst_csr *a,
                             size_t *full_rows, char *err)
 {
     *full_rows = 0;
     double support = pst_nlist_support(op->nl), radius = proxy_radius(op, so->amg_radius);
     double cut = radius > 0 && radius < support ? radius / support : 1;
-    int own = so->amg_source == PST_AMG_OWN ||
-              (strcmp(op->scheme->name, "brookshaw") == 0 && cut == 1 && !op->half);
     PST_CHECK(own && op->half, PST_EINVAL, err,
               "the scheme's own AMG matrix needs the whole neighbour list, and the operator uses "
               "a half list (pst_op_use_half_list): use the Brookshaw matrix");
-    if (own) {
+    if (own || (strcmp(op->scheme->name, "brookshaw") == 0 && cut == 1 && !op->half)) {
         int st = pst_op_assemble(op, a);
         PST_CHECK(st != PST_OK, st, err, "cannot assemble the AMG matrix of %zu rows", op->n);
         return PST_OK;
@@ -497,24 +497,21 @@ static int fill_entries(amg_ctx *c, amg_build *t, const pst_op *op, char *err)
     return PST_OK;
 }
 
-int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
+/* The preconditioner on the scheme's own matrix (own = 1) or the Brookshaw proxy. */
+static int prec_amg_on(pst_prec *p, const pst_op *op, const pst_solve_opts *o, int own,
+                       char *err)
 {
-    *p = (pst_prec){0};
-    PST_CHECK(o->amg_source != PST_AMG_BROOKSHAW && o->amg_source != PST_AMG_OWN, PST_EINVAL,
-              err, "unknown AMG source %d (brookshaw = 0, own = 1)", o->amg_source);
-    PST_CHECK(op->n > (size_t)INT_MAX, PST_EINVAL, err,
-              "%zu particles exceed hypre's 32-bit indices", op->n);
-    PST_TRY(runtime_ready(err));
     double t0 = omp_get_wtime();
     amg_build t = {0};
     size_t full_rows;
-    PST_TRY(low_order_matrix(op, o, &t.a, &full_rows, err));
+    PST_TRY(low_order_matrix(op, o, own, &t.a, &full_rows, err));
     int st = PST_OK;
     amg_ctx *c = calloc(1, sizeof *c);
     PST_CHECK_GOTO(!c, st, PST_ENOMEM, fail, err, "cannot allocate the AMG matrix of %zu rows",
                    op->n);
     c->n = op->n;
     c->full_rows = full_rows;
+    c->own = own;
     PST_TRY_GOTO(st, amg_layout(c, op->kind, &t, err), fail);
     PST_TRY_GOTO(st, count_entries(c, &t, err), fail);
     PST_TRY_GOTO(st, fill_entries(c, &t, op, err), fail);
@@ -541,6 +538,27 @@ fail:
     return st;
 }
 
+int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err)
+{
+    *p = (pst_prec){0};
+    PST_TRY(pst_solve_check_opts(o, NULL, err));
+    PST_CHECK(op->n > (size_t)INT_MAX, PST_EINVAL, err,
+              "%zu particles exceed hypre's 32-bit indices", op->n);
+    PST_TRY(runtime_ready(err));
+    int automatic = o->amg_source == PST_AMG_AUTO;
+    /* AUTO takes the scheme's own matrix only where the whole list is there to assemble it */
+    int own = o->amg_source == PST_AMG_OWN || (automatic && op->scheme->amg_own && !op->half);
+    int st = prec_amg_on(p, op, o, own, err);
+    /* AUTO's own matrix is not an M-matrix: on a rough cloud a row may lose its positive
+     * diagonal (lsmps on a free surface), and then the proxy, which always has one, serves. */
+    if (st == PST_ENUMERIC && own && automatic) {
+        if (err)
+            err[0] = '\0';
+        st = prec_amg_on(p, op, o, 0, err);
+    }
+    return st;
+}
+
 void pst_prec_amg_stats(const pst_prec *p, pst_krylov_stats *st)
 {
     const amg_ctx *c = p->lin.ctx;
@@ -549,6 +567,7 @@ void pst_prec_amg_stats(const pst_prec *p, pst_krylov_stats *st)
     st->amg_entries = c->entries;
     st->amg_full_rows = c->full_rows;
     st->amg_setup_seconds = c->seconds;
+    st->amg_own = c->own;
 }
 
 #endif

@@ -10,10 +10,13 @@ void pst_solve_defaults(pst_solve_opts *o)
 {
     o->solver = PST_SOLVER_AUTO;
     o->precond = PST_PREC_JACOBI;
-    o->amg_source = PST_AMG_BROOKSHAW;
+    o->amg_source = PST_AMG_AUTO;
     o->amg_radius = -1;
     o->amg_aggressive = 0;
     o->amg_strong = 0;
+    o->amg_coarsen = PST_AMG_HMIS;
+    o->amg_interp = PST_AMG_EXT_I;
+    o->amg_pmax = 4;
     o->restart = 50;
     o->max_iter = 5000;
     o->rtol = 1e-10;

@@ -20,7 +20,7 @@ typedef struct {
 int pst_prec_jacobi(pst_prec *p, const pst_linop *A, char *err);
 
 /* hypre BoomerAMG on an assembled low-order operator (src/solve/precond_amg.c), with the AMG
- * options of o (amg_source, amg_radius, amg_aggressive, amg_strong). L has a negative diagonal on interior rows and a positive one on Neumann
+ * options of o (amg_*). L has a negative diagonal on interior rows and a positive one on Neumann
  * (flux) and Dirichlet rows, so the AMG matrix is A = S L_low with S = -1 on interior rows and
  * +1 elsewhere (an M-matrix with a positive diagonal for Brookshaw), and apply computes
  * z = A^-1 (S r). Dirichlet rows are eliminated inside (they give z = r). The caller must have
