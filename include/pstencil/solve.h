@@ -87,8 +87,9 @@ typedef struct {
     double amg_radius;     /* the Brookshaw proxy keeps the pairs closer than
                               amg_radius * h (h of the pair, (h_I + h_J) / 2); 0, or at least
                               the kernel's support, keeps the whole list; -1 (the default):
-                              1.6 h, or the whole list where the mobility's max / min over
-                              the particles exceeds 10                                        */
+                              the scheme's radius (pst_scheme_amg_radius: 1.3 h for qsfdi,
+                              1.6 h for the others), or the whole list where the mobility's
+                              max / min over the particles exceeds 10                         */
     int amg_aggressive;    /* levels of aggressive coarsening, 0-10 (default 0)              */
     double amg_strong;     /* strong threshold in (0, 1); 0 = by dimension (0.25 in 2D, 0.5
                               in 3D, the default)                                            */

@@ -20,11 +20,10 @@
 #define AMG_BYTES_PER_ENTRY 36.5
 #define AMG_BYTES_PER_ROW 150.0
 
-/* The shortest GMRES restart the planner chooses to fit the memory (AMG solves); the AMG
- * proxy's automatic radius in the library (src/solve/precond_amg.c) and the tighter one the
- * planner chooses where memory is short, in h. */
+/* The shortest GMRES restart the planner chooses to fit the memory (AMG solves), and the
+ * tighter AMG proxy radius (in h) it chooses where memory is short and the scheme's automatic
+ * one (pst_scheme_amg_radius) is wider. */
 #define PLAN_MIN_RESTART 20
-#define PLAN_AMG_RADIUS 1.6
 #define PLAN_AMG_TIGHT_RADIUS 1.3
 
 /* Bytes the machine can give a run: MemAvailable from /proc/meminfo, else physical memory. */
@@ -139,7 +138,7 @@ static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, int k)
      * only the cloud shows: with a per-particle mobility the estimate assumes the whole list */
     double radius = p->task_amg_radius[k] >= 0 ? p->task_amg_radius[k]
                     : p->mobility_ncomp        ? 0
-                                               : PLAN_AMG_RADIUS;
+                                               : pst_scheme_amg_radius(s->op.scheme);
     double reach = p->support;
     if (amg_uses_proxy(p, s, k) && radius > 0 && radius < reach)
         reach = radius;
@@ -163,10 +162,10 @@ static double amg_bytes_per_row(const pst_plan *p, const pst_scene *s)
 
 /* Where the run would not fit in `budget` bytes, the AMG solves with amg_source auto on the
  * scheme's own matrix (lsmps: the whole list, about 160 entries per row in 3D) take the
- * Brookshaw proxy; where it still does not fit, those with the automatic radius (and no
+ * Brookshaw proxy; where it still does not fit, those with a wider automatic radius (and no
  * per-particle mobility, whose contrast may need the whole list) take the tight one: in 3D
- * 1.3 h keeps about 15 entries per row against 25 at 1.6 h, for the same iterations on qsfdi
- * and up to 40 % more on lv and lpmps (docs/solving.md). */
+ * 1.3 h keeps about 15 entries per row against 25 at 1.6 h, for up to 40 % more iterations on
+ * lv and lpmps (qsfdi's automatic radius is 1.3 h already; docs/solving.md). */
 static void fit_amg_radius(pst_plan *p, const pst_scene *s, double other, double budget)
 {
     double n = (double)p->particles;
@@ -178,7 +177,7 @@ static void fit_amg_radius(pst_plan *p, const pst_scene *s, double other, double
         return;
     for (int k = 0; k < s->ntasks; ++k)
         if (s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].amg_radius < 0 &&
-            amg_uses_proxy(p, s, k))
+            amg_uses_proxy(p, s, k) && pst_scheme_amg_radius(s->op.scheme) > PLAN_AMG_TIGHT_RADIUS)
             p->task_amg_radius[k] = PLAN_AMG_TIGHT_RADIUS;
 }
 
@@ -237,9 +236,8 @@ static double fit_solves(pst_plan *p, const pst_scene *s, double list, double bu
     for (int k = 0; k < s->ntasks; ++k) {
         p->task_restart[k] = s->tasks[k].restart;
         p->task_amg_radius[k] = s->tasks[k].amg_radius;
-        p->task_amg_source[k] = half && s->tasks[k].amg_source == PST_AMG_AUTO
-                                    ? PST_AMG_BROOKSHAW
-                                    : s->tasks[k].amg_source;
+        int own = s->tasks[k].amg_source == PST_AMG_AUTO && pst_scheme_amg_own(s->op.scheme);
+        p->task_amg_source[k] = half && own ? PST_AMG_BROOKSHAW : s->tasks[k].amg_source;
     }
     double other = p->bytes_cloud + list + p->bytes_operators;
     fit_amg_radius(p, s, other + n * 8.0 * solver_vectors(p, s), budget);

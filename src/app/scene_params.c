@@ -174,8 +174,8 @@ const sc_param sc_params[] = {
     {.key = "tasks[].amg_radius", .type = SC_T_REAL, .def = "-1", .lo_kind = '[', .lo = -1,
      .hi = 1000, .hi_kind = ']', .applies = "solve", .units = "h",
      .doc = "The Brookshaw AMG matrix keeps the pairs closer than this (0: every neighbour; "
-            "-1: 1.6, 1.3 where memory is short, or every neighbour where the mobility varies "
-            "more than tenfold)."},
+            "-1: 1.3 for qsfdi, 1.6 for the others, 1.3 where memory is short, or every "
+            "neighbour where the mobility varies more than tenfold)."},
     {.key = "tasks[].amg_aggressive", .type = SC_T_INT, .def = "0", .lo_kind = '[', .lo = 0,
      .hi = 10, .hi_kind = ']', .applies = "solve",
      .doc = "Levels of aggressive coarsening in the AMG hierarchy."},

@@ -136,6 +136,16 @@ int pst_scheme_amg_own(const char *name)
     return s ? s->amg_own : 0;
 }
 
+/* The proxy radius of the schemes that name none: the whole list's iterations at a quarter
+ * (2D) to a sixth (3D) of its entries for lpmps and lv (docs/solving.md). */
+#define AMG_RADIUS_DEFAULT 1.6
+
+double pst_scheme_amg_radius(const char *name)
+{
+    const pst_scheme *s = find_scheme(name);
+    return !s ? 0 : s->amg_radius > 0 ? s->amg_radius : AMG_RADIUS_DEFAULT;
+}
+
 /* The boundary override of opts (kinds, normals): known kinds, finite Neumann normals. */
 static int check_boundary(const pst_op_opts *o, const pst_cloud *c, char *err)
 {

@@ -76,6 +76,9 @@ typedef struct pst_scheme {
     /* 1 when the scheme's own assembled matrix is its better AMG matrix (measured,
      * docs/solving.md): amg_source AUTO takes it; 0: the Brookshaw proxy (pst_scheme_amg_own) */
     int amg_own;
+    /* The automatic radius (in h) of its Brookshaw AMG proxy where it differs from the
+     * library's 1.6 h (measured, docs/solving.md); 0: 1.6 h (pst_scheme_amg_radius) */
+    double amg_radius;
     void (*free_data)(void *data);
 } pst_scheme;
 

@@ -85,9 +85,8 @@ int pst_prec_amg_ready(char *err)
 
 int pst_have_amg(void) { return 1; }
 
-/* The automatic proxy radius (in h) and the mobility contrast above which the proxy keeps the
- * whole list (docs/solving.md, "The AMG matrix's stencil"). */
-#define PST_AMG_RADIUS 1.6
+/* The mobility contrast above which the automatic proxy keeps the whole list (docs/solving.md,
+ * "The AMG matrix's stencil"); below it the radius is the scheme's (pst_scheme_amg_radius). */
 #define PST_AMG_CONTRAST 10.0
 
 /* MPI checked, then hypre initialised (when it is not yet). */
@@ -345,7 +344,8 @@ static double proxy_radius(const pst_op *op, double asked)
 {
     if (asked >= 0)
         return asked;
-    return mobility_contrast(op->cloud) > PST_AMG_CONTRAST ? 0 : PST_AMG_RADIUS;
+    return mobility_contrast(op->cloud) > PST_AMG_CONTRAST ? 0
+                                                           : pst_scheme_amg_radius(op->scheme->name);
 }
 
 /* The assembled low-order operator: the operator itself (OWN), or the Brookshaw proxy with the
