@@ -13,9 +13,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Rows per block: large enough that a 3D block's neighbours reach few other blocks (about 20
- * colours), small enough for hundreds of blocks per colour at 10^6 rows and more. Doubled while
- * the greedy colouring needs more than HALF_COLOURS colours (one bit each in a 64-bit mask). */
+/* Rows per block: large enough that a 3D block's neighbours reach few other blocks (39 colours
+ * at the quintic support, h = 1.2 s0), small enough for about 12 blocks per colour at 10^6 rows
+ * and 120 at 10^7 (2 threads need 2; a 16-core machine wants the 10^7 clouds this layout is
+ * for). Doubled while the greedy colouring needs more than HALF_COLOURS colours (one bit each in
+ * a 64-bit mask). */
 #define HALF_BLOCK 2048
 #define HALF_COLOURS 64
 
