@@ -705,14 +705,6 @@ PST_KHOT double qs_weight_to(const qs_ctx *k, const qs_data *d, int D, size_t j,
     return qs_row_weight(k, D, xj, 1.0 / pst_h(&k->c, j), d->kap + (size_t)QS_NK(D) * j, i);
 }
 
-/* -r into m (negation is exact); returns m. */
-PST_KHOT const double *qs_neg(int D, const double r[3], double m[3])
-{
-    for (int a = 0; a < D; ++a)
-        m[a] = -r[a];
-    return m;
-}
-
 /* Row i into y (apply) or its weights into w (emission), for constant D. */
 PST_KHOT void qs_row_t(const qs_ctx *k, const qs_data *d, const int64_t *off, const uint32_t *idx,
                      size_t i, const double *u, double *y, double *w, int D)
@@ -770,7 +762,7 @@ PST_KHOT void qs_half_t(const qs_ctx *k, const qs_data *d, const int64_t *off,
             double r[3] = {0, 0, 0}, m[3] = {0, 0, 0}, o2, o4;
             PST_HALF_LOOP(off, idx, kind, i, u, y, j, qs_pair(k, D, xi, ih, j, r, &o2, &o4),
                           qs_weight(D, r, o2, o4, kap),
-                          qs_weight(D, qs_neg(D, r, m), o2, o4, d->kap + (size_t)nk * j));
+                          qs_weight(D, pst_negated(D, r, m), o2, o4, d->kap + (size_t)nk * j));
         }
     }
 }

@@ -358,14 +358,6 @@ PST_KHOT double reverse_weight(const wls_ctx *k, int D, int B, pst_kernel K, siz
     return row_weight(k, D, B, K, xc, 1.0 / pst_h(&k->c, j), k->d->lam + (size_t)nb * j, i);
 }
 
-/* -x into m (negation is exact); returns m. */
-PST_KHOT const double *negated(int D, const double x[3], double m[3])
-{
-    for (int a = 0; a < D; ++a)
-        m[a] = -x[a];
-    return m;
-}
-
 /* Row i of a half list (operator.h, half_rows). With one h for the cloud the pair's offset and
  * kernel weight serve both directions (x^_JI = -x^_IJ exactly): one sqrt for two weights, each
  * bit for bit apply's; with per-particle h each direction is computed as apply does. */
@@ -384,7 +376,7 @@ PST_KHOT void half_row_t(const wls_ctx *k, const int64_t *off, const uint32_t *i
         double xh[3] = {0, 0, 0}, m[3] = {0, 0, 0}, w;
         PST_HALF_LOOP(off, idx, kind, i, u, y, j, w = pair_weight(k, D, K, xc, j, ih, xh),
                       basis_weight(D, B, w, xh, lam),
-                      basis_weight(D, B, w, negated(D, xh, m), lam0 + (size_t)nb * j));
+                      basis_weight(D, B, w, pst_negated(D, xh, m), lam0 + (size_t)nb * j));
     }
 }
 

@@ -366,6 +366,15 @@ static void test_parameters(void)
     pst_cloud_destroy(cl);
 }
 
+/* The 3D unit cube at spacing 0.1 with no fields, one task (a "tasks=[...]" override) and a
+ * scheme (an "operator.scheme=..." override): the memory tests plan it for 10^6 particles. */
+static pst_scene cube_solve(const char *task, const char *scheme)
+{
+    const char *ov[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]", "cloud.spacing=0.1",
+                        task, "fields={}", scheme};
+    return scene(ov, 7);
+}
+
 /* The AMG matrix the plan counts is the one the solve builds: with amg_source auto, lsmps's own
  * matrix (the whole list: more bytes than its Brookshaw proxy at 1.6 h, and never cut to fit)
  * and qsfdi's proxy (the same bytes as amg_source brookshaw). */
@@ -381,9 +390,7 @@ static void test_amg_matrix_memory(void)
                      "tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\","
                      "\"precond\":\"amg\",\"amg_source\":%s}]",
                      sources[a]);
-            const char *ov[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]",
-                                "cloud.spacing=0.1", task, "fields={}", schemes[k]};
-            pst_scene s = scene(ov, 7);
+            pst_scene s = cube_solve(task, schemes[k]);
             pst_plan p;
             char err[1024];
             CHECK_INT(pst_plan_make(&p, &s, 1000000, err, sizeof err), PST_OK);
@@ -401,11 +408,9 @@ static void test_amg_matrix_memory(void)
  * proxy at the automatic radius first, and says so. */
 static void test_amg_source_to_fit(void)
 {
-    const char *ov[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]", "cloud.spacing=0.1",
-                        "tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\","
-                        "\"precond\":\"amg\",\"operator\":\"matrix_free\"}]",
-                        "fields={}", "operator.scheme=lsmps"};
-    pst_scene s = scene(ov, 7);
+    pst_scene s = cube_solve("tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\","
+                             "\"precond\":\"amg\",\"operator\":\"matrix_free\"}]",
+                             "operator.scheme=lsmps");
     pst_plan p;
     char err[1024];
     size_t n = 1000000;
@@ -455,7 +460,9 @@ static void test_half_list(void)
         pst_plan p;
         pst_cloud *half = run(&s, &cnt, &p, PST_OK);
         CHECK(p.half_list == 1 && cnt.half_lists == 1 && cnt.stored_weights == 0);
-        CHECK(fabs(p.bytes_half_list - p.particles * (8 + 2 * p.neighbours)) < 1);
+        /* each pair once: about half the whole list (its offsets are not halved) */
+        CHECK(p.bytes_half_list > 0.5 * p.bytes_neighbours &&
+              p.bytes_half_list < 0.6 * p.bytes_neighbours);
         CHECK(p.bytes_total >= p.bytes_cloud + p.bytes_neighbours + p.bytes_half_list +
                                    p.bytes_operators);
         pst_scene_free(&s);
@@ -493,12 +500,10 @@ static void test_half_list(void)
 
 static void test_fit_memory(void)
 {
-    const char *solve[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]", "cloud.spacing=0.1",
-                           "tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\","
-                           "\"operator\":\"matrix_free\"}]",
-                           "fields={}", "operator.scheme=lpmps"};
     /* lpmps: its automatic AMG radius is 1.6 h (qsfdi's is the tight 1.3 h already) */
-    pst_scene s = scene(solve, 7);
+    pst_scene s = cube_solve("tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\","
+                             "\"operator\":\"matrix_free\"}]",
+                             "operator.scheme=lpmps");
     pst_plan p;
     char err[1024];
     size_t n = 1000000;
