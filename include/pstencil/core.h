@@ -54,6 +54,12 @@ int pst_write_atomic(const char *path, void (*write)(FILE *f, const void *job), 
 /* The number of OpenMP threads the library will use (omp_get_max_threads). */
 int pst_threads(void);
 
+/* The instruction set the hot kernels run with (docs/building.md, "Vector instructions"):
+ * "x86-64-v4" (AVX-512), "x86-64-v3" (AVX2 + FMA) or "generic", chosen at load time from the
+ * CPU; "native" for a -march=native build and "generic" where the build has no dispatch. A
+ * static string. */
+const char *pst_isa(void);
+
 #ifdef __cplusplus
 }
 #endif

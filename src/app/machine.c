@@ -1,6 +1,8 @@
 /* The machine probe of machine.h: hwloc topology, CPU model, OpenMP threads, compiler flags. */
 #include "machine.h"
 
+#include "pstencil.h"
+
 #include <hwloc.h>
 #include <omp.h>
 #include <stdio.h>
@@ -48,6 +50,7 @@ void pst_machine_probe(pst_machine *m)
     memset(m, 0, sizeof *m);
     m->compile_flags = PSTENCIL_C_FLAGS;
     m->build_type = PSTENCIL_BUILD_TYPE;
+    m->kernel_isa = pst_isa();
     m->hwloc_version = HWLOC_VERSION;
     m->omp_threads = omp_get_max_threads();
     m->omp_procs = omp_get_num_procs();
@@ -90,9 +93,9 @@ int pst_machine_line(const pst_machine *m, char *buf, size_t len)
     cache_text(&m->l3, l3, sizeof l3);
     return snprintf(buf, len,
                     "%s, %d packages, %d cores, %d threads, L1d %s, L2 %s, L3 %s, %d NUMA, "
-                    "OpenMP %d; flags: %s",
+                    "OpenMP %d, kernels %s; flags: %s",
                     m->cpu_model, m->packages, m->cores, m->hardware_threads, l1, l2, l3,
-                    m->numa_nodes, m->omp_threads, m->compile_flags);
+                    m->numa_nodes, m->omp_threads, m->kernel_isa, m->compile_flags);
 }
 
 int pst_machine_pairs(const pst_machine *m, const char *keys[],
@@ -121,6 +124,7 @@ int pst_machine_pairs(const pst_machine *m, const char *keys[],
     PAIR("openmp_threads", "%d", m->omp_threads);
     PAIR("compiler_flags", "%s", m->compile_flags);
     PAIR("build_type", "%s", m->build_type);
+    PAIR("kernel_isa", "%s", m->kernel_isa);
 #undef PAIR
     return n;
 }

@@ -26,6 +26,7 @@ typedef struct {
     int omp_threads, omp_procs; /* omp_get_max_threads(), omp_get_num_procs() at the probe */
     const char *compile_flags;  /* "<compiler> <version>: <flags>" */
     const char *build_type;     /* CMAKE_BUILD_TYPE */
+    const char *kernel_isa;     /* pst_isa(): the instruction set of the dispatched kernels */
     const char *hwloc_version;  /* the hwloc headers this build used */
 } pst_machine;
 
@@ -33,7 +34,7 @@ typedef struct {
 void pst_machine_probe(pst_machine *m);
 
 /* One line: "<cpu>, P packages, C cores, T threads, L1d 48 KiB x 2, L2 ..., L3 ..., N NUMA,
- * OpenMP T; flags: <flags>". Returns what snprintf returns. */
+ * OpenMP T, kernels <isa>; flags: <flags>". Returns what snprintf returns. */
 int pst_machine_line(const pst_machine *m, char *buf, size_t len);
 
 /* Key/value pairs (no JSON): up to max pairs written to keys[] / values[] (values are

@@ -16,6 +16,7 @@ cJSON *report_begin(const pst_scene *s)
     if (s->title)
         cJSON_AddStringToObject(r, "title", s->title);
     cJSON_AddNumberToObject(r, "threads", pst_threads());
+    cJSON_AddStringToObject(r, "kernel_isa", pst_isa());
     cJSON_AddNumberToObject(r, "dim", s->dim);
     cJSON_AddObjectToObject(r, "timers");
     cJSON_AddArrayToObject(r, "operators");

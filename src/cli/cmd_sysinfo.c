@@ -38,6 +38,7 @@ int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv)
     }
     printf("pstencil             %s (%s build)\n", pst_version(), m.build_type);
     printf("compiler flags       %s\n", m.compile_flags);
+    printf("kernel instructions  %s\n", m.kernel_isa);
     printf("hwloc                %s\n", m.hwloc_version);
     printf("CPU model            %s\n", m.cpu_model);
     printf("packages             %d\n", m.packages);
