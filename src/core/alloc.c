@@ -1,18 +1,34 @@
 /* Aligned allocation: every hot array of the library comes from here. */
+#define _DEFAULT_SOURCE /* madvise, MADV_HUGEPAGE */
 #include "internal.h"
 
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
+
+/* Arrays of at least this size are placed on 2 MiB boundaries and offered to the kernel as
+ * transparent huge pages (where THP is in "madvise" mode, Debian's default). The first touch of
+ * a 10^6-particle neighbour list or weight store then takes hundreds of faults instead of
+ * hundreds of thousands: measured in a VM, where a fault costs several microseconds, the page
+ * faults were 12 % of a qsfdi precompute + store with 4 KiB pages. */
+#define PST_HUGE_BYTES ((size_t)8 << 20)
+#define PST_HUGE_PAGE ((size_t)2 << 20)
 
 void *pst_alloc(size_t bytes)
 {
-    if (bytes > SIZE_MAX - PST_ALIGN)
+    if (bytes > SIZE_MAX - PST_HUGE_PAGE)
         return NULL;
-    size_t rounded = (bytes + PST_ALIGN - 1) / PST_ALIGN * PST_ALIGN;
+    size_t align = bytes >= PST_HUGE_BYTES ? PST_HUGE_PAGE : PST_ALIGN;
+    size_t rounded = (bytes + align - 1) / align * align;
     if (rounded == 0)
         rounded = PST_ALIGN;
-    return aligned_alloc(PST_ALIGN, rounded);
+    void *p = aligned_alloc(align, rounded);
+#ifdef MADV_HUGEPAGE
+    if (p && align == PST_HUGE_PAGE)
+        (void)madvise(p, rounded, MADV_HUGEPAGE); /* a hint: refused, the pages stay small */
+#endif
+    return p;
 }
 
 void *pst_calloc(size_t count, size_t size)
