@@ -24,6 +24,7 @@
  * neighbour). Never NaN. */
 #include "cells.h"
 #include "check.h"
+#include "isa.h"
 #include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
@@ -283,8 +284,8 @@ PST_KHOT void wls_msum4(int D, int n, const double *x, const double *y, const do
         s[e] += acc[e];
 }
 
-/* The same sums for qsfdi.c (wls.h). */
-void pst_wls_msums(int dim, int deg, int n, const double *r, int stride, const double *w,
+/* The same sums for qsfdi.c (wls.h), in the widest vector ISA. */
+PST_ISA_DISPATCH void pst_wls_msums(int dim, int deg, int n, const double *r, int stride, const double *w,
                    double *s)
 {
     const double *x = r, *y = r + stride, *z = dim == 3 ? r + 2 * stride : NULL;

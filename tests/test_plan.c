@@ -437,14 +437,14 @@ static void test_amg_source_to_fit(void)
     pst_scene_free(&s);
 }
 
-/* Where memory is short the plan of an AMG solve first takes the tight proxy radius (1.3 h),
- * then shortens the GMRES restart (not below 20), and each plan fits its budget; the
+/* Where memory is short the plan of a matrix-free AMG solve first takes the half list, then
+ * the tight proxy radius (1.3 h), then shortens the GMRES restart (not below 20), and each plan fits its budget; the
  * operator's estimate is the scheme's own per-particle bytes. The budget is set through
  * limits.memory_fraction as a fraction of the memory the first plan saw. */
-/* A matrix-free solve runs on a half list (the whole list freed after the precompute) and gives
- * the stored solve's answer; stored weights, a gradient task, a scheme without a half-list
- * apply or AMG on the scheme's own matrix keep the whole list. The estimate covers both
- * phases. */
+/* A matrix-free solve keeps the whole list where it fits (its apply is the faster one); short of
+ * memory it runs on a half list (the whole list freed after the precompute) and gives the
+ * stored solve's answer; stored weights, a gradient task, a scheme without a half-list apply or
+ * AMG on the scheme's own matrix keep the whole list. The estimate covers both phases. */
 static void test_half_list(void)
 {
     const char *base[] = {
@@ -458,8 +458,14 @@ static void test_half_list(void)
         pst_scene s = scene(ov, 4);
         pst_run_counters cnt;
         pst_plan p;
+        char err[1024];
+        CHECK_INT(pst_plan_make(&p, &s, pst_plan_particles(&s), err, sizeof err), PST_OK);
+        CHECK_INT(p.half_list, 0); /* it fits: the whole list */
+        /* a budget the whole list misses by a quarter of the list: the half list fits it */
+        s.memory_fraction = (p.bytes_total - 0.25 * p.bytes_neighbours) / p.bytes_available;
         pst_cloud *half = run(&s, &cnt, &p, PST_OK);
         CHECK(p.half_list == 1 && cnt.half_lists == 1 && cnt.stored_weights == 0);
+        CHECK(p.bytes_total <= s.memory_fraction * p.bytes_available);
         /* each pair once: about half the whole list (its offsets are not halved) */
         CHECK(p.bytes_half_list > 0.5 * p.bytes_neighbours &&
               p.bytes_half_list < 0.6 * p.bytes_neighbours);
@@ -511,15 +517,19 @@ static void test_fit_memory(void)
     CHECK(p.task_amg_radius[0] == -1 && p.task_restart[0] == 50); /* room enough: as asked */
     CHECK(fabs(p.bytes_operators - (double)n * (1 + pst_scheme_data_bytes("lpmps", 3))) < 1);
     double loose = p.bytes_total, avail = p.bytes_available;
-    const double cut[2] = {0.9, 0.7};
-    for (int k = 0; k < 2; ++k) {
+    const double cut[3] = {0.9, 0.7, 0.6};
+    for (int k = 0; k < 3; ++k) {
         s.memory_fraction = cut[k] * loose / avail;
         CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
-        CHECK(p.task_amg_radius[0] == 1.3);
-        CHECK(k == 0 ? p.task_restart[0] == 50 : p.task_restart[0] >= 20 && p.task_restart[0] < 50);
+        /* first the half list, then the tight radius, then a shorter restart */
+        CHECK_INT(p.half_list, 1);
+        CHECK(p.task_amg_radius[0] == (k == 0 ? -1 : 1.3));
+        CHECK(k < 2 ? p.task_restart[0] == 50 : p.task_restart[0] >= 20 && p.task_restart[0] < 50);
         CHECK(p.bytes_total <= s.memory_fraction * p.bytes_available);
-        printf("budget %.2f of the plan: AMG radius %g h, GMRES(%d), %.0f bytes per particle\n",
-               cut[k], p.task_amg_radius[0], p.task_restart[0], p.bytes_total / (double)n);
+        printf("budget %.2f of the plan: half list %d, AMG radius %g h, GMRES(%d), %.0f bytes per "
+               "particle\n",
+               cut[k], p.half_list, p.task_amg_radius[0], p.task_restart[0],
+               p.bytes_total / (double)n);
     }
     s.memory_fraction = 0.5 * loose / avail; /* no shortening reaches it */
     CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_ENOMEM);

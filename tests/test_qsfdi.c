@@ -2,12 +2,14 @@
  * Hessian and interpolation on jittered clouds; the one-pass moment weights against the
  * literal multi-pass oracle and the printed-typo negative control; Neumann rows; both apply
  * paths, assembly and thread independence; degenerate rows and the fallback chain; bad
- * options; phase timers; Test A (direct Laplacian of x^6 y^6) against the spec's prototype. */
+ * options; phase timers; kept derivative weights (opts.keep) against the computed ones; Test A
+ * (direct Laplacian of x^6 y^6) against the spec's prototype. */
 #include "check.h"
 #include "pstencil.h"
 #include "qsfdi_oracle.h"
 #include "support.h"
 
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -416,6 +418,107 @@ static void test_errors(void)
     pst_cloud_destroy(c);
 }
 
+/* max |a - b| over the ncomp arrays, relative to max |b|. */
+static double rel_diff(double *const a[6], double *const b[6], int ncomp, size_t n)
+{
+    double d = 0, m = 0;
+    for (int c = 0; c < ncomp; ++c)
+        for (size_t i = 0; i < n; ++i) {
+            d = fmax(d, fabs(a[c][i] - b[c][i]));
+            m = fmax(m, fabs(b[c][i]));
+        }
+    return d / m;
+}
+
+/* opts.keep: the gradient and Hessian from the kept kappas equal the computed ones bit for bit,
+ * on clouds with too-few-neighbour rows (the fallbacks; 2D), Dirichlet rows (kept
+ * there too; 3D) and per-particle h; bit-identical for 1 and 2 threads; bad keep options refused. */
+static void test_keep(void)
+{
+    for (int t = 0; t < 3; ++t) {
+        int dim = t == 0 ? 2 : 3;
+        pst_cloud *c = t == 0 ? test_lattice(2, 2.0, 3.0, 0.05, 0.75, 0.8, 3, 0)
+                              : test_lattice(3, 2.0, 3.0, 1.0 / 12, 1.2, 0.6, 5, 1);
+        size_t n = pst_cloud_size(c);
+        if (t == 2) {
+            double *h = pst_cloud_h_per_particle(c);
+            for (size_t i = 0; i < n; ++i)
+                h[i] = 1.2 / 12 * (1.0 + 0.2 * pst_rng_symmetric(5, i, 9));
+        }
+        pst_nlist *nl = test_nlist(c, 3.0);
+        pst_op_opts o;
+        pst_op_defaults(&o);
+        o.scheme = "qsfdi";
+        pst_op *plain = test_op_of(c, nl, &o);
+        o.keep = PST_KEEP_GRADIENT | PST_KEEP_HESSIAN;
+        pst_op *kept = test_op_of(c, nl, &o);
+        size_t counts[PST_ROW_NSTATUS];
+        pst_op_status_counts(kept, counts);
+        double *u = malloc(n * sizeof *u), *a[4][6];
+        for (size_t i = 0; i < n; ++i) {
+            double x[3];
+            test_position(c, i, x);
+            u[i] = sin(2 * x[0] + 3 * x[1]) * cos(x[2] - x[0]);
+        }
+        for (int r = 0; r < 4; ++r)
+            for (int k = 0; k < 6; ++k)
+                a[r][k] = malloc(n * sizeof(double));
+        int nq = dim == 2 ? 3 : 6, saved = omp_get_max_threads();
+        CHECK_INT(pst_op_gradient(plain, u, a[0]), PST_OK);
+        CHECK_INT(pst_op_hessian(plain, u, a[1]), PST_OK);
+        CHECK_INT(pst_op_gradient(kept, u, a[2]), PST_OK);
+        CHECK_INT(pst_op_hessian(kept, u, a[3]), PST_OK);
+        double dg = rel_diff(a[2], a[0], dim, n), dh = rel_diff(a[3], a[1], nq, n);
+        printf("keep %dD%s: %zu / %zu rows too few / rank-deficient, gradient %.1e, Hessian %.1e from "
+               "the computed ones\n",
+               dim, t == 2 ? " per-particle h" : "", counts[PST_ROW_TOO_FEW],
+               counts[PST_ROW_RANK_DEFICIENT], dg, dh);
+        CHECK(t != 0 || counts[PST_ROW_TOO_FEW] > 0);
+        CHECK(dg == 0); /* the same sums and the same kappa: bit for bit */
+        CHECK(dh == 0);
+        omp_set_num_threads(1);
+        CHECK_INT(pst_op_gradient(kept, u, a[0]), PST_OK);
+        CHECK_INT(pst_op_hessian(kept, u, a[1]), PST_OK);
+        omp_set_num_threads(saved > 1 ? saved : 2);
+        CHECK(rel_diff(a[0], a[2], dim, n) == 0);
+        CHECK(rel_diff(a[1], a[3], nq, n) == 0);
+        omp_set_num_threads(saved);
+        pst_op_destroy(plain);
+        pst_op_destroy(kept);
+        for (int r = 0; r < 4; ++r)
+            for (int k = 0; k < 6; ++k)
+                free(a[r][k]);
+        free(u);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+    pst_cloud *c = test_lattice(2, 2.0, 3.0, 0.1, 1.2, 0.5, 1, 0);
+    pst_nlist *nl = test_nlist(c, 3.0);
+    pst_op_opts o;
+    pst_op_defaults(&o);
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    o.scheme = "qsfdi";
+    o.keep = 4;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "PST_KEEP_GRADIENT") != NULL);
+    o.keep = PST_KEEP_GRADIENT;
+    o.laplacian = 0;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "laplacian = 1") != NULL);
+    o.laplacian = 1;
+    o.scheme = "lsmps";
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "only qsfdi") != NULL);
+    CHECK(op == NULL);
+    CHECK_INT(pst_scheme_supports("qsfdi", PST_SUPPORTS_KEEP), 1);
+    CHECK_INT(pst_scheme_supports("lv", PST_SUPPORTS_KEEP), 0);
+    CHECK_INT(pst_scheme_keep_bytes("qsfdi", 3, PST_KEEP_GRADIENT | PST_KEEP_HESSIAN), 1080);
+    CHECK_INT(pst_scheme_keep_bytes("lv", 3, PST_KEEP_GRADIENT), 0);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
 static double x6y6(const double *x) { return pow(x[0], 6) * pow(x[1], 6); }
 static double lap_x6y6(const double *x)
 {
@@ -490,6 +593,7 @@ int main(void)
     test_neumann_and_phases();
     test_degenerate();
     test_errors();
+    test_keep();
     const double p04[2] = {1.70e-2, 9.0e-4}, p08[2] = {3.0e-2, 1.7e-3};
     test_a(0.4, 0.9, p04);
     test_a(0.8, 0.75, p08);

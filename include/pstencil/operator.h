@@ -67,6 +67,10 @@ typedef struct {
                              DERIVATIVES_ONLY) then skip the precompute, and every call that
                              needs the rows (apply, store, diagonal, scale, assemble, audit)
                              returns PST_EINVAL                                               */
+    int keep;             /* PST_KEEP_* bits: what the precompute keeps beyond the rows, so
+                             that later derivative calls reuse it (docs/operators.md, "Kept
+                             derivatives"); 0 (default): nothing. Needs the rows (laplacian
+                             = 1) and a scheme with PST_SUPPORTS_KEEP, else PST_EINVAL     */
     /* The boundary description of the rows, instead of the cloud's own (a solve's boundary
      * groups): kinds[i] is particle i's pst_kind and normals[d][i] its outward normal, in
      * cloud order. NULL (the default) takes the cloud's kinds, and normals[0] == NULL the
@@ -98,9 +102,19 @@ typedef enum {
                                      first such particle in the message                     */
 } pst_on_degenerate;
 
+/* What pst_op_opts.keep asks the precompute to keep: the weights of the derivative estimates
+ * at every particle, which the precompute's inversions already give, so that pst_op_gradient
+ * (pst_op_hessian) is one pass over the neighbours that forms the data moments and dots them
+ * with the kept weights, instead of redoing the moments and inversions of every particle.
+ * pst_scheme_keep_bytes gives the memory; the results are the computed ones, bit for bit. */
+enum {
+    PST_KEEP_GRADIENT = 1, /* what pst_op_gradient needs */
+    PST_KEEP_HESSIAN = 2   /* what pst_op_hessian needs  */
+};
+
 /* Defaults: scheme "lv", the scheme's default kernel, G1, variant 0, cond_max 1e10,
  * rank_tol 1e-13, min_pair_distance 1e-8, on_degenerate PST_DEGENERATE_FALL_BACK,
- * mobility_mean PST_MEAN_ARITHMETIC, laplacian 1.
+ * mobility_mean PST_MEAN_ARITHMETIC, laplacian 1, keep 0.
  * Degenerate rows are never regularised: they drop down the scheme's fallback chain. */
 void pst_op_defaults(pst_op_opts *o);
 
@@ -147,9 +161,14 @@ enum {
     PST_SUPPORTS_MOBILITY,         /* a per-particle mobility: div(M grad u)                   */
     PST_SUPPORTS_SYMMETRIC,        /* CG through a symmetric scaling (with G1, no Neumann rows) */
     PST_SUPPORTS_DERIVATIVES_ONLY, /* derivatives without the rows (opts.laplacian = 0)        */
-    PST_SUPPORTS_HALF_LIST         /* the matrix-free apply on a half list (pst_op_use_half_list) */
+    PST_SUPPORTS_HALF_LIST,        /* the matrix-free apply on a half list (pst_op_use_half_list) */
+    PST_SUPPORTS_KEEP              /* pst_op_opts.keep (qsfdi)                                 */
 };
 int pst_scheme_supports(const char *name, int what);
+
+/* Bytes per particle that pst_op_opts.keep = `keep` (PST_KEEP_* bits) adds to an operator of
+ * the scheme in dimension dim; 0 for schemes without PST_SUPPORTS_KEEP. */
+int pst_scheme_keep_bytes(const char *name, int dim, int keep);
 
 /* Build an operator: validate the inputs, precompute the per-particle data (one threaded
  * pass), classify every row. The cloud and the list must outlive the operator and must not

@@ -204,6 +204,23 @@ static void fit_restarts(pst_plan *p, const pst_scene *s, double room)
             p->task_restart[k] = fits > PLAN_MIN_RESTART ? fits : PLAN_MIN_RESTART;
 }
 
+/* What the base operator keeps for the gradient and Hessian tasks it serves (pst_op_opts.keep):
+ * the weights its precompute's inversions give, so that each task is one pass over the
+ * neighbours instead of a second precompute. Only with Laplacian rows: a derivatives-only
+ * operator computes them in its one pass anyway. */
+static int base_keep(const pst_plan *p, const pst_scene *s)
+{
+    if (!p->base_operator || !p->base_laplacian ||
+        !pst_scheme_supports(s->op.scheme, PST_SUPPORTS_KEEP))
+        return 0;
+    int keep = 0;
+    for (int k = 0; k < s->ntasks; ++k)
+        keep |= s->tasks[k].type == SC_TASK_GRADIENT  ? PST_KEEP_GRADIENT
+                : s->tasks[k].type == SC_TASK_HESSIAN ? PST_KEEP_HESSIAN
+                                                      : 0;
+    return keep;
+}
+
 /* The half list (pst_op_use_half_list) serves a run whose one operator feeds only matrix-free
  * solves and Laplacian or divergence applies, of a scheme with a half-list apply, and whose AMG
  * solves use the Brookshaw proxy in the whole-list plan (the scheme's own matrix needs whole
@@ -224,6 +241,25 @@ static int half_list_serves(const pst_plan *p, const pst_scene *s, int nops)
         }
     }
     return 1;
+}
+
+/* 1 when the whole-list plan gives something up to fit `budget`: it does not fit, or a solve
+ * had its restart shortened, its AMG radius tightened or its AMG matrix changed. Only then does
+ * the half list pay: the whole-list matrix-free apply is faster (vectorised across a row's
+ * neighbours; the half-list apply scatters to the other rows one pair at a time), 2.0x for
+ * qsfdi in 3D (docs/operators.md, "The half-list apply"). */
+static int whole_list_gives_up(const pst_plan *p, const pst_scene *s, double budget)
+{
+    if (p->bytes_total > budget)
+        return 1;
+    for (int k = 0; k < s->ntasks; ++k) {
+        const sc_task *t = &s->tasks[k];
+        if (t->type == SC_TASK_SOLVE &&
+            (p->task_restart[k] < t->restart || p->task_amg_radius[k] != t->amg_radius ||
+             p->task_amg_source[k] != t->amg_source))
+            return 1;
+    }
+    return 0;
 }
 
 /* Fit the solves into `budget` with a list of `list` bytes resident during them: the AMG
@@ -319,9 +355,16 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
     p->bytes_operators = nops * n * (1.0 + pst_scheme_data_bytes(s->op.scheme, dim));
     p->bytes_available = available_bytes();
     double budget = s->memory_fraction * p->bytes_available;
+    p->base_keep = base_keep(p, s);
     p->bytes_total = fit_solves(p, s, p->bytes_neighbours, budget, 0);
-    if (half_list_serves(p, s, nops)) {
-        /* matrix-free: the half list is smaller and its apply no slower; the whole list lives
+    double kept = n * pst_scheme_keep_bytes(s->op.scheme, dim, p->base_keep);
+    if (p->bytes_total + kept > budget)
+        p->base_keep = 0; /* the derivatives are then computed when asked */
+    else
+        p->bytes_operators += kept;
+    p->bytes_total = fit_solves(p, s, p->bytes_neighbours, budget, 0);
+    if (half_list_serves(p, s, nops) && whole_list_gives_up(p, s, budget)) {
+        /* matrix-free and short of memory: the half list is smaller; the whole list lives
          * through the precompute and the copy only */
         p->half_list = 1;
         p->bytes_half_list = n * (8.0 + 2.0 * p->neighbours);
@@ -392,8 +435,13 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
                 pst_kernel_name(p->kernel), p->support, p->neighbours,
                 p->half_list ? "; a half list (each pair once) after the precompute" : "");
     if (p->base_operator)
-        fprintf(f, "  operator   %s%s\n", s->op.scheme,
-                p->base_laplacian ? "" : ", derivatives only (no Laplacian rows)");
+        fprintf(f, "  operator   %s%s%s%s\n", s->op.scheme,
+                p->base_laplacian ? "" : ", derivatives only (no Laplacian rows)",
+                p->base_keep ? "; keeps the weights of its " : "",
+                p->base_keep == (PST_KEEP_GRADIENT | PST_KEEP_HESSIAN) ? "gradient and Hessian"
+                : p->base_keep == PST_KEEP_GRADIENT                     ? "gradient"
+                : p->base_keep                                          ? "Hessian"
+                                                                        : "");
     for (int k = 0; k < s->ntasks; ++k) {
         const sc_task *t = &s->tasks[k];
         fprintf(f, "  task %-6d %s '%s'", k, task_type_name(t->type), t->name);

@@ -39,6 +39,9 @@ typedef struct {
      * gradients, Hessians and interpolation is built without Laplacian rows. */
     int base_operator;        /* 1 when some task needs it                                     */
     int base_laplacian;       /* 1 when it needs Laplacian rows                                */
+    /* PST_KEEP_* bits: the derivative weights the base operator's precompute keeps for the
+     * gradient and Hessian tasks (pst_op_opts.keep), when its scheme can and they fit */
+    int base_keep;
     /* 1: the one operator switches to a half neighbour list after its precompute
      * (pst_op_use_half_list): matrix-free solves and applies only */
     int half_list;

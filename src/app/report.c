@@ -125,6 +125,8 @@ void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt
     cJSON_AddBoolToObject(pl, "base_operator", p->base_operator);
     cJSON_AddBoolToObject(pl, "base_laplacian_rows", p->base_laplacian);
     cJSON_AddBoolToObject(pl, "half_list", p->half_list);
+    cJSON_AddBoolToObject(pl, "keeps_gradient", (p->base_keep & PST_KEEP_GRADIENT) != 0);
+    cJSON_AddBoolToObject(pl, "keeps_hessian", (p->base_keep & PST_KEEP_HESSIAN) != 0);
     const named_number memory[] = {{"cloud", p->bytes_cloud},
                                    {"neighbours", p->bytes_neighbours},
                                    {"half_list", p->bytes_half_list},

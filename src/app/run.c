@@ -62,6 +62,7 @@ int run_make_operator(run_state *r, int laplacian, const run_boundary *bnd, pst_
     pst_op_opts oo;
     pst_scene_op_opts(r->s, &oo);
     oo.laplacian = laplacian;
+    oo.keep = bnd ? 0 : r->plan.base_keep;
     if (bnd) {
         oo.kinds = bnd->kind;
         for (int d = 0; d < 3; ++d)
@@ -240,6 +241,7 @@ int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, p
     r.report = report_begin(s);
     r.plan.need_neighbours = 1;
     r.plan.half_list = 0; /* the caller reads the whole rows (the analysis assembles them) */
+    r.plan.base_keep = 0; /* and asks for no derivatives */
     if (st == PST_OK)
         st = build(&r);
     if (st == PST_OK && !r.nl)

@@ -1,4 +1,4 @@
-/* The operator object: scheme registry, creation, the stored-weight path, diagonal, assembly,
+/* The operator object: creation, the stored-weight path, diagonal, assembly,
  * status counts and the monotonicity audit. Everything here is derived from a scheme's
  * emit_row, so a new scheme gets all of it by filling its table (operator.h). */
 #include "operator.h"
@@ -8,31 +8,6 @@
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* One entry per line; the order is the order of listings. */
-static const pst_scheme *const registry[] = {
-    &pst_scheme_brookshaw,
-    &pst_scheme_cb,
-    &pst_scheme_schwaiger,
-    &pst_scheme_lv,
-    &pst_scheme_cspm,
-    &pst_scheme_icspm,
-    &pst_scheme_csph2g,
-    &pst_scheme_mixed0,
-    &pst_scheme_mixed1,
-    &pst_scheme_mixed2,
-    &pst_scheme_qsfdi,
-    &pst_scheme_lsmps,
-    &pst_scheme_lpmps,
-};
-#define NSCHEMES ((int)(sizeof registry / sizeof *registry))
-
-int pst_scheme_count(void) { return NSCHEMES; }
-const char *pst_scheme_name(int i) { return i >= 0 && i < NSCHEMES ? registry[i]->name : NULL; }
-const char *pst_scheme_description(int i)
-{
-    return i >= 0 && i < NSCHEMES ? registry[i]->description : NULL;
-}
 
 const char *pst_phase_name(int phase)
 {
@@ -64,86 +39,10 @@ void pst_op_defaults(pst_op_opts *o)
     o->min_pair_distance = 1e-8;
     o->on_degenerate = PST_DEGENERATE_FALL_BACK;
     o->laplacian = 1;
+    o->keep = 0;
     o->mobility_mean = PST_MEAN_ARITHMETIC;
     o->kinds = NULL;
     o->normals[0] = o->normals[1] = o->normals[2] = NULL;
-}
-
-static const pst_scheme *find_scheme(const char *name)
-{
-    for (int i = 0; i < NSCHEMES && name; ++i)
-        if (strcmp(registry[i]->name, name) == 0)
-            return registry[i];
-    return NULL;
-}
-
-/* CG's symmetric scaling (spec lukyanov_vuik §4.5) exists for these two schemes only. */
-int pst_scheme_symmetrisable(const pst_scheme *s)
-{
-    return s == &pst_scheme_brookshaw || s == &pst_scheme_cb;
-}
-
-int pst_scheme_supports(const char *name, int what)
-{
-    const pst_scheme *s = find_scheme(name);
-    if (!s)
-        return 0;
-    switch (what) {
-    case PST_SUPPORTS_GRADIENT: return s->gradient != NULL;
-    case PST_SUPPORTS_HESSIAN: return s->hessian != NULL;
-    case PST_SUPPORTS_INTERPOLATE: return s->interpolate != NULL;
-    case PST_SUPPORTS_MOBILITY: return s->mobility;
-    case PST_SUPPORTS_SYMMETRIC: return pst_scheme_symmetrisable(s);
-    case PST_SUPPORTS_DERIVATIVES_ONLY: return s->derivatives_standalone;
-    case PST_SUPPORTS_HALF_LIST: return s->half_rows != NULL;
-    default: return 0;
-    }
-}
-
-int pst_scheme_default_kernel(const char *name)
-{
-    const pst_scheme *s = find_scheme(name);
-    return s ? (int)s->default_kernel : -1;
-}
-
-const char *pst_scheme_fallback(const char *name)
-{
-    const pst_scheme *s = find_scheme(name);
-    return s ? s->fallback : NULL;
-}
-
-int pst_scheme_degree(const char *name, int lattice)
-{
-    const pst_scheme *s = find_scheme(name);
-    return !s ? -1 : lattice ? s->degree_lattice : s->degree;
-}
-
-int pst_scheme_variants(const char *name)
-{
-    const pst_scheme *s = find_scheme(name);
-    return !s ? 0 : s->variants > 1 ? s->variants : 1;
-}
-
-int pst_scheme_data_bytes(const char *name, int dim)
-{
-    const pst_scheme *s = find_scheme(name);
-    return s && (dim == 2 || dim == 3) ? s->data_bytes[dim - 2] : 0;
-}
-
-int pst_scheme_amg_own(const char *name)
-{
-    const pst_scheme *s = find_scheme(name);
-    return s ? s->amg_own : 0;
-}
-
-/* The proxy radius of the schemes that name none: the whole list's iterations at a quarter
- * (2D) to a sixth (3D) of its entries for lpmps and lv (docs/solving.md). */
-#define AMG_RADIUS_DEFAULT 1.6
-
-double pst_scheme_amg_radius(const char *name)
-{
-    const pst_scheme *s = find_scheme(name);
-    return !s ? 0 : s->amg_radius > 0 ? s->amg_radius : AMG_RADIUS_DEFAULT;
 }
 
 /* The boundary override of opts (kinds, normals): known kinds, finite Neumann normals. */
@@ -162,24 +61,13 @@ static int check_boundary(const pst_op_opts *o, const pst_cloud *c, char *err)
     return PST_OK;
 }
 
-/* The names of the registered schemes, ", "-separated, for a message. */
-static const char *scheme_names(char *names, size_t size)
-{
-    names[0] = '\0';
-    for (int i = 0; i < NSCHEMES; ++i) {
-        strncat(names, i ? ", " : "", size - strlen(names) - 1);
-        strncat(names, registry[i]->name, size - strlen(names) - 1);
-    }
-    return names;
-}
-
 static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist *nl,
                       const pst_scheme **scheme, char *err)
 {
     char names[256];
-    *scheme = find_scheme(o->scheme);
+    *scheme = pst_scheme_find(o->scheme);
     PST_CHECK(!*scheme, PST_EINVAL, err, "unknown scheme '%s' (known: %s)",
-              o->scheme ? o->scheme : "(null)", scheme_names(names, sizeof names));
+              o->scheme ? o->scheme : "(null)", pst_scheme_names(names, sizeof names));
     PST_CHECK(o->kernel < -1 || o->kernel > PST_KERNEL_WENDLAND_C4, PST_EINVAL, err,
               "unknown kernel %d", o->kernel);
     PST_CHECK(o->gradient < PST_GRAD_G1 || o->gradient > PST_GRAD_G4, PST_EINVAL, err,
@@ -214,6 +102,17 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
               "%s discretises the plain Laplacian only: it has no heterogeneous form, so the "
               "cloud must have no mobility (it has %d components)",
               (*scheme)->name, c->mob_ncomp);
+    PST_CHECK(o->keep & ~(PST_KEEP_GRADIENT | PST_KEEP_HESSIAN), PST_EINVAL, err,
+              "keep must be a combination of PST_KEEP_GRADIENT (1) and PST_KEEP_HESSIAN (2) "
+              "(got %d)",
+              o->keep);
+    PST_CHECK(o->keep && !(*scheme)->keep_bytes[1][0], PST_EINVAL, err,
+              "%s keeps no derivative weights (keep = %d): only qsfdi does; its derivatives "
+              "are computed when asked",
+              (*scheme)->name, o->keep);
+    PST_CHECK(o->keep && !o->laplacian, PST_EINVAL, err,
+              "keep needs the rows (laplacian = 1): without them the derivatives are computed "
+              "in one pass when asked, which is what keeping would save");
     PST_CHECK(pst_nlist_is_half(nl), PST_EINVAL, err,
               "an operator needs the whole neighbour list: a half list (pst_nlist_halve) serves "
               "an operator already built, through pst_op_use_half_list");

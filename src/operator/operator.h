@@ -36,6 +36,9 @@ typedef struct pst_scheme {
     /* bytes per particle of the precomputed data (op->data) in 2D and 3D, the largest over
      * the variants: the planner's memory estimate (pst_scheme_data_bytes) */
     int data_bytes[2];
+    /* bytes per particle that opts.keep adds in 2D and 3D, for PST_KEEP_GRADIENT and
+     * PST_KEEP_HESSIAN; all 0: the scheme keeps nothing (opts.keep is refused) */
+    int keep_bytes[2][2];
     /* minimum neighbours (j != i) of a row in dimension dim (spec choice 6) */
     int (*min_neighbours)(int dim);
     /* Precompute the per-particle data into op->data (op->status is zeroed, fill it); one
@@ -125,6 +128,10 @@ void pst_op_check_flat_rows(pst_op *op);
 
 /* 1 for the schemes CG can solve through their symmetric scaling (brookshaw, cb). */
 int pst_scheme_symmetrisable(const pst_scheme *s);
+/* The registered scheme of that name, or NULL (registry.c). */
+const pst_scheme *pst_scheme_find(const char *name);
+/* The names of the registered schemes, ", "-separated into names (size bytes), for a message. */
+const char *pst_scheme_names(char *names, size_t size);
 
 /* The registered schemes (one file each under kernels/), one declaration per line. */
 extern const pst_scheme pst_scheme_brookshaw;

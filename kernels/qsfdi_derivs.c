@@ -1,0 +1,211 @@
+/* QSFDI's one-off derivatives (gradient and Hessian at the particles, spec §1.9) and its
+ * interpolation at points (§1.7), from the fit of qsfdi_fit.h. */
+#include "check.h"
+#include "isa.h"
+#include "qsfdi_fit.h"
+
+#include <omp.h>
+#include <stdlib.h>
+
+/* ---- one-off derivatives: gradient and Hessian -------------------------------------------- */
+
+/* Component c of the gradient (which = 0) or Hessian (1) at row i from its kappa and the data
+ * moments, with the h factors. */
+PST_KHOT double qs_deriv_dot(int D, const double *kap, const double *du2, const double *du4,
+                             double h, int which)
+{
+    const int nq = QS_NQ(D), nk = QS_NK(D);
+    double v = 0;
+    for (int a = 0; a < nq; ++a)
+        v += kap[a] * du4[a];
+    for (int a = 0; a < nk - nq; ++a)
+        v += kap[nq + a] * du2[a];
+    return which ? v / (h * h) : v / h;
+}
+
+/* Gradient or Hessian at row i. With the kappas kept by the precompute (opts.keep): the data
+ * moments dotted with them (bit for bit the computed result: the same sums, the same kappa). Otherwise one pass of geometry and data moments, the inversions,
+ * then one kappa per component (spec §1.9: no stored weights needed); fallback rows take the
+ * linear WLS gradient (or 0) and a zero Hessian, as the kept kappas do (qs_keep_row). */
+PST_KHOT void qs_deriv_row_t(const qs_ctx *k, const double *kept, int D, size_t i,
+                             const int64_t *off, const uint32_t *idx, const double *u,
+                             double *const out[6], int which)
+{
+    const int n2 = QS_N2(D), nq = QS_NQ(D), nk = QS_NK(D), ncomp = which ? nq : D;
+    double xi[3] = {0, 0, 0}, mom[QS_NMOM], du2[9], du4[6], h = pst_h(&k->c, i);
+    for (int a = 0; a < D; ++a)
+        xi[a] = k->c.x[a][i];
+    if (kept) {
+        qs_moments(k, D, xi, 1.0 / h, idx, off[i], off[i + 1], u, u[i], NULL, NULL, du2, du4);
+        for (int c = 0; c < ncomp; ++c)
+            out[c][i] = qs_deriv_dot(D, kept + ((size_t)ncomp * i + c) * nk, du2, du4, h, which);
+        return;
+    }
+    int live = qs_moments(k, D, xi, 1.0 / h, idx, off[i], off[i + 1], u, u[i], mom, mom + n2,
+                          du2, du4);
+    qs_state st;
+    int fit = live >= qs_min(D) && qs_invert(k, D, mom, mom + n2, &st) < PST_ROW_RANK_DEFICIENT;
+    for (int c = 0; c < ncomp; ++c) {
+        double lg[3] = {0, 0, 0}, ls[3] = {0, 0, 0}, lc[3] = {0, 0, 0}, kap[15];
+        if (!which)
+            lg[c] = 1;
+        else if (c < D)
+            ls[c] = 1;
+        else
+            lc[c - D] = 1;
+        if (fit)
+            qs_functional(D, &st, lg, ls, lc, kap);
+        else if (!which)
+            qs_fallback_gradient(k, D, mom, mom + n2, lg, kap);
+        else
+            memset(kap, 0, sizeof kap);
+        out[c][i] = qs_deriv_dot(D, kap, du2, du4, h, which);
+    }
+}
+
+PST_ISA_DISPATCH static void qs_deriv_row(const qs_ctx *k, const double *kept, int D, size_t i,
+                                          const int64_t *off, const uint32_t *idx,
+                                          const double *u, double *const out[6], int which)
+{
+    if (D == 2)
+        qs_deriv_row_t(k, kept, 2, i, off, idx, u, out, which);
+    else
+        qs_deriv_row_t(k, kept, 3, i, off, idx, u, out, which);
+}
+
+/* Gradient (which = 0) or Hessian (1) of u at every particle (qs_deriv_row). */
+static void qs_derivs(const pst_op *op, const double *u, double *const out[6], int which)
+{
+    qs_ctx k = make_ctx(op);
+    const qs_data *d = op->data;
+    const double *kept = !d ? NULL : which ? d->hkap : d->gkap;
+    const int64_t *off = pst_nlist_offsets(op->nl);
+    const uint32_t *idx = pst_nlist_indices(op->nl);
+#pragma omp parallel for schedule(dynamic, 64)
+    for (size_t i = 0; i < op->n; ++i)
+        qs_deriv_row(&k, kept, op->dim, i, off, idx, u, out, which);
+}
+
+void pst_qsfdi_gradient(const pst_op *op, const double *u, double *const grad[3])
+{
+    double *const out[6] = {grad[0], grad[1], grad[2], NULL, NULL, NULL};
+    qs_derivs(op, u, out, 0);
+}
+
+void pst_qsfdi_hessian(const pst_op *op, const double *u, double *const hess[6])
+{
+    qs_derivs(op, u, hess, 1);
+}
+
+/* ---- interpolation at points (spec §1.7, eqs. 32-35) ---------------------------------------- */
+
+/* Value and Laplacian at point p with neighbours idx[e0..e1) and smoothing length h:
+ * Phi_k = omega1_k - tau^T Phi^all_k, <p> = sum Phi_k u_k / M0, lap = sum a_k (u_k - <p>).
+ * Returns 0 (fallback) for too few neighbours, a singular fit or M0 not positive. The data
+ * are taken relative to uref (the nearest neighbour's value) to keep rounding small. */
+PST_KHOT int qs_point_t(const qs_ctx *k, int D, const double p[3], double h, const uint32_t *idx,
+                      int64_t e0, int64_t e1, const double *u, double uref, double *value,
+                      double *lap)
+{
+    const int n2 = QS_N2(D), nq = QS_NQ(D);
+    double mom[QS_NMOM], ih = 1.0 / h;
+    if (qs_moments(k, D, p, ih, idx, e0, e1, NULL, 0.0, mom, mom + n2, NULL, NULL) < qs_min(D))
+        return 0;
+    qs_state st;
+    if (qs_invert(k, D, mom, mom + n2, &st) >= PST_ROW_RANK_DEFICIENT)
+        return 0;
+    /* tau = sum omega1 (r; r2s / 2; r2c), omega1 = w / d */
+    double tau[9] = {0};
+    for (int64_t e = e0; e < e1; ++e) {
+        double r[3] = {0, 0, 0}, o2, o4, qm[6];
+        qs_pair(k, D, p, ih, idx[e], r, &o2, &o4);
+        qs_quad(D, r, qm);
+        double o1 = o2 * sqrt(qm[0] + qm[1] + (D == 3 ? qm[2] : 0.0)); /* w/d = omega2 d */
+        for (int a = 0; a < D; ++a)
+            tau[a] += o1 * r[a];
+        for (int a = 0; a < nq; ++a)
+            tau[D + a] += o1 * (a < D ? 0.5 : 1.0) * qm[a];
+    }
+    double kt[15], kl[15], one[3] = {1, 1, 1}, zero[3] = {0, 0, 0};
+    qs_functional(D, &st, tau, tau + D, tau + 2 * D, kt);
+    qs_functional(D, &st, zero, one, zero, kl);
+    double sp = 0, m0 = 0, sphi = 0, sa = 0, sau = 0;
+    for (int64_t e = e0; e < e1; ++e) {
+        double r[3] = {0, 0, 0}, o2, o4;
+        size_t j = idx[e];
+        qs_pair(k, D, p, ih, j, r, &o2, &o4);
+        double d2 = 0;
+        for (int a = 0; a < D; ++a)
+            d2 += r[a] * r[a];
+        double o1 = o2 * sqrt(d2);
+        double phi = o1 - qs_weight(D, r, o2, o4, kt), a = qs_weight(D, r, o2, o4, kl);
+        double du = u[j] - uref;
+        sp += phi * du;
+        m0 += phi;
+        sphi += fabs(phi);
+        sa += a;
+        sau += a * du;
+    }
+    if (!(fabs(m0) > k->rank_tol * sphi))
+        return 0; /* M0 = 0: the value is undetermined (e.g. neighbours on one circle) */
+    double v = sp / m0;
+    *value = uref + v;
+    *lap = (sau - sa * v) * ih * ih;
+    return 1;
+}
+
+int pst_qsfdi_interpolate(const pst_op *op, const double *const pts[3], size_t m,
+                          const double *u, double *value, double *lap, size_t *fallbacks,
+                          char *err)
+{
+    qs_ctx k = make_ctx(op);
+    int D = op->dim;
+    for (size_t q = 0; q < m; ++q)
+        for (int a = 0; a < D; ++a)
+            PST_CHECK(!isfinite(pts[a][q]), PST_EINVAL, err,
+                      "interpolation point %zu has a non-finite coordinate", q);
+    double h = pst_cloud_h_max(op->cloud);
+    int64_t *off;
+    uint32_t *idx;
+    int st = pst_points_neighbours(op->cloud, pts, m, k.supp * h, &off, &idx, err);
+    if (st != PST_OK)
+        return st;
+    size_t nfb = 0;
+#pragma omp parallel for schedule(dynamic, 64) reduction(+ : nfb)
+    for (size_t q = 0; q < m; ++q) {
+        double p[3] = {0, 0, 0}, v = 0, l = 0;
+        for (int a = 0; a < D; ++a)
+            p[a] = pts[a][q];
+        /* the nearest particle: among the neighbours, else over the whole cloud (rare) */
+        size_t near = 0;
+        double best = INFINITY;
+        int64_t e0 = off[q], e1 = off[q + 1];
+        size_t cand = e0 < e1 ? (size_t)(e1 - e0) : op->n;
+        for (size_t t = 0; t < cand; ++t) {
+            size_t j = e0 < e1 ? idx[e0 + (int64_t)t] : t;
+            double d2 = 0;
+            for (int a = 0; a < D; ++a)
+                d2 += (k.c.x[a][j] - p[a]) * (k.c.x[a][j] - p[a]);
+            if (d2 < best) {
+                best = d2;
+                near = j;
+            }
+        }
+        double uref = op->n ? u[near] : 0.0;
+        int ok = D == 2 ? qs_point_t(&k, 2, p, h, idx, e0, e1, u, uref, &v, &l)
+                        : qs_point_t(&k, 3, p, h, idx, e0, e1, u, uref, &v, &l);
+        if (!ok) {
+            v = uref;
+            l = 0;
+            ++nfb;
+        }
+        if (value)
+            value[q] = v;
+        if (lap)
+            lap[q] = l;
+    }
+    pst_free(off);
+    pst_free(idx);
+    *fallbacks = nfb;
+    return PST_OK;
+}
