@@ -350,7 +350,10 @@ PST_ISA_DISPATCH static void row(const cs_ctx *k, size_t i, const double *u, dou
 /* Raw moments of row i: sum B m_k over degrees 1..3 (1..2 without ICSPM), sum A m_k and
  * sum C m_k over degrees 3..4, and, with data du (u_j - u_i), S1 = sum B r du and
  * S2_p = sum (A r_pa r_pb + B delta_p) du. Returns the number of contributing neighbours. One
- * pass: per chunk the kernel loop, then 5-7 (2D) / 7-9 (3D) reduction loops of 4-15 sums. */
+ * pass: per chunk the kernel loop, then 3 (csph2g) to 6 (icspm) reduction loops of 4-15 sums.
+ * Compute-bound, the scalar sqrt ~30 % of it (perf, 1 thread). The whole precompute, 3D 10^6 at
+ * 2 threads: 20 (csph2g) / 27 (cspm) / 23 (icspm) ns per neighbour and thread, qsfdi 22, was
+ * 86-91 (bench/README.md). */
 PST_KHOT int moments_t(const cs_ctx *k, int D, int which, size_t i, double *mB, double *mA,
                      double *mC, const double *u, double *S1, double *S2)
 {
@@ -734,7 +737,7 @@ PST_ISA_DISPATCH static double volume_of(const cs_ctx *k, size_t j)
     return k->c.dim == 2 ? volume_t(k, 2, j) : volume_t(k, 3, j);
 }
 
-/* Bound by the gather and the scalar sqrt per pair (measured below, docs/schemes/cspm.md). */
+/* Bound by the scalar sqrt per pair (~60 % of the pass, perf) and the gather. */
 static void volumes(const cs_ctx *k, double *V, size_t n)
 {
 #pragma omp parallel for schedule(dynamic, 512)
@@ -742,7 +745,7 @@ static void volumes(const cs_ctx *k, double *V, size_t n)
         V[j] = volume_of(k, j);
 }
 
-/* The moments pass of one block, bound by the per-pair kernel and 14-69 FMAs (2D-3D). */
+/* The moments pass of one block (moments_t). */
 static void moments_block(const cs_ctx *k, size_t b0, size_t b1, double *mom_blk, int *count)
 {
     const int D = k->c.dim, nm = cs_nm(D);
@@ -827,8 +830,9 @@ static int pre_csph(pst_op *op, char *err) { return precompute(op, CS_CSPH, err)
 /* ---- apply, emission, gradient, Hessian ---------------------------------------------------- */
 
 /* Matrix-free apply: each pair's weight from the positions, V_j and the row's coefficients.
- * Compute-bound: a sqrt, two divisions and ~60 flops (2D) / ~75 (3D) per pair against 4 bytes
- * of list, 8 of V_j and 8 of u_J gathered. */
+ * Compute-bound: a sqrt, one division and ~70 flops (2D) / ~90 (3D) per pair against 4 bytes
+ * of list, 8 of V_j and 8 of u_J gathered; 3D 10^6 at 2 threads 6 ns per pair and thread (was
+ * 19; qsfdi's apply 14). */
 static void cs_apply(const pst_op *op, const double *u, double *y)
 {
     cs_ctx k = make_ctx(op);
