@@ -347,10 +347,11 @@ PST_ISA_DISPATCH static void row(const cs_ctx *k, size_t i, const double *u, dou
 
 /* ---- moments ------------------------------------------------------------------------------ */
 
-/* Raw moments of row i: sum B m_k over degrees 1..3 (1..2 without ICSPM), sum A m_k and
- * sum C m_k over degrees 3..4, and, with data du (u_j - u_i), S1 = sum B r du and
+/* Raw moments of row i: sum B m_k over degrees 1..3 (1..2 without ICSPM), sum A m_k (not for
+ * CSPH) and sum C m_k (CSPH only: the others need them only on a fallback to CSPH, where
+ * invert_t computes them) over degrees 3..4, and, with data du (u_j - u_i), S1 = sum B r du and
  * S2_p = sum (A r_pa r_pb + B delta_p) du. Returns the number of contributing neighbours. One
- * pass: per chunk the kernel loop, then 3 (csph2g) to 6 (icspm) reduction loops of 4-15 sums.
+ * pass: per chunk the kernel loop, then 3 (csph2g) to 4 (icspm) reduction loops of 4-15 sums.
  * Compute-bound, the scalar sqrt ~30 % of it (perf, 1 thread). The whole precompute, 3D 10^6 at
  * 2 threads: 20 (csph2g) / 27 (cspm) / 23 (icspm) ns per neighbour and thread, qsfdi 22, was
  * 86-91 (bench/README.md). */
@@ -378,8 +379,10 @@ PST_KHOT int moments_t(const cs_ctx *k, int D, int which, size_t i, double *mB, 
             cs_sum3(D, n, &g, g.a, mA + d3);
             cs_sum4(D, n, &g, g.a, mA + d4);
         }
-        cs_sum3(D, n, &g, g.c, mC + d3);
-        cs_sum4(D, n, &g, g.c, mC + d4);
+        if (which == CS_CSPH) {
+            cs_sum3(D, n, &g, g.c, mC + d3);
+            cs_sum4(D, n, &g, g.c, mC + d4);
+        }
         if (u) {
             double bu[CS_CHUNK], au[CS_CHUNK];
             for (int c = 0; c < n; ++c) {
@@ -483,8 +486,9 @@ static inline double mom(int D, const double *m, int a, int b, int c, int d)
 /* The fallback chain of row i from its moments: M1 first, then the scheme's level and the
  * ones below it until an invertible matrix is found. Neumann rows need only the gradient
  * (ICSPM's when it exists, else CSPM's). */
-PST_KHOT void invert_t(const pst_op *op, int D, int which, int neumann, int count,
-                       const double *mB, const double *mA, const double *mC, cs_inv *v)
+PST_KHOT void invert_t(const pst_op *op, const cs_ctx *k, int D, int which, size_t i,
+                       int neumann, int count, const double *mB, const double *mA,
+                       const double *mC, cs_inv *v)
 {
     const int n2 = cs_n2(D);
     double M1[9] = {0};
@@ -512,6 +516,11 @@ PST_KHOT void invert_t(const pst_op *op, int D, int which, int neumann, int coun
         double X[36];
         int n = lev == CS_CSPH ? D : n2;
         if (lev == CS_CSPH) {
+            double mc[3 * CS_NM_MAX];
+            if (which != CS_CSPH) { /* the C moments of a fallback row, as csph2g forms them */
+                moments_table[D - 2][CS_CSPH](k, i, mc, NULL, NULL, NULL);
+                mC = mc + 2 * cs_nm(D);
+            }
             for (int a = 0; a < D; ++a)
                 for (int b = 0; b < D; ++b) {
                     X[a * D + b] = mom(D, mC, a, a, b, b);
@@ -571,13 +580,13 @@ PST_KHOT void invert_t(const pst_op *op, int D, int which, int neumann, int coun
 
 /* The fallback chain of row i from its moments m (B, A and C back to back), per dimension so
  * that the index arithmetic folds to constants, compiled per ISA. */
-PST_ISA_DISPATCH static void invert(const pst_op *op, int D, int which, int neumann, int count,
-                                    const double *m, cs_inv *v)
+PST_ISA_DISPATCH static void invert(const pst_op *op, const cs_ctx *k, size_t i, int neumann,
+                                    int count, const double *m, cs_inv *v)
 {
-    if (D == 2)
-        invert_t(op, 2, which, neumann, count, m, m + cs_nm(2), m + 2 * cs_nm(2), v);
+    if (k->c.dim == 2)
+        invert_t(op, k, 2, k->which, i, neumann, count, m, m + cs_nm(2), m + 2 * cs_nm(2), v);
     else
-        invert_t(op, 3, which, neumann, count, m, m + cs_nm(3), m + 2 * cs_nm(3), v);
+        invert_t(op, k, 3, k->which, i, neumann, count, m, m + cs_nm(3), m + 2 * cs_nm(3), v);
 }
 
 /* lam = 2 X^-T I over the diagonal components (n2 entries; D for CS_CSPH). */
@@ -801,7 +810,7 @@ static int precompute(pst_op *op, int which, char *err)
             const double *m = mom_blk + (size_t)3 * nm * (i - b0);
             if (k.c.kind[i] == PST_DIRICHLET)
                 continue;
-            invert(op, D, which, k.c.kind[i] == PST_NEUMANN, count[i - b0], m, &inv_blk[i - b0]);
+            invert(op, &k, i, k.c.kind[i] == PST_NEUMANN, count[i - b0], m, &inv_blk[i - b0]);
         }
         op->phase[PST_PHASE_INVERSION] += omp_get_wtime() - t;
         t = omp_get_wtime();
@@ -859,7 +868,7 @@ static void refit(const pst_op *op, const cs_ctx *k, size_t i, const double *u, 
     double m[3 * CS_NM_MAX], S1[3], S2[6];
     int count = moments_table[D - 2][k->which](k, i, m, u, S1, S2);
     cs_inv v;
-    invert(op, D, k->which, k->c.kind[i] == PST_NEUMANN, count, m, &v);
+    invert(op, k, i, k->c.kind[i] == PST_NEUMANN, count, m, &v);
     double H[6] = {0, 0, 0, 0, 0, 0}, t[6], gs[3];
     if (v.level == CS_ICSPM || v.level == CS_CSPM) {
         /* H = 2 X^-1 (S2 - N21 M1^-1 S1) */
