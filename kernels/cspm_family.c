@@ -353,8 +353,8 @@ PST_ISA_DISPATCH static void row(const cs_ctx *k, size_t i, const double *u, dou
  * S2_p = sum (A r_pa r_pb + B delta_p) du. Returns the number of contributing neighbours. One
  * pass: per chunk the kernel loop, then 3 (csph2g) to 4 (icspm) reduction loops of 4-15 sums.
  * Compute-bound, the scalar sqrt ~30 % of it (perf, 1 thread). The whole precompute, 3D 10^6 at
- * 2 threads: 20 (csph2g) / 27 (cspm) / 23 (icspm) ns per neighbour and thread, qsfdi 22, was
- * 86-91 (bench/README.md). */
+ * 2 threads: 21 (csph2g) / 24 (cspm) / 22 (icspm) ns per neighbour and thread, qsfdi 23, was
+ * 70-88 (bench/README.md). */
 PST_KHOT int moments_t(const cs_ctx *k, int D, int which, size_t i, double *mB, double *mA,
                      double *mC, const double *u, double *S1, double *S2)
 {
@@ -841,7 +841,7 @@ static int pre_csph(pst_op *op, char *err) { return precompute(op, CS_CSPH, err)
 /* Matrix-free apply: each pair's weight from the positions, V_j and the row's coefficients.
  * Compute-bound: a sqrt, one division and ~70 flops (2D) / ~90 (3D) per pair against 4 bytes
  * of list, 8 of V_j and 8 of u_J gathered; 3D 10^6 at 2 threads 6 ns per pair and thread (was
- * 19; qsfdi's apply 14). */
+ * 19; qsfdi's apply 13). */
 static void cs_apply(const pst_op *op, const double *u, double *y)
 {
     cs_ctx k = make_ctx(op);
