@@ -20,6 +20,7 @@
  * otherwise each row is sorted afterwards by a natural merge sort of its runs. */
 #include "cells.h"
 #include "check.h"
+#include "isa.h"
 
 #include <float.h>
 #include <math.h>
@@ -259,7 +260,7 @@ static void sort_row(uint32_t *row, uint32_t *tmp, size_t len)
 
 /* The count pass (k->index == NULL) or the fill pass over the cells of ranks [c0, c1), with
  * the thread's counters / cursors `cur`, dispatched to a specialised instance of the loops. */
-static void pass(const ctx *k, size_t c0, size_t c1, cand *cl, uint32_t *cur)
+PST_ISA_DISPATCH static void pass(const ctx *k, size_t c0, size_t c1, cand *cl, uint32_t *cur)
 {
     const pst_cells *g = k->g;
     int fill = k->index != NULL, varh = k->h != NULL;
