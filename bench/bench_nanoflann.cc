@@ -151,7 +151,8 @@ template <int D> int compare(int reps)
         }
         med[nt - 1][0] = bench_median(tp.data(), reps);
         med[nt - 1][1] = bench_median(tn.data(), reps);
-        std::printf("  %d thread%s: pstencil %.3f s, nanoflann %.3f s: ratio %.2f (medians of %d)\n",
+        std::printf("  %d thread%s: pstencil %.3f s, nanoflann %.3f s: ratio %.2f "
+                    "(medians of %d)\n",
                     nt, nt > 1 ? "s" : " ", med[nt - 1][0], med[nt - 1][1],
                     med[nt - 1][1] / med[nt - 1][0], reps);
         std::fflush(stdout);
