@@ -20,6 +20,7 @@
  * otherwise each row is sorted afterwards by a natural merge sort of its runs. */
 #include "cells.h"
 #include "check.h"
+#include "isa.h"
 
 #include <float.h>
 #include <math.h>
@@ -153,8 +154,10 @@ scan_range(const ctx *k, int dim, int varh, int fill, size_t a, size_t b, const 
     const uint32_t *restrict pid = k->pid;
     double halfs = k->halfs, r2u = k->r2uni;
     if (!fill) {
-        /* count: bound by the flops and compare latency of the distance tests (vectorised);
-         * each hit is credited to q here and to p by the caller */
+        /* count: bound by the flops and compare latency of the distance tests (vectorised,
+         * AVX-512 under dispatch: about a quarter of the 3D scene's 1.6 s of user time at 1
+         * thread, the fill most of the rest); each hit is credited to q here and to p by the
+         * caller */
         size_t cnt = 0;
         for (size_t q = a; q < b; ++q) {
             size_t hit = pair_hit(X, Y, Z, H, xi, hi, halfs, r2u, dim, varh, q);
@@ -182,7 +185,8 @@ scan_range(const ctx *k, int dim, int varh, int fill, size_t a, size_t b, const 
             m += hit[e];
         }
         /* fill, writes: q into row p and p into row q; bound by the stores into the index
-         * array (first touch of its pages, the rows of the candidate cells in L2) */
+         * array (first touch of its pages, the rows of the candidate cells in L2): with the
+         * compaction, 44 % of the passes' samples (docs/neighbours.md) */
         for (size_t j = 0; j < m; ++j) {
             uint32_t q = qs[j], i = pid[q];
             row[w++] = i;
@@ -258,8 +262,9 @@ static void sort_row(uint32_t *row, uint32_t *tmp, size_t len)
 }
 
 /* The count pass (k->index == NULL) or the fill pass over the cells of ranks [c0, c1), with
- * the thread's counters / cursors `cur`, dispatched to a specialised instance of the loops. */
-static void pass(const ctx *k, size_t c0, size_t c1, cand *cl, uint32_t *cur)
+ * the thread's counters / cursors `cur`, dispatched to a specialised instance of the loops;
+ * compiled per ISA (AVX-512 tests: 1.78x less user time than the generic build's, 3D). */
+PST_ISA_DISPATCH static void pass(const ctx *k, size_t c0, size_t c1, cand *cl, uint32_t *cur)
 {
     const pst_cells *g = k->g;
     int fill = k->index != NULL, varh = k->h != NULL;
