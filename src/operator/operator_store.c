@@ -208,10 +208,12 @@ int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
     const uint8_t *kind = op->kind;
     if (op->w32) {
         /* Bound: per-core loads (the u_J gathers are scalar loads: GCC emits no gather
-         * instructions for these targets), not the bandwidth. Measured 2026-12-02 (10^6, 3D
-         * qsfdi, 2 threads): 0.78 x the double store's time; in 2D (17 pairs per row) no
-         * faster than the double store (bench_stored, bench/README.md). The dispatched
-         * worker's wider simd reduction is what makes the float stream pay in 3D. */
+         * instructions for these targets), not the bandwidth. Measured 2026-12-02, 10^6
+         * particles, alternated with the double loop below (load 0.3-1): 3D qsfdi (187 pairs
+         * per row) 0.72-0.81 of the double store's time at 1 and 2 threads, 3D lv (55) 0.86;
+         * 2D lv (17) 1.1x slower: short rows pay the wide reduction's epilogue. The
+         * dispatched worker's wide simd reduction is what makes the float stream pay in 3D;
+         * the same dispatch gains nothing on the double loop. */
         size_t nb = (op->n + FLOAT_BLOCK - 1) / FLOAT_BLOCK;
 #pragma omp parallel for schedule(static)
         for (size_t b = 0; b < nb; ++b) {
