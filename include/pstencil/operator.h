@@ -213,15 +213,52 @@ void pst_op_options(const pst_op *op, pst_op_opts *o);
 /* Entries of the operator's sparsity pattern without the diagonal: the neighbour list's
  * pairs, or more for schemes with a wider stencil (the mixed schemes' neighbours of
  * neighbours, counted on demand until pst_op_store builds the pattern; -1 when the count
- * cannot allocate its n + 1 offsets). pst_op_store keeps 8 bytes per entry. */
+ * cannot allocate its n + 1 offsets). pst_op_store keeps 8 bytes per entry (4 in float). */
 int64_t pst_op_pattern_pairs(const pst_op *op);
 
 /* Compute and keep the stencil weights w_IJ (CSR in the pattern's layout: 8 bytes per entry;
  * a wider pattern than the list, the mixed schemes', is built here and kept with them, 4 bytes
- * more per entry). PST_ENOMEM when they do not fit (nothing is kept then). */
+ * more per entry). PST_ENOMEM when they do not fit (nothing is kept then). The same as
+ * pst_op_store_with(op, NULL, NULL): PST_EINVAL without rows, on a half list, or when the
+ * weights are already stored in float. */
 int pst_op_store(pst_op *op);
-/* Apply from the stored weights (same rows as pst_op_apply, to rounding). PST_EINVAL when
- * pst_op_store has not been called. */
+
+/* The precision of stored weights. */
+typedef enum {
+    PST_STORE_DOUBLE = 0, /* 8 bytes per entry: the stored apply agrees with pst_op_apply to
+                             rounding (the default)                                         */
+    PST_STORE_FLOAT = 1   /* 4 bytes per entry: each weight rounded to float (2^-24 relative),
+                             the apply still sums in double; 8 instead of 12 bytes streamed per
+                             pair. Effect on the error and on solves: docs/operators.md,
+                             "Stored weights in float"                                      */
+} pst_store_precision;
+
+typedef struct {
+    int precision; /* a pst_store_precision (default PST_STORE_DOUBLE) */
+} pst_op_store_opts;
+
+/* Defaults: PST_STORE_DOUBLE. */
+void pst_op_store_defaults(pst_op_store_opts *o);
+
+/* pst_op_store with options (o NULL: the defaults); one store per operator. Storing again in
+ * the precision already stored is PST_OK and does nothing. Refused: PST_EINVAL for a NULL
+ * operator, an unknown precision, an operator without rows (opts.laplacian = 0), one on a half
+ * list, or weights already stored in the other precision; PST_ENUMERIC for a float store with
+ * a row whose largest |w_IJ| lies outside [2^-102, FLT_MAX], where float would not keep it to
+ * 2^-24 (a cloud of extreme coordinates: the message names the first such row); PST_ENOMEM.
+ * Nothing is kept on failure.
+ * Whatever the store, pst_op_diagonal, pst_op_assemble and the audits use the double weights
+ * (emitted per row when only floats are stored), so a float-stored operator's Jacobi and AMG
+ * preconditioners are those of the double rows. */
+int pst_op_store_with(pst_op *op, const pst_op_store_opts *o, char *err);
+
+/* The precision of op's stored weights (a pst_store_precision), or -1 when none are stored. */
+int pst_op_store_precision(const pst_op *op);
+
+/* Apply from the stored weights of either precision (same rows as pst_op_apply, to rounding
+ * of the stored weights), deterministic for every thread count. PST_EINVAL when nothing is
+ * stored. The solves' stored path (pst_solve_opts.stored = 1, pst_op_linop) is this call, so
+ * it takes a float store as it is. */
 int pst_op_apply_stored(const pst_op *op, const double *u, double *y);
 
 /* The diagonal of L: -sum_J w_IJ on scheme and Neumann rows, 1 on Dirichlet rows. */

@@ -26,9 +26,9 @@ typedef struct {
 } pst_linop;
 
 /* The solve layer's view of an engine operator: apply is pst_op_apply (stored = 0) or
- * pst_op_apply_stored (stored = 1, after pst_op_store), diagonal is pst_op_diagonal, ctx is op
- * (which must outlive the linop). PST_EINVAL for a NULL argument, an operator without rows,
- * or stored = 1 before pst_op_store. */
+ * pst_op_apply_stored (stored = 1, after pst_op_store or pst_op_store_with, either precision),
+ * diagonal is pst_op_diagonal, ctx is op (which must outlive the linop). PST_EINVAL for a NULL
+ * argument, an operator without rows, or stored = 1 before a store. */
 int pst_op_linop(const pst_op *op, int stored, pst_linop *out, char *err);
 
 /* ------------------------------------------------------------------------------------------ */
@@ -100,7 +100,8 @@ typedef struct {
     int restart;           /* GMRES restart length m (default 50)                             */
     int max_iter;          /* iteration limit (default 5000)                                  */
     double rtol;           /* stop when ||b - L u|| <= rtol ||b|| (2-norms, default 1e-10)      */
-    int stored;            /* 1: apply the stored weights (pst_op_store), 0: matrix-free      */
+    int stored;            /* 1: apply the stored weights (pst_op_store, or pst_op_store_with
+                              in either precision), 0: matrix-free                           */
     int history;           /* 1: keep the relative residual of every iteration                */
     /* Called after every iteration with the iteration count and the estimated relative
      * residual, from the calling thread outside any parallel region (progress bars); NULL

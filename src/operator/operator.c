@@ -219,6 +219,7 @@ void pst_op_destroy(pst_op *op)
         op->scheme->free_data(op->data);
     pst_free(op->status);
     pst_free(op->w);
+    pst_free(op->w32);
     pst_free(op->own_poff);
     pst_free(op->own_pidx);
     pst_half_schedule_free(op->half);
@@ -244,7 +245,7 @@ static void dirichlet_rows(const pst_op *op, const double *u, double *y)
 
 /* The apply timer is the one field an apply writes; applies of one operator are not meant to
  * run concurrently (they are parallel inside). */
-static void record_apply(const pst_op *op, double t0)
+void pst_op_record_apply(const pst_op *op, double t0)
 {
     ((pst_op *)op)->phase[PST_PHASE_APPLY] = omp_get_wtime() - t0;
 }
@@ -259,7 +260,7 @@ int pst_op_apply(const pst_op *op, const double *u, double *y)
     else
         op->scheme->apply(op, u, y);
     dirichlet_rows(op, u, y);
-    record_apply(op, t0);
+    pst_op_record_apply(op, t0);
     return PST_OK;
 }
 
@@ -286,88 +287,6 @@ int64_t pst_op_pattern_pairs(const pst_op *op)
     int64_t pairs = off[op->n];
     pst_free(off);
     return pairs;
-}
-
-/* The stored weights need the pattern for as long as they live: a wide one is built into op. */
-static int own_pattern(pst_op *op)
-{
-    if (op->poff)
-        return PST_OK;
-    PST_TRY(op->scheme->wide_pattern(op, &op->own_poff, &op->own_pidx, NULL));
-    op->poff = op->own_poff;
-    op->pidx = op->own_pidx;
-    return PST_OK;
-}
-
-static void drop_own_pattern(pst_op *op)
-{
-    if (!op->own_poff)
-        return;
-    pst_free(op->own_poff);
-    pst_free(op->own_pidx);
-    op->own_poff = NULL;
-    op->own_pidx = NULL;
-    op->poff = NULL;
-    op->pidx = NULL;
-}
-
-int pst_op_store(pst_op *op)
-{
-    if (!op->rows || op->half)
-        return PST_EINVAL;
-    if (op->w)
-        return PST_OK;
-    PST_TRY(own_pattern(op));
-    const int64_t *off = op->poff;
-    double *w = pst_alloc((size_t)off[op->n] * sizeof *w);
-    if (!w) {
-        drop_own_pattern(op); /* a caller that goes on matrix-free gets its memory back */
-        return PST_ENOMEM;
-    }
-    const uint8_t *kind = op->kind;
-#pragma omp parallel for schedule(dynamic, 256)
-    for (size_t i = 0; i < op->n; ++i) {
-        if (kind[i] == PST_DIRICHLET)
-            memset(w + off[i], 0, (size_t)(off[i + 1] - off[i]) * sizeof *w);
-        else
-            op->scheme->emit_row(op, i, w + off[i]);
-    }
-    op->w = w;
-    return PST_OK;
-}
-
-/* Stored apply, y_I = sum_J w_IJ (u_J - u_I): the matrix-free apply's weights, summed in SIMD
- * partial sums, so the two paths agree to rounding. Per pair 8 bytes of weight + 4 of index
- * streamed, u_J gathered (Morton order keeps it in cache); about 12 bytes and 3 flops. */
-int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
-{
-    if (!op->w)
-        return PST_EINVAL;
-    double t0 = omp_get_wtime();
-    const int64_t *off = op->poff;
-    const uint32_t *idx = op->pidx;
-    const double *w = op->w;
-    const uint8_t *kind = op->kind;
-    /* Bound: per-core load throughput (12 bytes of w and idx per pair plus the u gather), not
-     * the machine's bandwidth on 2 cores (bench/README.md). The simd reduction splits the row
-     * sum into independent partial sums, so consecutive pairs no longer wait on one add chain:
-     * about 20 % faster than the sequential sum, and still deterministic for any thread count.
-     * Dirichlet rows (their stored weights are zeros) are the identity and skip the stream: a
-     * boundary layer is 6 % of the rows of a 100^3 cloud and 17 % of a 33^3 one. */
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i) {
-        if (kind[i] == PST_DIRICHLET) {
-            y[i] = u[i];
-            continue;
-        }
-        double ui = u[i], s = 0;
-#pragma omp simd reduction(+ : s)
-        for (int64_t k = off[i]; k < off[i + 1]; ++k)
-            s += w[k] * (u[idx[k]] - ui);
-        y[i] = s;
-    }
-    record_apply(op, t0);
-    return PST_OK;
 }
 
 /* A read-only path's operator with the rows' pattern in place: op itself when it has one,

@@ -100,6 +100,8 @@ struct pst_op {
     uint8_t *status;       /* pst_row_status per particle                            */
     size_t counts[PST_ROW_NSTATUS];
     double *w;             /* stored weights (pattern layout) or NULL                */
+    float *w32;            /* ... stored as float (pst_op_store_with), or NULL; at most one
+                              of w and w32 is set                                        */
     /* The sparsity pattern of the rows (without the diagonal), sorted by column in a row: the
      * neighbour list, or for a scheme with a wide_pattern NULL until pst_op_store builds it
      * into own_poff / own_pidx (the read-only paths build theirs per call, operator.c). */
@@ -114,6 +116,12 @@ struct pst_op {
     struct pst_half_schedule *half;
     double *half_diag;
 };
+
+/* Set the apply timer (PST_PHASE_APPLY) to the time since t0 (omp_get_wtime). */
+void pst_op_record_apply(const pst_op *op, double t0);
+
+/* 1 when op holds stored weights of either precision (operator_store.c). */
+int pst_op_has_store(const pst_op *op);
 
 /* The half-list apply (operator_half.c): y = L u through scheme->half_rows. */
 void pst_op_apply_half(const pst_op *op, const double *u, double *y);

@@ -199,7 +199,7 @@ static int check_half(const pst_op *op, const pst_nlist *half, char *err)
     PST_CHECK(!op->rows, PST_EINVAL, err,
               "the operator was built without rows (laplacian = 0): it has no apply");
     PST_CHECK(op->half, PST_EINVAL, err, "the operator already uses a half list");
-    PST_CHECK(op->w, PST_EINVAL, err,
+    PST_CHECK(pst_op_has_store(op), PST_EINVAL, err,
               "the operator has stored weights: the stored apply is faster than any list");
     PST_CHECK(!pst_nlist_is_half(half) || pst_nlist_rows(half) != op->n ||
                   pst_nlist_support(half) != pst_nlist_support(op->nl) ||

@@ -42,7 +42,7 @@ int pst_solve_check_opts(const pst_solve_opts *o, const pst_op *op, char *err)
               o->max_iter);
     PST_CHECK(!(o->rtol > 0 && o->rtol < 1), PST_EINVAL, err, "rtol must be in (0, 1) (got %g)",
               o->rtol);
-    PST_CHECK(op && o->stored && !op->w, PST_EINVAL, err,
+    PST_CHECK(op && o->stored && !pst_op_has_store(op), PST_EINVAL, err,
               "stored = 1 needs the weights: call pst_op_store(op) first");
     return PST_OK;
 }

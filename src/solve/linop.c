@@ -24,7 +24,7 @@ int pst_op_linop(const pst_op *op, int stored, pst_linop *out, char *err)
     PST_CHECK(!op || !out, PST_EINVAL, err, "pst_op_linop needs an operator and an output");
     PST_CHECK(!pst_op_has_rows(op), PST_EINVAL, err,
               "the operator was built without rows (laplacian = 0): it cannot be solved");
-    PST_CHECK(stored && !op->w, PST_EINVAL, err,
+    PST_CHECK(stored && !pst_op_has_store(op), PST_EINVAL, err,
               "stored = 1 needs the weights: call pst_op_store(op) first");
     /* the callbacks take ctx as void *; they only read the operator */
     *out = (pst_linop){.n = op->n, .apply = stored ? apply_stored : apply_free,

@@ -1,0 +1,249 @@
+/* The stored weights and the stored apply, in double (8 bytes per pattern entry) or in float
+ * (4 bytes, pst_op_store_with). Either store serves pst_op_apply_stored and the solves that
+ * take the stored path; the diagonal, assembly and audits always use the rows' double weights
+ * (the double store, or emit_row). docs/operators.md, "Stored weights in float". */
+#include "operator.h"
+#include "check.h"
+#include "isa.h"
+
+#include <float.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <string.h>
+
+int pst_op_has_store(const pst_op *op) { return op->w || op->w32; }
+
+int pst_op_store_precision(const pst_op *op)
+{
+    return op->w ? PST_STORE_DOUBLE : op->w32 ? PST_STORE_FLOAT : -1;
+}
+
+void pst_op_store_defaults(pst_op_store_opts *o) { o->precision = PST_STORE_DOUBLE; }
+
+/* The stored weights need the pattern for as long as they live: a wide one is built into op. */
+static int own_pattern(pst_op *op)
+{
+    if (op->poff)
+        return PST_OK;
+    PST_TRY(op->scheme->wide_pattern(op, &op->own_poff, &op->own_pidx, NULL));
+    op->poff = op->own_poff;
+    op->pidx = op->own_pidx;
+    return PST_OK;
+}
+
+static void drop_own_pattern(pst_op *op)
+{
+    if (!op->own_poff)
+        return;
+    pst_free(op->own_poff);
+    pst_free(op->own_pidx);
+    op->own_poff = NULL;
+    op->own_pidx = NULL;
+    op->poff = NULL;
+    op->pidx = NULL;
+}
+
+static int store_double(pst_op *op)
+{
+    const int64_t *off = op->poff;
+    double *w = pst_alloc((size_t)off[op->n] * sizeof *w);
+    if (!w)
+        return PST_ENOMEM;
+    const uint8_t *kind = op->kind;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < op->n; ++i) {
+        if (kind[i] == PST_DIRICHLET)
+            memset(w + off[i], 0, (size_t)(off[i + 1] - off[i]) * sizeof *w);
+        else
+            op->scheme->emit_row(op, i, w + off[i]);
+    }
+    op->w = w;
+    return PST_OK;
+}
+
+/* Float keeps a row to 2^-24 of its largest weight when that weight is in
+ * [FLOAT_ROW_MIN, FLT_MAX]: weights far below it may round to subnormals or zero (absolute
+ * error <= 2^-150, under 2^-48 of the row's largest), which the bound covers. */
+#define FLOAT_ROW_MIN 0x1p-102
+
+static int row_fits_float(const double *w, size_t len)
+{
+    double m = 0;
+    for (size_t k = 0; k < len; ++k)
+        m = fmax(m, fabs(w[k]));
+    return m == 0 || (m >= FLOAT_ROW_MIN && m <= FLT_MAX);
+}
+
+static double row_largest(const double *w, size_t len)
+{
+    double m = 0;
+    for (size_t k = 0; k < len; ++k)
+        m = fabs(w[k]) > fabs(m) ? w[k] : m;
+    return m;
+}
+
+/* Each row emitted in double into a per-thread buffer, rounded to float; the first row (lowest
+ * index, the same for every thread count) whose largest weight float cannot hold to 2^-24
+ * refuses the store. */
+static int store_float(pst_op *op, char *err)
+{
+    const int64_t *off = op->poff;
+    int64_t longest = 0;
+    for (size_t i = 0; i < op->n; ++i)
+        longest = off[i + 1] - off[i] > longest ? off[i + 1] - off[i] : longest;
+    float *w = pst_alloc((size_t)off[op->n] * sizeof *w);
+    double *scratch = pst_alloc((size_t)omp_get_max_threads() * ((size_t)longest + 1) *
+                                sizeof *scratch);
+    if (!w || !scratch) {
+        pst_free(w);
+        pst_free(scratch);
+        pst_set_err(err, "cannot allocate the float weights (%lld entries)",
+                    (long long)off[op->n]);
+        return PST_ENOMEM;
+    }
+    const uint8_t *kind = op->kind;
+    size_t bad = SIZE_MAX;
+    double bad_value = 0;
+#pragma omp parallel
+    {
+        double *buf = scratch + (size_t)omp_get_thread_num() * ((size_t)longest + 1);
+#pragma omp for schedule(dynamic, 256) reduction(min : bad)
+        for (size_t i = 0; i < op->n; ++i) {
+            size_t len = (size_t)(off[i + 1] - off[i]);
+            if (kind[i] == PST_DIRICHLET) {
+                memset(w + off[i], 0, len * sizeof *w);
+                continue;
+            }
+            op->scheme->emit_row(op, i, buf);
+            if (!row_fits_float(buf, len) && i < bad)
+                bad = i;
+            for (size_t k = 0; k < len; ++k)
+                w[off[i] + (int64_t)k] = (float)buf[k];
+        }
+    }
+    if (bad != SIZE_MAX) {
+        op->scheme->emit_row(op, bad, scratch);
+        bad_value = row_largest(scratch, (size_t)(off[bad + 1] - off[bad]));
+    }
+    pst_free(scratch);
+    if (bad != SIZE_MAX) {
+        pst_free(w);
+        pst_set_err(err,
+                    "row %zu's largest weight %.3e is outside the range float keeps to 2^-24 "
+                    "[%.3e, %.3e]: store in double (or rescale the coordinates)",
+                    bad, bad_value, FLOAT_ROW_MIN, (double)FLT_MAX);
+        return PST_ENUMERIC;
+    }
+    op->w32 = w;
+    return PST_OK;
+}
+
+int pst_op_store_with(pst_op *op, const pst_op_store_opts *o, char *err)
+{
+    pst_op_store_opts d;
+    if (!o) {
+        pst_op_store_defaults(&d);
+        o = &d;
+    }
+    PST_CHECK(!op, PST_EINVAL, err, "pst_op_store_with needs an operator");
+    PST_CHECK(o->precision != PST_STORE_DOUBLE && o->precision != PST_STORE_FLOAT, PST_EINVAL,
+              err, "unknown store precision %d (PST_STORE_DOUBLE or PST_STORE_FLOAT)",
+              o->precision);
+    PST_CHECK(!op->rows, PST_EINVAL, err,
+              "the operator was built without rows (laplacian = 0): there are no weights");
+    PST_CHECK(op->half, PST_EINVAL, err,
+              "the operator uses a half list (pst_op_use_half_list): it keeps no pattern to "
+              "store weights in");
+    int have = pst_op_store_precision(op);
+    if (have == o->precision)
+        return PST_OK;
+    PST_CHECK(have >= 0, PST_EINVAL, err,
+              "the weights are already stored in %s: one store per operator",
+              have == PST_STORE_DOUBLE ? "double" : "float");
+    int st = own_pattern(op);
+    PST_CHECK(st != PST_OK, st, err, "cannot build the rows' pattern");
+    st = o->precision == PST_STORE_DOUBLE ? store_double(op) : store_float(op, err);
+    if (st == PST_ENOMEM && o->precision == PST_STORE_DOUBLE)
+        pst_set_err(err, "cannot allocate the weights (%lld entries)", (long long)op->poff[op->n]);
+    if (st != PST_OK)
+        drop_own_pattern(op); /* a caller that goes on matrix-free gets its memory back */
+    return st;
+}
+
+int pst_op_store(pst_op *op) { return pst_op_store_with(op, NULL, NULL); }
+
+/* Rows [i0, i1) from float weights, summed in double. Each weight is widened exactly, so the
+ * only difference from the double store is the weights' own rounding (2^-24 relative). */
+static PST_ISA_DISPATCH void rows_float(const int64_t *off, const uint32_t *idx, const float *w,
+                                        const uint8_t *kind, const double *u, double *y,
+                                        size_t i0, size_t i1)
+{
+    for (size_t i = i0; i < i1; ++i) {
+        if (kind[i] == PST_DIRICHLET) {
+            y[i] = u[i];
+            continue;
+        }
+        double ui = u[i], s = 0;
+#pragma omp simd reduction(+ : s)
+        for (int64_t k = off[i]; k < off[i + 1]; ++k)
+            s += (double)w[k] * (u[idx[k]] - ui);
+        y[i] = s;
+    }
+}
+
+#define FLOAT_BLOCK 1024 /* rows per call of rows_float: its dispatch costs < 0.1 % of a block */
+
+/* Stored apply, y_I = sum_J w_IJ (u_J - u_I): the matrix-free apply's weights, summed in SIMD
+ * partial sums, so the two paths agree to rounding. Per pair 8 bytes of weight (4 in float) +
+ * 4 of index streamed, u_J gathered (Morton order keeps it in cache); about 12 (8) bytes and
+ * 3 flops. */
+int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
+{
+    if (!pst_op_has_store(op))
+        return PST_EINVAL;
+    double t0 = omp_get_wtime();
+    const int64_t *off = op->poff;
+    const uint32_t *idx = op->pidx;
+    const uint8_t *kind = op->kind;
+    if (op->w32) {
+        /* Bound: per-core loads (the u_J gathers are scalar loads: GCC emits no gather
+         * instructions for these targets), not the bandwidth. Measured 2026-12-02, 10^6
+         * particles, alternated with the double loop below (load 0.3-1): 3D qsfdi (187 pairs
+         * per row) 0.72-0.81 of the double store's time at 1 and 2 threads, 3D lv (55) 0.86;
+         * 2D lv (17) 1.1x slower: short rows pay the wide reduction's epilogue. The
+         * dispatched worker's wide simd reduction is what makes the float stream pay in 3D;
+         * the same dispatch gains nothing on the double loop. */
+        size_t nb = (op->n + FLOAT_BLOCK - 1) / FLOAT_BLOCK;
+#pragma omp parallel for schedule(static)
+        for (size_t b = 0; b < nb; ++b) {
+            size_t i1 = (b + 1) * FLOAT_BLOCK < op->n ? (b + 1) * FLOAT_BLOCK : op->n;
+            rows_float(off, idx, op->w32, kind, u, y, b * FLOAT_BLOCK, i1);
+        }
+        pst_op_record_apply(op, t0);
+        return PST_OK;
+    }
+    const double *w = op->w;
+    /* Bound: per-core load throughput (12 bytes of w and idx per pair plus the u gather), not
+     * the machine's bandwidth on 2 cores (bench/README.md). The simd reduction splits the row
+     * sum into independent partial sums, so consecutive pairs no longer wait on one add chain:
+     * about 20 % faster than the sequential sum, and still deterministic for any thread count.
+     * A dispatched per-block worker (x86-64-v3/v4), fixed 4/8/16-lane partial sums and masked
+     * row tails measured within noise of this loop (2026-12-02, bench/README.md), so it stays.
+     * Dirichlet rows (their stored weights are zeros) are the identity and skip the stream: a
+     * boundary layer is 6 % of the rows of a 100^3 cloud and 17 % of a 33^3 one. */
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i) {
+        if (kind[i] == PST_DIRICHLET) {
+            y[i] = u[i];
+            continue;
+        }
+        double ui = u[i], s = 0;
+#pragma omp simd reduction(+ : s)
+        for (int64_t k = off[i]; k < off[i + 1]; ++k)
+            s += w[k] * (u[idx[k]] - ui);
+        y[i] = s;
+    }
+    pst_op_record_apply(op, t0);
+    return PST_OK;
+}
