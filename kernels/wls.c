@@ -29,77 +29,12 @@
 #include "small_matrix.h"
 #include "sph_kernels.h"
 #include "wls.h"
+#include "wls_sums.h"
 
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#endif
-
-/* ---- square roots of a block ---------------------------------------------------------------- */
-
-/* GCC does not vectorise sqrt while it may set errno (the default -fmath-errno; the optimize
- * attribute does not lift it), and the scalar sqrt with its errno check costs ~2.8 ns here, as
- * much as the rest of a pair's weight. These take the vector instruction directly: sqrt is
- * correctly rounded in every width, so the values are those of sqrt() bit for bit. Measured
- * per value (this EPYC, one thread): scalar 2.8 ns, SSE2 1.4, AVX 0.6, AVX-512 0.3. */
-#if defined(__x86_64__) && defined(__GNUC__)
-__attribute__((target("avx512f"))) static void sqrt_avx512(int n, const double *a, double *b)
-{
-    int c = 0;
-    for (; c + 8 <= n; c += 8)
-        _mm512_storeu_pd(b + c, _mm512_sqrt_pd(_mm512_loadu_pd(a + c)));
-    if (c < n) {
-        __mmask8 m = (__mmask8)((1u << (n - c)) - 1);
-        _mm512_mask_storeu_pd(b + c, m, _mm512_sqrt_pd(_mm512_maskz_loadu_pd(m, a + c)));
-    }
-}
-
-__attribute__((target("avx"))) static void sqrt_avx(int n, const double *a, double *b)
-{
-    int c = 0;
-    for (; c + 4 <= n; c += 4)
-        _mm256_storeu_pd(b + c, _mm256_sqrt_pd(_mm256_loadu_pd(a + c)));
-    for (; c < n; ++c)
-        _mm_store_sd(b + c, _mm_sqrt_pd(_mm_load_sd(a + c)));
-}
-
-static void sqrt_sse2(int n, const double *a, double *b)
-{
-    int c = 0;
-    for (; c + 2 <= n; c += 2)
-        _mm_storeu_pd(b + c, _mm_sqrt_pd(_mm_loadu_pd(a + c)));
-    if (c < n)
-        _mm_store_sd(b + c, _mm_sqrt_pd(_mm_load_sd(a + c)));
-}
-
-void pst_sqrt_block(int n, const double *a, double *b)
-{
-#if !defined(PSTENCIL_NO_ISA_DISPATCH) && !defined(__clang__)
-    /* the levels of PST_ISA_DISPATCH's resolver (pst_isa()) */
-    if (__builtin_cpu_supports("x86-64-v4"))
-        sqrt_avx512(n, a, b);
-    else if (__builtin_cpu_supports("x86-64-v3"))
-        sqrt_avx(n, a, b);
-    else
-        sqrt_sse2(n, a, b);
-#elif defined(__AVX512F__)
-    sqrt_avx512(n, a, b);
-#elif defined(__AVX__)
-    sqrt_avx(n, a, b);
-#else
-    sqrt_sse2(n, a, b);
-#endif
-}
-#else
-void pst_sqrt_block(int n, const double *a, double *b)
-{
-    for (int c = 0; c < n; ++c)
-        b[c] = sqrt(a[c]);
-}
-#endif
 
 /* Particles per block of the precompute: bounds the memory of the moments and factors kept
  * between passes (3D type B: 32768 x 235 doubles, 62 MB) and the number of parallel regions;
@@ -203,150 +138,6 @@ PST_KHOT void gather(const wls_ctx *k, int D, pst_kernel K, const double *xc, do
 #pragma omp simd
     for (int c = 0; c < n; ++c)
         w[c] = (q[c] < supp) & (q[c] > eps) ? w[c] : 0.0;
-}
-
-/* s[.] += sum_c w_c m(r_c) over the monomials m of one degree (1 to 4) in graded
- * lexicographic order (2D: x y | xx xy yy | xxx xxy xyy yyy | xxxx xxxy xxyy xyyy yyyy; 3D
- * likewise with z; z is not read in 2D). One vectorised reduction loop per degree, at most 15
- * accumulators so that they stay in registers. Compute-bound: a multiply and an add per sum
- * and neighbour (ISO C mode: no FMA contraction) plus the shared products; qsfdi's 56 sums
- * in 3D take ~8 ns per neighbour with SSE2 (2 lanes), ~4.3 with -march=native (4 lanes). */
-PST_KHOT void wls_msum1(int D, int n, const double *x, const double *y, const double *z,
-                      const double *w, double *s)
-{
-    double a0 = 0, a1 = 0, a2 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2)
-    for (int c = 0; c < n; ++c) {
-        a0 += w[c] * x[c];
-        a1 += w[c] * y[c];
-        a2 += D == 3 ? w[c] * z[c] : 0.0;
-    }
-    s[0] += a0;
-    s[1] += a1;
-    if (D == 3)
-        s[2] += a2;
-}
-
-PST_KHOT void wls_msum2(int D, int n, const double *x, const double *y, const double *z,
-                      const double *w, double *s)
-{
-    if (D == 2) {
-        double a0 = 0, a1 = 0, a2 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2)
-        for (int c = 0; c < n; ++c) {
-            double wx = w[c] * x[c], wy = w[c] * y[c];
-            a0 += wx * x[c];
-            a1 += wx * y[c];
-            a2 += wy * y[c];
-        }
-        const double acc[3] = {a0, a1, a2};
-        for (int e = 0; e < 3; ++e)
-            s[e] += acc[e];
-        return;
-    }
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5)
-    for (int c = 0; c < n; ++c) {
-        double wx = w[c] * x[c], wy = w[c] * y[c], wz = w[c] * z[c];
-        a0 += wx * x[c];
-        a1 += wx * y[c];
-        a2 += wx * z[c];
-        a3 += wy * y[c];
-        a4 += wy * z[c];
-        a5 += wz * z[c];
-    }
-    const double acc[6] = {a0, a1, a2, a3, a4, a5};
-    for (int e = 0; e < 6; ++e)
-        s[e] += acc[e];
-}
-
-PST_KHOT void wls_msum3(int D, int n, const double *x, const double *y, const double *z,
-                      const double *w, double *s)
-{
-    if (D == 2) {
-        double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3)
-        for (int c = 0; c < n; ++c) {
-            double wxx = w[c] * x[c] * x[c], wxy = w[c] * x[c] * y[c], wyy = w[c] * y[c] * y[c];
-            a0 += wxx * x[c];
-            a1 += wxx * y[c];
-            a2 += wxy * y[c];
-            a3 += wyy * y[c];
-        }
-        const double acc[4] = {a0, a1, a2, a3};
-        for (int e = 0; e < 4; ++e)
-            s[e] += acc[e];
-        return;
-    }
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0, a9 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8, a9)
-    for (int c = 0; c < n; ++c) {
-        double wx = w[c] * x[c], wy = w[c] * y[c], wz = w[c] * z[c];
-        double wxx = wx * x[c], wxy = wx * y[c], wxz = wx * z[c], wyy = wy * y[c],
-               wyz = wy * z[c], wzz = wz * z[c];
-        a0 += wxx * x[c];
-        a1 += wxx * y[c];
-        a2 += wxx * z[c];
-        a3 += wxy * y[c];
-        a4 += wxy * z[c];
-        a5 += wxz * z[c];
-        a6 += wyy * y[c];
-        a7 += wyy * z[c];
-        a8 += wyz * z[c];
-        a9 += wzz * z[c];
-    }
-    const double acc[10] = {a0, a1, a2, a3, a4, a5, a6, a7, a8, a9};
-    for (int e = 0; e < 10; ++e)
-        s[e] += acc[e];
-}
-
-PST_KHOT void wls_msum4(int D, int n, const double *x, const double *y, const double *z,
-                      const double *w, double *s)
-{
-    if (D == 2) {
-        double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4)
-        for (int c = 0; c < n; ++c) {
-            double xx = x[c] * x[c], xy = x[c] * y[c], yy = y[c] * y[c];
-            double wxx = w[c] * xx, wxy = w[c] * xy, wyy = w[c] * yy;
-            a0 += wxx * xx;
-            a1 += wxx * xy;
-            a2 += wxx * yy;
-            a3 += wxy * yy;
-            a4 += wyy * yy;
-        }
-        const double acc[5] = {a0, a1, a2, a3, a4};
-        for (int e = 0; e < 5; ++e)
-            s[e] += acc[e];
-        return;
-    }
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0, a9 = 0,
-           a10 = 0, a11 = 0, a12 = 0, a13 = 0, a14 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14)
-    for (int c = 0; c < n; ++c) {
-        double xx = x[c] * x[c], xy = x[c] * y[c], xz = x[c] * z[c], yy = y[c] * y[c],
-               yz = y[c] * z[c], zz = z[c] * z[c];
-        double wxx = w[c] * xx, wxy = w[c] * xy, wxz = w[c] * xz, wyy = w[c] * yy,
-               wyz = w[c] * yz, wzz = w[c] * zz;
-        a0 += wxx * xx;
-        a1 += wxx * xy;
-        a2 += wxx * xz;
-        a3 += wxx * yy;
-        a4 += wxx * yz;
-        a5 += wxx * zz;
-        a6 += wxy * yy;
-        a7 += wxy * yz;
-        a8 += wxy * zz;
-        a9 += wxz * zz;
-        a10 += wyy * yy;
-        a11 += wyy * yz;
-        a12 += wyy * zz;
-        a13 += wyz * zz;
-        a14 += wzz * zz;
-    }
-    const double acc[15] = {a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14};
-    for (int e = 0; e < 15; ++e)
-        s[e] += acc[e];
 }
 
 /* The same sums for qsfdi.c (wls.h). */
@@ -503,16 +294,6 @@ PST_KHOT void row_t(const wls_ctx *k, size_t i, const double *u, double *y, doub
 /* The degree-2 sums of graded lexicographic order (xx xy yy / xx xy xz yy yz zz) in the
  * basis order (xx yy xy / xx yy zz xy xz yz). */
 static const unsigned char wls_gl2b[2][6] = {{0, 2, 1}, {0, 3, 5, 1, 2, 4}};
-
-/* s[0] += sum_c w_c (type B's constant moment and data entry). */
-PST_KHOT void wls_msum0(int n, const double *w, double *s)
-{
-    double a = 0;
-#pragma omp simd reduction(+ : a)
-    for (int c = 0; c < n; ++c)
-        a += w[c];
-    s[0] += a;
-}
 
 /* s[0..nb) += sum_c w_c p(r_c), p the basis ((1,) x, y[, z], squares, crosses). */
 PST_KHOT void wls_basis_sums(int D, int B, int n, const double *x, const double *y,
