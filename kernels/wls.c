@@ -117,10 +117,10 @@ PST_KHOT double pair_weight(const wls_ctx *k, int D, pst_kernel K, const double 
 #define WLS_CHUNK 256
 
 /* Scaled offsets r[a][c] of the neighbours idx[0..n) of xc and their weights w (pair_weight's
- * values). Separate loops, so that only the sqrt stays scalar (GCC does not vectorise sqrt
- * while it may set errno, the default -fmath-errno) and the kernel loop has no select: GCC
- * would sink the kernel into a branch of it. Bound by the scalar sqrt and the gather: ~2 ns
- * per neighbour, about a quarter of the moment pass. */
+ * values). Separate loops, so that the sqrt runs in vector instructions (pst_sqrt_block: GCC
+ * does not vectorise sqrt while it may set errno, the default -fmath-errno) and the kernel loop
+ * has no select: GCC would sink the kernel into a branch of it. Bound by the gather of x_J; the
+ * scalar sqrt it replaced cost ~2.8 ns per neighbour (pst_sqrt_block's comment). */
 PST_KHOT void gather(const wls_ctx *k, int D, pst_kernel K, const double *xc, double ih,
                     const uint32_t *idx, int n, double (*r)[WLS_CHUNK], double *w)
 {
@@ -272,7 +272,8 @@ PST_KHOT void chunk_weights(const wls_ctx *k, int D, int B, pst_kernel K, const 
 /* Row i into y (apply) or its weights into w (emission), a chunk of neighbours at a time: the
  * weights of a chunk (chunk_weights), then their dot product with u_J - u_I (pst_dot_du). Per
  * neighbour: the gather of x_J and u_J, one sqrt (pst_sqrt_block) and ~60 flops (3D), all in
- * vector lanes. Measured (3D, 2 threads): see bench/README.md, "matrix-free apply". */
+ * vector lanes: compute-bound. Measured (3D lpmps, 2 threads, loaded machine) ~2.6 ns per
+ * pair and thread (was ~10 with a pair at a time), 3.9-4.8x the stored apply (bench/README.md). */
 PST_KHOT void row_t(const wls_ctx *k, size_t i, const double *u, double *y, double *w, int D,
                    int B, pst_kernel K)
 {
