@@ -19,9 +19,11 @@
  * component for tensors (pair_mobility below; 0 when m_I + m_J <= 0).
  * Fallback chain (docs/schemes/): too few neighbours or a singular C / Gamma -> the Brookshaw
  * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN. */
+#include "isa.h"
 #include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
+#include "wls.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -66,8 +68,8 @@ PST_KHOT double pair_mobility(double a, double b, int H)
 {
     if (!H)
         return a + b;
-    double s = a + b;
-    return s > 0 ? 4.0 * a * (b / s) : 0.0;
+    double s = a + b, v = 4.0 * a * (b / s); /* evaluated always: a select, which vectorises */
+    return s > 0 ? v : 0.0;
 }
 
 /* The pair geometry of (i, j): x = r_j - r_i, d^2, h~ = (h_i + h_j)/2 (26), the kernel value W
@@ -86,12 +88,13 @@ PST_KHOT double pair_geometry(const lv_ctx *k, int D, int needW, size_t i, size_
 }
 
 /* The kernel gradient g_IJ of variant G (15)-(18) at pair (i, j), and F_IJ = x . g / d^2
- * (returned; 0 for a degenerate pair). For the radial variants g = f x and F = f exactly. Needs
- * nu (G2-G4) and grad nu (G2) of i. */
-PST_KHOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j, double x[3],
-                            double g[3], double *d2)
+ * (returned; 0 for a degenerate pair), from the pair's offset x, d2 and pair_geometry's a and
+ * W. For the radial variants g = f x and F = f exactly. Needs nu (G2-G4) and grad nu (G2) of
+ * i. Branch-free (selects), so that the loops over a chunk of pairs vectorise. */
+PST_KHOT double gradient_from(const lv_ctx *k, int D, int G, size_t i, size_t j,
+                              const double *x, int xs, double d2, double a, double W,
+                              double g[3])
 {
-    double W, a = pair_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, j, x, d2, &W);
     double f = a; /* the radial factor */
     if (G != PST_GRAD_G1) {
         double inu = 1.0 / k->d->nu[i];
@@ -100,69 +103,219 @@ PST_KHOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j,
             f *= 1.0 - W * k->c.V[j] * inu;
     }
     for (int c = 0; c < D; ++c)
-        g[c] = f * x[c];
-    if (G != PST_GRAD_G2 || a == 0)
+        g[c] = f * x[c * xs];
+    if (G != PST_GRAD_G2)
         return f;
-    /* G2 (16): minus W grad nu / nu^2, not along x */
+    /* G2 (16): minus W grad nu / nu^2, not along x (where a != 0) */
     double inu = 1.0 / k->d->nu[i], t = W * inu * inu, xg = 0;
     for (int c = 0; c < D; ++c) {
-        g[c] -= t * k->d->gnu[(size_t)D * i + c];
-        xg += x[c] * g[c];
+        double gc = g[c] - t * k->d->gnu[(size_t)D * i + c];
+        xg += x[c * xs] * gc;
+        g[c] = a == 0 ? g[c] : gc;
     }
-    return xg / *d2;
+    double F = xg / d2;
+    return a == 0 ? f : F;
 }
 
-/* w_IJ of a scheme row (see the file comment). Shared by apply and emit_row so that the two
- * apply paths use the same weights bit for bit. */
-PST_KHOT double row_weight(const lv_ctx *k, int D, int G, int T, int H, size_t i, size_t j)
+/* The same at pair (i, j) from the positions. */
+PST_KHOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j, double x[3],
+                            double g[3], double *d2)
 {
-    double x[3], g[3], d2;
-    double F = pair_gradient(k, D, G, i, j, x, g, &d2);
-    if (F == 0.0)
-        return 0.0;
+    double W, a = pair_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, j, x, d2, &W);
+    return gradient_from(k, D, G, i, j, x, 1, *d2, a, W, g);
+}
+
+/* w_IJ of a scheme row (see the file comment) from the pair's geometry (gradient_from's
+ * arguments; x and mj at stride xs) and the mobilities of I and J (mi, mj: 1 value, D for a
+ * tensor). Shared by apply,
+ * emit_row and the half-list rows, so that their weights agree bit for bit. */
+PST_KHOT double weight_from(const lv_ctx *k, int D, int G, int T, int H, size_t i, size_t j,
+                            const double *x, int xs, double d2, double a, double W,
+                            const double *mi, const double *mj, double *Fout)
+{
+    double g[3];
+    double F = *Fout = gradient_from(k, D, G, i, j, x, xs, d2, a, W, g);
     const lv_data *d = k->d;
-    double Vs = d->s[i] * k->c.V[j];
+    double Vs = d->s[i] * k->c.V[j], w;
     if (!T) {
         double t = F;
         for (int c = 0; c < D; ++c)
             t -= d->eta[(size_t)D * i + c] * g[c];
-        return Vs * pair_mobility(pst_mob(&k->c, 0, i), pst_mob(&k->c, 0, j), H) * t;
+        w = Vs * pair_mobility(mi[0], mj[0], H) * t;
+    } else {
+        const double *C = d->C + (size_t)D * D * i, *zeta = d->zeta + (size_t)D * i;
+        double s = 0;
+        for (int b = 0; b < D; ++b) {
+            double Cg = 0;
+            for (int e = 0; e < D; ++e)
+                Cg += C[b * D + e] * g[e];
+            s += pair_mobility(mi[b], mj[b * xs], H) * (x[b * xs] * g[b] / d2 - zeta[b] * Cg);
+        }
+        w = Vs * s;
     }
-    const double *C = d->C + (size_t)D * D * i, *zeta = d->zeta + (size_t)D * i;
-    double w = 0;
-    for (int a = 0; a < D; ++a) {
-        double Cg = 0;
-        for (int b = 0; b < D; ++b)
-            Cg += C[a * D + b] * g[b];
-        w += pair_mobility(k->c.mob[a][i], k->c.mob[a][j], H) * (x[a] * g[a] / d2 - zeta[a] * Cg);
-    }
-    return Vs * w;
+    return w;
 }
 
-/* w_IJ of a Neumann row (100): V_J (M_I n_I) . C_I g_IJ, the outward flux. */
-PST_KHOT double neumann_weight(const lv_ctx *k, int D, int G, size_t i, size_t j)
+/* w_IJ of a Neumann row (100) from the pair's geometry: V_J (M_I n_I) . C_I g_IJ, the outward
+ * flux; mn = M_I n_I. */
+PST_KHOT double neumann_from(const lv_ctx *k, int D, int G, size_t i, size_t j, const double *x,
+                             int xs, double d2, double a, double W, const double *mn, double *F)
 {
-    double x[3], g[3], d2;
-    if (pair_gradient(k, D, G, i, j, x, g, &d2) == 0.0)
-        return 0.0;
+    double g[3];
+    *F = gradient_from(k, D, G, i, j, x, xs, d2, a, W, g);
     const double *C = k->d->C + (size_t)D * D * i;
     double w = 0;
-    for (int a = 0; a < D; ++a) {
+    for (int b = 0; b < D; ++b) {
         double Cg = 0;
-        for (int b = 0; b < D; ++b)
-            Cg += C[a * D + b] * g[b];
-        w += pst_mob(&k->c, a, i) * k->c.normal[a][i] * Cg;
+        for (int e = 0; e < D; ++e)
+            Cg += C[b * D + e] * g[e];
+        w += mn[b] * Cg;
     }
     return k->c.V[j] * w;
 }
 
-/* Row i into y (apply) or its weights into w (emission), for constant D, G, T, H. */
+/* The row constants of row i: mi, the mobility of I as weight_from reads it, and on a Neumann
+ * row mn = M_I n_I (neumann_from; only Neumann rows have normals). */
+PST_KHOT void row_mobility(const lv_ctx *k, int D, int T, size_t i, double mi[3], double mn[3])
+{
+    int neumann = k->c.kind[i] == PST_NEUMANN;
+    for (int b = 0; b < D; ++b) {
+        mi[b] = T ? k->c.mob[b][i] : pst_mob(&k->c, 0, i);
+        mn[b] = neumann ? pst_mob(&k->c, b, i) * k->c.normal[b][i] : 0.0;
+    }
+}
+
+/* w_IJ of row i (Neumann or not) at pair (i, j) from the positions: the half-list rows. */
+PST_KHOT double row_weight(const lv_ctx *k, int D, int G, int T, int H, size_t i, size_t j)
+{
+    double x[3], d2, W, mi[3], mn[3], mj[3], F, w;
+    double a = pair_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, j, x, &d2, &W);
+    row_mobility(k, D, T, i, mi, mn);
+    if (k->c.kind[i] == PST_NEUMANN) {
+        w = neumann_from(k, D, G, i, j, x, 1, d2, a, W, mn, &F);
+    } else {
+        for (int b = 0; b < (T ? D : 1); ++b)
+            mj[b] = pst_mob(&k->c, b, j);
+        w = weight_from(k, D, G, T, H, i, j, x, 1, d2, a, W, mi, mj, &F);
+    }
+    return F == 0.0 ? 0.0 : w; /* a degenerate pair */
+}
+
+/* The geometry of a chunk of pairs (i, idx[c]), c < n, in arrays: x, d2, and pair_geometry's
+ * a and W (W only with needW). */
+#define LV_CHUNK 256
+typedef struct {
+    double x[3][LV_CHUNK], d2[LV_CHUNK], a[LV_CHUNK], W[LV_CHUNK];
+} lv_chunk;
+
+/* a and W of a chunk for the constant kernel K (pair_geometry's arithmetic). */
+PST_KHOT void chunk_kernel(pst_kernel K, int D, int needW, int n, const double *d,
+                           const double *ht, double eps, lv_chunk *ch)
+{
+#pragma omp simd
+    for (int c = 0; c < n; ++c) {
+        double av = -pst_sph_dw(K, D, d[c], ht[c]) / d[c];
+        ch->a[c] = d[c] > eps * ht[c] ? av : 0.0;
+    }
+    if (needW)
+#pragma omp simd
+        for (int c = 0; c < n; ++c) {
+            double wv = pst_sph_w(K, D, d[c], ht[c]);
+            ch->W[c] = d[c] > eps * ht[c] ? wv : 0.0;
+        }
+}
+
+/* Separate loops, so that the sqrt (the library is built without math errno) and the kernel
+ * (one loop per kernel, the switch outside) vectorise. */
+PST_KHOT void chunk_geometry(const lv_ctx *k, int D, int needW, size_t i, const uint32_t *idx,
+                             int n, lv_chunk *ch)
+{
+    double d[LV_CHUNK], ht[LV_CHUNK], hi = pst_h(&k->c, i);
+    for (int c = 0; c < n; ++c) {
+        double d2 = 0;
+        for (int b = 0; b < D; ++b) {
+            double xb = k->c.x[b][idx[c]] - k->c.x[b][i];
+            ch->x[b][c] = xb;
+            d2 += xb * xb;
+        }
+        ch->d2[c] = d2;
+    }
+    if (k->c.h)
+        for (int c = 0; c < n; ++c)
+            ht[c] = 0.5 * (hi + k->c.h[idx[c]]);
+    else
+        for (int c = 0; c < n; ++c)
+            ht[c] = 0.5 * (hi + k->c.h_uniform);
+    for (int c = 0; c < n; ++c)
+        d[c] = sqrt(ch->d2[c]);
+    const double eps = k->c.pair_eps;
+    switch (k->c.kernel) {
+    case PST_KERNEL_CUBIC: chunk_kernel(PST_KERNEL_CUBIC, D, needW, n, d, ht, eps, ch); break;
+    case PST_KERNEL_QUINTIC: chunk_kernel(PST_KERNEL_QUINTIC, D, needW, n, d, ht, eps, ch); break;
+    case PST_KERNEL_WENDLAND_C2:
+        chunk_kernel(PST_KERNEL_WENDLAND_C2, D, needW, n, d, ht, eps, ch);
+        break;
+    default: chunk_kernel(PST_KERNEL_WENDLAND_C4, D, needW, n, d, ht, eps, ch); break;
+    }
+}
+
+/* The weights (uncut) and F of a scheme row's chunk (weight_from). */
+PST_KHOT void chunk_row_weights(const lv_ctx *k, int D, int G, int T, int H, size_t i,
+                                const uint32_t *idx, int n, const lv_chunk *ch, const double *mi,
+                                double *F, double *t)
+{
+    double mj[3][LV_CHUNK];
+    for (int b = 0; b < (T ? D : 1); ++b)
+        if (k->c.ncomp)
+            for (int c = 0; c < n; ++c)
+                mj[b][c] = k->c.mob[k->c.ncomp == 1 ? 0 : b][idx[c]];
+        else
+            for (int c = 0; c < n; ++c)
+                mj[b][c] = 1.0;
+#pragma omp simd
+    for (int c = 0; c < n; ++c)
+        t[c] = weight_from(k, D, G, T, H, i, idx[c], &ch->x[0][c], LV_CHUNK, ch->d2[c],
+                           ch->a[c], ch->W[c], mi, &mj[0][c], &F[c]);
+}
+
+/* The weights of row i for its neighbours idx[0..n) into t. */
+PST_KHOT void chunk_weights(const lv_ctx *k, int D, int G, int T, int H, size_t i,
+                            const uint32_t *idx, int n, double *t)
+{
+    lv_chunk ch;
+    double mi[3], mn[3], F[LV_CHUNK];
+    chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, idx, n, &ch);
+    row_mobility(k, D, T, i, mi, mn);
+    if (k->c.kind[i] == PST_NEUMANN) {
+#pragma omp simd
+        for (int c = 0; c < n; ++c)
+            t[c] = neumann_from(k, D, G, i, idx[c], &ch.x[0][c], LV_CHUNK, ch.d2[c], ch.a[c],
+                                ch.W[c], mn, &F[c]);
+    } else {
+        chunk_row_weights(k, D, G, T, H, i, idx, n, &ch, mi, F, t);
+    }
+    /* the cut of degenerate pairs as a loop of its own: inside the weight loop GCC would sink
+     * the weight into a branch of it, and that loop would not vectorise below AVX-512 */
+    for (int c = 0; c < n; ++c)
+        t[c] = F[c] == 0.0 ? 0.0 : t[c];
+}
+
+/* Row i into y (apply) or its weights into w (emission), a chunk of neighbours at a time: the
+ * chunk's geometry and weights in vector lanes (chunk_weights), then their dot product with
+ * u_J - u_I (pst_dot_du). */
 PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
                   const double *u, double *y, double *w, int D, int G, int T, int H)
 {
-    int neumann = k->c.kind[i] == PST_NEUMANN;
-    PST_ROW_LOOP(off, idx, i, u, y, w, j,
-                 neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, H, i, j));
+    double acc[PST_DOT_LANES] = {0}, t[LV_CHUNK], ui = u ? u[i] : 0.0;
+    for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += LV_CHUNK) {
+        int n = (int)(off[i + 1] - c0 < LV_CHUNK ? off[i + 1] - c0 : LV_CHUNK);
+        double *wt = w ? w + (c0 - off[i]) : t;
+        chunk_weights(k, D, G, T, H, i, idx + c0, n, wt);
+        if (!w)
+            pst_dot_du(n, wt, idx + c0, u, ui, acc);
+    }
+    if (!w)
+        y[i] = pst_dot_sum(acc);
 }
 
 /* Row i of a half list (operator.h, half_rows), for constant D, G, T, H: both weights of each
@@ -172,18 +325,15 @@ PST_KHOT void half_row_t(const lv_ctx *k, const int64_t *off, const uint32_t *id
                          const double *u, double *y, int D, int G, int T, int H)
 {
     const uint8_t *kind = k->c.kind;
-    int neumann = kind[i] == PST_NEUMANN;
-    PST_HALF_LOOP(off, idx, kind, i, u, y, j, (void)0,
-                  neumann ? neumann_weight(k, D, G, i, j) : row_weight(k, D, G, T, H, i, j),
-                  kind[j] == PST_NEUMANN ? neumann_weight(k, D, G, j, i)
-                                         : row_weight(k, D, G, T, H, j, i));
+    PST_HALF_LOOP(off, idx, kind, i, u, y, j, (void)0, row_weight(k, D, G, T, H, i, j),
+                  row_weight(k, D, G, T, H, j, i));
 }
 
 /* Row i: of the whole list (apply, emission) or, with half = 1, of a half list. */
 typedef void (*row_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t,
                        const double *, double *, double *, int half);
 #define LV_ROW(D, G, T, H)                                                                     \
-    static void row_##D##_##G##_##T##_##H(const lv_ctx *k, const int64_t *off,                 \
+    PST_ISA_DISPATCH static void row_##D##_##G##_##T##_##H(const lv_ctx *k, const int64_t *off,                 \
                                           const uint32_t *idx, size_t i, const double *u,      \
                                           double *y, double *w, int half)                      \
     {                                                                                          \
@@ -421,9 +571,11 @@ static int pre_msph(pst_op *op, char *err) { return precompute(op, LV_MSPH, err)
 /* ---- apply, emission and the rest of the table ------------------------------------------ */
 
 /* Matrix-free apply: recompute each pair's geometry and weight from the positions and the
- * per-particle data. Compute-bound: a sqrt, two divisions and ~40 flops per pair (more for
- * G2/G4 and tensors) against 4 bytes of list and 8 of u_J gathered; ~105 M pairs/s per thread
- * here, against ~0.7 G for the stored apply (bench/README.md). */
+ * per-particle data, a chunk of neighbours at a time in vector lanes (row_t). Compute-bound: a
+ * sqrt, two divisions and ~40 flops per pair (more for G2/G4 and tensors) against 4 bytes of
+ * list and 8 of x_J (3 coordinates) and u_J gathered; measured (3D, cubic, G1, 2 threads, loaded
+ * machine) ~4.6 ns per pair and thread (was ~10 scalar), 5.6-6x the stored apply
+ * (bench/README.md). */
 static void lv_apply(const pst_op *op, const double *u, double *y)
 {
     lv_ctx k = make_ctx(op);

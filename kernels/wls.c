@@ -29,6 +29,7 @@
 #include "small_matrix.h"
 #include "sph_kernels.h"
 #include "wls.h"
+#include "wls_sums.h"
 
 #include <math.h>
 #include <omp.h>
@@ -116,10 +117,10 @@ PST_KHOT double pair_weight(const wls_ctx *k, int D, pst_kernel K, const double 
 #define WLS_CHUNK 256
 
 /* Scaled offsets r[a][c] of the neighbours idx[0..n) of xc and their weights w (pair_weight's
- * values). Separate loops, so that only the sqrt stays scalar (GCC does not vectorise sqrt
- * while it may set errno, the default -fmath-errno) and the kernel loop has no select: GCC
- * would sink the kernel into a branch of it. Bound by the scalar sqrt and the gather: ~2 ns
- * per neighbour, about a quarter of the moment pass. */
+ * values). Separate loops, so that the sqrt runs in vector instructions (the library is built
+ * without math errno: a scalar sqrt with its errno check cost ~2.8 ns per neighbour, a vector
+ * one ~0.3 ns with AVX-512) and the kernel loop has no select: GCC would sink the kernel into a
+ * branch of it. Bound by the gather of x_J. */
 PST_KHOT void gather(const wls_ctx *k, int D, pst_kernel K, const double *xc, double ih,
                     const uint32_t *idx, int n, double (*r)[WLS_CHUNK], double *w)
 {
@@ -140,152 +141,9 @@ PST_KHOT void gather(const wls_ctx *k, int D, pst_kernel K, const double *xc, do
         w[c] = (q[c] < supp) & (q[c] > eps) ? w[c] : 0.0;
 }
 
-/* s[.] += sum_c w_c m(r_c) over the monomials m of one degree (1 to 4) in graded
- * lexicographic order (2D: x y | xx xy yy | xxx xxy xyy yyy | xxxx xxxy xxyy xyyy yyyy; 3D
- * likewise with z; z is not read in 2D). One vectorised reduction loop per degree, at most 15
- * accumulators so that they stay in registers. Compute-bound: a multiply and an add per sum
- * and neighbour (ISO C mode: no FMA contraction) plus the shared products; qsfdi's 56 sums
- * in 3D take ~8 ns per neighbour with SSE2 (2 lanes), ~4.3 with -march=native (4 lanes). */
-PST_KHOT void wls_msum1(int D, int n, const double *x, const double *y, const double *z,
-                      const double *w, double *s)
-{
-    double a0 = 0, a1 = 0, a2 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2)
-    for (int c = 0; c < n; ++c) {
-        a0 += w[c] * x[c];
-        a1 += w[c] * y[c];
-        a2 += D == 3 ? w[c] * z[c] : 0.0;
-    }
-    s[0] += a0;
-    s[1] += a1;
-    if (D == 3)
-        s[2] += a2;
-}
-
-PST_KHOT void wls_msum2(int D, int n, const double *x, const double *y, const double *z,
-                      const double *w, double *s)
-{
-    if (D == 2) {
-        double a0 = 0, a1 = 0, a2 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2)
-        for (int c = 0; c < n; ++c) {
-            double wx = w[c] * x[c], wy = w[c] * y[c];
-            a0 += wx * x[c];
-            a1 += wx * y[c];
-            a2 += wy * y[c];
-        }
-        const double acc[3] = {a0, a1, a2};
-        for (int e = 0; e < 3; ++e)
-            s[e] += acc[e];
-        return;
-    }
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5)
-    for (int c = 0; c < n; ++c) {
-        double wx = w[c] * x[c], wy = w[c] * y[c], wz = w[c] * z[c];
-        a0 += wx * x[c];
-        a1 += wx * y[c];
-        a2 += wx * z[c];
-        a3 += wy * y[c];
-        a4 += wy * z[c];
-        a5 += wz * z[c];
-    }
-    const double acc[6] = {a0, a1, a2, a3, a4, a5};
-    for (int e = 0; e < 6; ++e)
-        s[e] += acc[e];
-}
-
-PST_KHOT void wls_msum3(int D, int n, const double *x, const double *y, const double *z,
-                      const double *w, double *s)
-{
-    if (D == 2) {
-        double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3)
-        for (int c = 0; c < n; ++c) {
-            double wxx = w[c] * x[c] * x[c], wxy = w[c] * x[c] * y[c], wyy = w[c] * y[c] * y[c];
-            a0 += wxx * x[c];
-            a1 += wxx * y[c];
-            a2 += wxy * y[c];
-            a3 += wyy * y[c];
-        }
-        const double acc[4] = {a0, a1, a2, a3};
-        for (int e = 0; e < 4; ++e)
-            s[e] += acc[e];
-        return;
-    }
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0, a9 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8, a9)
-    for (int c = 0; c < n; ++c) {
-        double wx = w[c] * x[c], wy = w[c] * y[c], wz = w[c] * z[c];
-        double wxx = wx * x[c], wxy = wx * y[c], wxz = wx * z[c], wyy = wy * y[c],
-               wyz = wy * z[c], wzz = wz * z[c];
-        a0 += wxx * x[c];
-        a1 += wxx * y[c];
-        a2 += wxx * z[c];
-        a3 += wxy * y[c];
-        a4 += wxy * z[c];
-        a5 += wxz * z[c];
-        a6 += wyy * y[c];
-        a7 += wyy * z[c];
-        a8 += wyz * z[c];
-        a9 += wzz * z[c];
-    }
-    const double acc[10] = {a0, a1, a2, a3, a4, a5, a6, a7, a8, a9};
-    for (int e = 0; e < 10; ++e)
-        s[e] += acc[e];
-}
-
-PST_KHOT void wls_msum4(int D, int n, const double *x, const double *y, const double *z,
-                      const double *w, double *s)
-{
-    if (D == 2) {
-        double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4)
-        for (int c = 0; c < n; ++c) {
-            double xx = x[c] * x[c], xy = x[c] * y[c], yy = y[c] * y[c];
-            double wxx = w[c] * xx, wxy = w[c] * xy, wyy = w[c] * yy;
-            a0 += wxx * xx;
-            a1 += wxx * xy;
-            a2 += wxx * yy;
-            a3 += wxy * yy;
-            a4 += wyy * yy;
-        }
-        const double acc[5] = {a0, a1, a2, a3, a4};
-        for (int e = 0; e < 5; ++e)
-            s[e] += acc[e];
-        return;
-    }
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0, a9 = 0,
-           a10 = 0, a11 = 0, a12 = 0, a13 = 0, a14 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14)
-    for (int c = 0; c < n; ++c) {
-        double xx = x[c] * x[c], xy = x[c] * y[c], xz = x[c] * z[c], yy = y[c] * y[c],
-               yz = y[c] * z[c], zz = z[c] * z[c];
-        double wxx = w[c] * xx, wxy = w[c] * xy, wxz = w[c] * xz, wyy = w[c] * yy,
-               wyz = w[c] * yz, wzz = w[c] * zz;
-        a0 += wxx * xx;
-        a1 += wxx * xy;
-        a2 += wxx * xz;
-        a3 += wxx * yy;
-        a4 += wxx * yz;
-        a5 += wxx * zz;
-        a6 += wxy * yy;
-        a7 += wxy * yz;
-        a8 += wxy * zz;
-        a9 += wxz * zz;
-        a10 += wyy * yy;
-        a11 += wyy * yz;
-        a12 += wyy * zz;
-        a13 += wyz * zz;
-        a14 += wzz * zz;
-    }
-    const double acc[15] = {a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14};
-    for (int e = 0; e < 15; ++e)
-        s[e] += acc[e];
-}
-
 /* The same sums for qsfdi.c (wls.h), in the widest vector ISA. */
-PST_ISA_DISPATCH void pst_wls_msums(int dim, int deg, int n, const double *r, int stride, const double *w,
+PST_ISA_DISPATCH void pst_wls_msums(int dim, int deg, int n, const double *r, int stride,
+                                    const double *w,
                    double *s)
 {
     const double *x = r, *y = r + stride, *z = dim == 3 ? r + 2 * stride : NULL;
@@ -329,16 +187,35 @@ PST_KHOT void centre_of(const wls_ctx *k, int D, size_t i, double xc[3])
         xc[a] = k->c.x[a][i];
 }
 
-/* w lam . p(xh): the weight of a pair with scaled offset xh and kernel weight w in the row of
- * coefficients lam. */
+/* w lam . p(x, y, z): the weight of a pair with scaled offset (x, y, z) (z unused in 2D) and
+ * kernel weight w in the row of coefficients lam; the sum in basis order. Scalars, not the
+ * basis array, so that GCC vectorises the loops over a chunk that call it. */
+PST_KHOT double basis_weight_xyz(int D, int B, double w, double x, double y, double z,
+                                 const double *lam)
+{
+    const double *l = lam + B;
+    double s = B ? 0.0 + lam[0] * 1.0 : 0.0;
+    s += l[0] * x;
+    s += l[1] * y;
+    if (D == 2) {
+        s += l[2] * (x * x);
+        s += l[3] * (y * y);
+        s += l[4] * (x * y);
+        return w * s;
+    }
+    s += l[2] * z;
+    s += l[3] * (x * x);
+    s += l[4] * (y * y);
+    s += l[5] * (z * z);
+    s += l[6] * (x * y);
+    s += l[7] * (x * z);
+    s += l[8] * (y * z);
+    return w * s;
+}
+
 PST_KHOT double basis_weight(int D, int B, double w, const double xh[3], const double *lam)
 {
-    double p[WLS_NBMAX];
-    basis(D, B, xh, p);
-    double s = 0;
-    for (int e = 0; e < D + D * (D + 1) / 2 + B; ++e)
-        s += lam[e] * p[e];
-    return w * s;
+    return basis_weight_xyz(D, B, w, xh[0], xh[1], D == 3 ? xh[2] : 0.0, lam);
 }
 
 /* a_Ij of row i for neighbour j: shared by apply and emit_row (bit-identical weights). */
@@ -381,31 +258,45 @@ PST_KHOT void half_row_t(const wls_ctx *k, const int64_t *off, const uint32_t *i
     }
 }
 
-/* Row i into y (apply) or its weights into w (emission). Compute-bound: per neighbour one
- * sqrt, no division, ~45 (2D) / ~60 (3D) flops against 4 bytes of index and 8 of u_J. */
+/* The weights a_Ij of row i for its neighbours idx[0..n) into t: the chunk's gather, then
+ * w_c lam . p(r_c) in one loop over the chunk that the compiler vectorises (basis_weight's
+ * arithmetic, so the half-list rows, which take a pair at a time, agree bit for bit). */
+PST_KHOT void chunk_weights(const wls_ctx *k, int D, int B, pst_kernel K, const double *xc,
+                            double ih, const double *lam, const uint32_t *idx, int n, double *t)
+{
+    double r[3][WLS_CHUNK];
+    gather(k, D, K, xc, ih, idx, n, r, t);
+#pragma omp simd
+    for (int c = 0; c < n; ++c)
+        t[c] = basis_weight_xyz(D, B, t[c], r[0][c], r[1][c], D == 3 ? r[2][c] : 0.0, lam);
+}
+
+/* Row i into y (apply) or its weights into w (emission), a chunk of neighbours at a time: the
+ * weights of a chunk (chunk_weights), then their dot product with u_J - u_I (pst_dot_du). Per
+ * neighbour: the gather of x_J and u_J, one sqrt and ~60 flops (3D), all in
+ * vector lanes: compute-bound. Measured (3D lpmps, 2 threads, loaded machine) ~2.6 ns per
+ * pair and thread (was ~10 with a pair at a time), 3.9-4.8x the stored apply (bench/README.md). */
 PST_KHOT void row_t(const wls_ctx *k, size_t i, const double *u, double *y, double *w, int D,
                    int B, pst_kernel K)
 {
     const int nb = D + D * (D + 1) / 2 + B;
-    double xc[3], ih = 1.0 / pst_h(&k->c, i);
-    const double *lam = k->d->lam + (size_t)nb * i;
+    double xc[3], ih = 1.0 / pst_h(&k->c, i), acc[PST_DOT_LANES] = {0}, t[WLS_CHUNK];
+    const double *lam = k->d->lam + (size_t)nb * i, ui = u ? u[i] : 0.0;
+    const int64_t e0 = k->c.off[i], e1 = k->c.off[i + 1];
     centre_of(k, D, i, xc);
-    PST_ROW_LOOP(k->c.off, k->c.idx, i, u, y, w, j, row_weight(k, D, B, K, xc, ih, lam, j));
+    for (int64_t c0 = e0; c0 < e1; c0 += WLS_CHUNK) {
+        int n = (int)(e1 - c0 < WLS_CHUNK ? e1 - c0 : WLS_CHUNK);
+        chunk_weights(k, D, B, K, xc, ih, lam, k->c.idx + c0, n, w ? w + (c0 - e0) : t);
+        if (!w)
+            pst_dot_du(n, t, k->c.idx + c0, u, ui, acc);
+    }
+    if (!w)
+        y[i] = pst_dot_sum(acc);
 }
 
 /* The degree-2 sums of graded lexicographic order (xx xy yy / xx xy xz yy yz zz) in the
  * basis order (xx yy xy / xx yy zz xy xz yz). */
 static const unsigned char wls_gl2b[2][6] = {{0, 2, 1}, {0, 3, 5, 1, 2, 4}};
-
-/* s[0] += sum_c w_c (type B's constant moment and data entry). */
-PST_KHOT void wls_msum0(int n, const double *w, double *s)
-{
-    double a = 0;
-#pragma omp simd reduction(+ : a)
-    for (int c = 0; c < n; ++c)
-        a += w[c];
-    s[0] += a;
-}
 
 /* s[0..nb) += sum_c w_c p(r_c), p the basis ((1,) x, y[, z], squares, crosses). */
 PST_KHOT void wls_basis_sums(int D, int B, int n, const double *x, const double *y,
@@ -559,14 +450,22 @@ static inline uint8_t cond_status(const pst_op *op, double cond)
 /* spec choice 6: a quadratic fit needs 5 (2D) / 9 (3D) neighbours j != I */
 int pst_wls_min_neighbours(int dim) { return dim == 2 ? 5 : 9; }
 
+/* Rows per call of a dispatched moment function (isa.h), dealt dynamically to the threads. */
+#define WLS_ROWS 128
 typedef void (*moments_fn)(const wls_ctx *, size_t, size_t, double *);
 #define WLS_MOMENTS(D, B, K)                                                                   \
-    static void moments_##D##_##B##_##K(const wls_ctx *k, size_t b0, size_t b1, double *mom)    \
+    PST_ISA_DISPATCH static void mrows_##D##_##B##_##K(const wls_ctx *k, size_t i0, size_t i1,  \
+                                                       size_t b0, double *mom)                 \
     {                                                                                          \
         const int nm = WLS_NMOM(D) - (B ? 0 : D + 1);                                          \
-        _Pragma("omp parallel for schedule(dynamic, 128)")                                      \
-        for (size_t i = b0; i < b1; ++i)                                                       \
+        for (size_t i = i0; i < i1; ++i)                                                       \
             moments_row(k, D, B, (pst_kernel)K, i, NULL, mom + (size_t)nm * (i - b0), NULL);   \
+    }                                                                                          \
+    static void moments_##D##_##B##_##K(const wls_ctx *k, size_t b0, size_t b1, double *mom)    \
+    {                                                                                          \
+        _Pragma("omp parallel for schedule(dynamic, 1)")                                        \
+        for (size_t c = b0; c < b1; c += WLS_ROWS)                                             \
+            mrows_##D##_##B##_##K(k, c, c + WLS_ROWS < b1 ? c + WLS_ROWS : b1, b0, mom);       \
     }
 #define WLS_MOMENTS_K(D, B)                                                                    \
     WLS_MOMENTS(D, B, 0) WLS_MOMENTS(D, B, 1) WLS_MOMENTS(D, B, 2) WLS_MOMENTS(D, B, 3)
@@ -714,7 +613,7 @@ void pst_wls_degrade(pst_op *op, size_t i)
 typedef void (*row_fn)(const wls_ctx *, size_t, const double *, double *, double *,
                        const int64_t *off, const uint32_t *idx);
 #define WLS_ROW(D, B, K)                                                                       \
-    static void row_##D##_##B##_##K(const wls_ctx *k, size_t i, const double *u, double *y,     \
+    PST_ISA_DISPATCH static void row_##D##_##B##_##K(const wls_ctx *k, size_t i, const double *u, double *y,     \
                                     double *w, const int64_t *off, const uint32_t *idx)        \
     {                                                                                          \
         if (off)                                                                               \
