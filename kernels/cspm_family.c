@@ -20,6 +20,7 @@
 #include "kernel_common.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
+#include "wls_sums.h"
 
 #include <math.h>
 #include <omp.h>
@@ -194,8 +195,8 @@ PST_KHOT void cs_weights(pst_kernel K, int D, const cs_kc *kc, const double *Ki,
             (s)[e_] += acc_[e_];                                                               \
     } while (0)
 
-/* s[.] += sum_c w_c m(r_c) over the monomials m of degree 1 and 2 (2D: 5, 3D: 9), degree 3
- * (4, 10) or degree 4 (5, 15), in the moment order. One accumulator per monomial, so the
+/* s[.] += sum_c w_c m(r_c) over the monomials m of degree 1 and 2 (2D: 5, 3D: 9) in the moment
+ * order. One accumulator per monomial, so the
  * reduction loops vectorise with independent add chains. */
 PST_KHOT void cs_sum12(int D, int n, const cs_chunk *g, const double *w, double *s)
 {
@@ -231,85 +232,15 @@ PST_KHOT void cs_sum12(int D, int n, const cs_chunk *g, const double *w, double 
     CS_ADD(s, a0, a1, a2, a3, a4, a5, a6, a7, a8);
 }
 
+/* Degree 3 and 4: the WLS engine's sums over the same arrays (wls_sums.h). */
 PST_KHOT void cs_sum3(int D, int n, const cs_chunk *g, const double *w, double *s)
 {
-    const double *x = g->r[0], *y = g->r[1], *z = g->r[2];
-    if (D == 2) {
-        double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3)
-        for (int c = 0; c < n; ++c) {
-            double wxx = w[c] * x[c] * x[c], wyy = w[c] * y[c] * y[c];
-            a0 += wxx * x[c];
-            a1 += wxx * y[c];
-            a2 += wyy * x[c];
-            a3 += wyy * y[c];
-        }
-        CS_ADD(s, a0, a1, a2, a3);
-        return;
-    }
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0, a9 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8, a9)
-    for (int c = 0; c < n; ++c) {
-        double wx = w[c] * x[c], wy = w[c] * y[c], wz = w[c] * z[c];
-        double wxx = wx * x[c], wxy = wx * y[c], wxz = wx * z[c], wyy = wy * y[c],
-               wyz = wy * z[c], wzz = wz * z[c];
-        a0 += wxx * x[c];
-        a1 += wxx * y[c];
-        a2 += wxx * z[c];
-        a3 += wxy * y[c];
-        a4 += wxy * z[c];
-        a5 += wxz * z[c];
-        a6 += wyy * y[c];
-        a7 += wyy * z[c];
-        a8 += wyz * z[c];
-        a9 += wzz * z[c];
-    }
-    CS_ADD(s, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9);
+    wls_msum3(D, n, g->r[0], g->r[1], g->r[2], w, s);
 }
 
 PST_KHOT void cs_sum4(int D, int n, const cs_chunk *g, const double *w, double *s)
 {
-    const double *x = g->r[0], *y = g->r[1], *z = g->r[2];
-    if (D == 2) {
-        double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4)
-        for (int c = 0; c < n; ++c) {
-            double xx = x[c] * x[c], xy = x[c] * y[c], yy = y[c] * y[c];
-            double wxx = w[c] * xx, wyy = w[c] * yy;
-            a0 += wxx * xx;
-            a1 += wxx * xy;
-            a2 += wxx * yy;
-            a3 += wyy * xy;
-            a4 += wyy * yy;
-        }
-        CS_ADD(s, a0, a1, a2, a3, a4);
-        return;
-    }
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0, a4 = 0, a5 = 0, a6 = 0, a7 = 0, a8 = 0, a9 = 0,
-           a10 = 0, a11 = 0, a12 = 0, a13 = 0, a14 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14)
-    for (int c = 0; c < n; ++c) {
-        double xx = x[c] * x[c], xy = x[c] * y[c], xz = x[c] * z[c], yy = y[c] * y[c],
-               yz = y[c] * z[c], zz = z[c] * z[c];
-        double wxx = w[c] * xx, wxy = w[c] * xy, wxz = w[c] * xz, wyy = w[c] * yy,
-               wyz = w[c] * yz, wzz = w[c] * zz;
-        a0 += wxx * xx;
-        a1 += wxx * xy;
-        a2 += wxx * xz;
-        a3 += wxx * yy;
-        a4 += wxx * yz;
-        a5 += wxx * zz;
-        a6 += wxy * yy;
-        a7 += wxy * yz;
-        a8 += wxy * zz;
-        a9 += wxz * zz;
-        a10 += wyy * yy;
-        a11 += wyy * yz;
-        a12 += wyy * zz;
-        a13 += wyz * zz;
-        a14 += wzz * zz;
-    }
-    CS_ADD(s, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14);
+    wls_msum4(D, n, g->r[0], g->r[1], g->r[2], w, s);
 }
 
 /* Row i into y (apply) or its weights into w (emission), a chunk at a time. */
