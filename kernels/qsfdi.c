@@ -86,8 +86,8 @@ PST_ISA_DISPATCH static int qs_row_moments(const qs_ctx *k, int D, size_t i, con
                                NULL, NULL);
 }
 
-/* The kept derivative kappas of row i (opts.keep), as qs_deriv_row_t (qsfdi_derivs.c) forms them: the gradient's
- * fallback is the linear WLS gradient, the Hessian's 0. */
+/* The kept derivative kappas of row i (opts.keep), as qs_deriv_row_t (qsfdi_derivs.c) forms
+ * them: the gradient's fallback is the linear WLS gradient, the Hessian's 0. */
 PST_KHOT void qs_keep_row(const qs_ctx *k, const qs_data *d, int D, size_t i, int fit,
                           const double *nu, const double *mu, const qs_state *st)
 {
