@@ -4,7 +4,8 @@
 # those as the machine has cores; medians of alternated repetitions, with speed-up and efficiency.
 # Usage: bash bench/scaling.sh [BUILD_DIR] [extra bench_scaling options, e.g. --n 2000000]
 # BUILD_DIR (default build) must have been configured with -DPSTENCIL_BUILD_BENCH=ON (the default).
-# At 3D 10^6 on 16 cores the whole run takes about 4 minutes; on 2 cores about 5.
+# At 3D 10^6 on 2 cores the whole run took 3.5 minutes (bench/README.md); each further thread
+# count adds its own share, less than the 1-thread one.
 set -euo pipefail
 build=${1:-build}
 shift || true
