@@ -26,6 +26,7 @@
 #include "wls.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -405,6 +406,107 @@ static void shepard(const lv_ctx *k, size_t i, const int64_t *off, const uint32_
             gnu[c] = gs[c];
 }
 
+/* The sums of a row's precompute (53), (55), (65), (71), row-major D x D: the first pass
+ * A = sum V x (x) g, N = sum V g, N~ = sum V F x, Gamma = sum V F x x^T; the second (M-SPH)
+ * Gamma* = sum V x (g - x (xi . g))^T. */
+typedef struct {
+    double A[9], N[3], Nt[3], G[9], Gs[9];
+} lv_sums;
+
+/* sum_c p_c q_c over a chunk, in vector lanes (a fixed order: the same for every thread). */
+PST_KHOT double chunk_dot(int n, const double *restrict p, const double *restrict q)
+{
+    double s = 0;
+#pragma omp simd reduction(+ : s)
+    for (int c = 0; c < n; ++c)
+        s += p[c] * q[c];
+    return s;
+}
+
+/* The sums of row i for constant D and G, a chunk of neighbours at a time: the chunk's geometry
+ * and gradients in vector lanes (chunk_geometry, gradient_from: the applies' arithmetic), then
+ * each sum as its own vectorised dot product over the chunk. The first pass without xi, the
+ * Gamma* pass with it. Per neighbour (3D, first pass): the gather, a sqrt, a division, ~25
+ * flops of kernel and gradient and 2 per each of the 21 sums (Gamma is symmetric: its upper
+ * triangle, mirrored) - compute-bound, like qsfdi's moments. */
+PST_KHOT void row_sums_t(const lv_ctx *k, int D, int G, size_t i, const int64_t *off,
+                         const uint32_t *idx, const double *xi, lv_sums *s)
+{
+    const int needW = G == PST_GRAD_G2 || G == PST_GRAD_G4;
+    if (xi)
+        memset(s->Gs, 0, sizeof s->Gs);
+    else
+        memset(s, 0, offsetof(lv_sums, Gs));
+    for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += LV_CHUNK) {
+        const int n = (int)(off[i + 1] - c0 < LV_CHUNK ? off[i + 1] - c0 : LV_CHUNK);
+        const uint32_t *ic = idx + c0;
+        lv_chunk ch;
+        double g[3][LV_CHUNK], F[LV_CHUNK], v[LV_CHUNK], vx[3][LV_CHUNK], t[LV_CHUNK];
+        chunk_geometry(k, D, needW, i, ic, n, &ch);
+#pragma omp simd
+        for (int c = 0; c < n; ++c) {
+            double gc[3];
+            F[c] = gradient_from(k, D, G, i, ic[c], &ch.x[0][c], LV_CHUNK, ch.d2[c], ch.a[c],
+                                 ch.W[c], gc);
+            for (int b = 0; b < D; ++b)
+                g[b][c] = gc[b];
+        }
+        for (int c = 0; c < n; ++c)
+            v[c] = k->c.V[ic[c]];
+        for (int a = 0; a < D; ++a)
+            for (int c = 0; c < n; ++c)
+                vx[a][c] = v[c] * ch.x[a][c];
+        if (xi) {
+            for (int c = 0; c < n; ++c) {
+                double xg = 0;
+                for (int b = 0; b < D; ++b)
+                    xg += xi[b] * g[b][c];
+                t[c] = xg;
+            }
+            for (int b = 0; b < D; ++b) {
+                double gb[LV_CHUNK];
+                for (int c = 0; c < n; ++c)
+                    gb[c] = g[b][c] - ch.x[b][c] * t[c];
+                for (int a = 0; a < D; ++a)
+                    s->Gs[a * D + b] += chunk_dot(n, vx[a], gb);
+            }
+            continue;
+        }
+        for (int c = 0; c < n; ++c)
+            t[c] = v[c] * F[c];
+        for (int a = 0; a < D; ++a) {
+            s->N[a] += chunk_dot(n, v, g[a]);
+            s->Nt[a] += chunk_dot(n, t, ch.x[a]);
+            for (int b = 0; b < D; ++b)
+                s->A[a * D + b] += chunk_dot(n, vx[a], g[b]);
+            double tx[LV_CHUNK];
+            for (int c = 0; c < n; ++c)
+                tx[c] = t[c] * ch.x[a][c];
+            for (int b = a; b < D; ++b)
+                s->G[a * D + b] += chunk_dot(n, tx, ch.x[b]);
+        }
+    }
+    if (!xi)
+        for (int a = 0; a < D; ++a)
+            for (int b = 0; b < a; ++b)
+                s->G[a * D + b] = s->G[b * D + a];
+}
+
+/* row_sums_t instantiated for each dimension and gradient variant, in the widest vector ISA. */
+typedef void (*sums_fn)(const lv_ctx *, size_t, const int64_t *, const uint32_t *,
+                        const double *, lv_sums *);
+#define LV_SUMS(D, G)                                                                          \
+    PST_ISA_DISPATCH static void sums_##D##_##G(const lv_ctx *k, size_t i, const int64_t *off,  \
+                                                const uint32_t *idx, const double *xi,          \
+                                                lv_sums *s)                                     \
+    {                                                                                          \
+        row_sums_t(k, D, G, i, off, idx, xi, s);                                               \
+    }
+LV_SUMS(2, 1) LV_SUMS(2, 2) LV_SUMS(2, 3) LV_SUMS(2, 4)
+LV_SUMS(3, 1) LV_SUMS(3, 2) LV_SUMS(3, 3) LV_SUMS(3, 4)
+static const sums_fn sums_table[2][4] = {{sums_2_1, sums_2_2, sums_2_3, sums_2_4},
+                                         {sums_3_1, sums_3_2, sums_3_3, sums_3_4}};
+
 /* Worse of two statuses (the enum is ordered by severity). */
 static inline uint8_t worse(uint8_t a, uint8_t b) { return a > b ? a : b; }
 
@@ -447,20 +549,10 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
         return PST_ROW_OK;
 
     /* A = sum V x (x) g, N = sum V g (53), N~ = sum V F x (65), Gamma = sum V F x x^T (55) */
-    double A[9] = {0}, N[3] = {0}, Nt[3] = {0}, G[9] = {0};
-    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-        size_t j = idx[e];
-        double x[3], g[3], d2, F = pair_gradient(k, dim, k->variant, i, j, x, g, &d2);
-        double V = k->c.V[j];
-        for (int a = 0; a < dim; ++a) {
-            N[a] += V * g[a];
-            Nt[a] += V * F * x[a];
-            for (int b = 0; b < dim; ++b) {
-                A[a * dim + b] += V * x[a] * g[b];
-                G[a * dim + b] += V * F * x[a] * x[b];
-            }
-        }
-    }
+    sums_fn sums = sums_table[dim - 2][k->variant - 1];
+    lv_sums S;
+    sums(k, i, off, idx, NULL, &S);
+    double *A = S.A, *N = S.N, *Nt = S.Nt, *G = S.G;
     if (k->variant == PST_GRAD_G2) /* the self term of (16) in (53): makes N = 0 exactly */
         for (int a = 0; a < dim; ++a)
             N[a] -= k->c.V[i] * pst_sph_w(k->c.kernel, dim, 0.0, pst_h(&k->c, i)) *
@@ -496,18 +588,8 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
     memcpy(norm, G, sizeof norm);
     if (which == LV_MSPH) {
         /* Gamma* (71) = sum V x (g - x (xi . g))^T, with xi = C^T N~ */
-        double Gs[9] = {0};
-        for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-            size_t j = idx[e];
-            double x[3], g[3], d2;
-            pair_gradient(k, dim, k->variant, i, j, x, g, &d2);
-            double xg = 0;
-            for (int c = 0; c < dim; ++c)
-                xg += xi[c] * g[c];
-            for (int a = 0; a < dim; ++a)
-                for (int b = 0; b < dim; ++b)
-                    Gs[a * dim + b] += k->c.V[j] * x[a] * (g[b] - x[b] * xg);
-        }
+        sums(k, i, off, idx, xi, &S);
+        const double *Gs = S.Gs;
         if (pst_mat_sdd_positive(dim, Gs))
             memcpy(norm, Gs, sizeof norm);
         else
