@@ -478,6 +478,28 @@ static void test_sweep_files(void)
     CHECK(files >= 7);
 }
 
+/* Hostile sweep files (issue 16): a range object with an unknown member in a list of grids
+ * (once a write past the position stack), with a did-you-mean for a misspelt member. */
+static void test_hostile_grids(void)
+{
+    pst_sweep sw;
+    char err[2048];
+    const char *typo = "[ {\"cloud.seed\": {\"from\": 1, \"cout\": 2}} ]";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", typo, lap_task), err, sizeof err), PST_EINPUT);
+    printf("range typo: %s\n", err);
+    CHECK(strstr(err, "bad.json:12:40: key 'grid.cloud.seed.cout': unknown key (a range is "
+                      "{from, count[, step]}; did you mean 'count'?)") != NULL);
+    const char *extra = "[ {\"cloud.seed\": {\"from\": 1, \"count\": 2, \"x\": 1}} ]";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", extra, lap_task), err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "key 'grid.cloud.seed.x': unknown key (a range is {from, count[, step]})") !=
+          NULL);
+    CHECK(strstr(err, "did you mean") == NULL);
+    /* the same in a single grid object */
+    const char *one = "{\"cloud.seed\": {\"from\": 1, \"stpe\": 2, \"count\": 2}}";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", one, lap_task), err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "key 'grid.cloud.seed.stpe'") && strstr(err, "did you mean 'step'?"));
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_sweep") != 0)
@@ -487,6 +509,7 @@ int main(void)
     test_errors();
     test_summary_statistics();
     test_sweep_files();
+    test_hostile_grids();
     test_remove_dir(dir);
     return check_summary("test_sweep");
 }

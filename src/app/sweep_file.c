@@ -147,7 +147,24 @@ static int alloc_values(pst_sweep *sw, int gi, int k, int n)
     return PST_OK;
 }
 
-/* A range {from, count[, step]}: count numbers from `from`, `step` apart (default 1). */
+/* "unknown key (a range is {from, count[, step]}; did you mean 'count'?)" at member m of the
+ * range object at steps[0..depth). */
+static int unknown_range_member(pctx *c, json_step *steps, int depth, const char *full,
+                                const cJSON *m)
+{
+    static const char *const members[] = {"from", "count", "step"};
+    const char *best = sc_suggest_word(m->string, members, 3);
+    char sub[340], hint[64] = "";
+    snprintf(sub, sizeof sub, "%s.%s", full, m->string);
+    if (best)
+        snprintf(hint, sizeof hint, "; did you mean '%s'?", best);
+    steps[depth] = (json_step){m->string, 0};
+    return perr(c, steps, depth + 1, sub, "unknown key (a range is {from, count[, step]}%s)",
+                hint);
+}
+
+/* A range {from, count[, step]}: count numbers from `from`, `step` apart (default 1). steps
+ * has room for one more step past depth (a member's). */
 static int read_range(pctx *c, json_step *steps, int depth, const char *full,
                       const cJSON *item, pst_sweep *sw, int gi, int k)
 {
@@ -156,12 +173,8 @@ static int read_range(pctx *c, json_step *steps, int depth, const char *full,
                 *step = cJSON_GetObjectItemCaseSensitive(item, "step"), *m;
     cJSON_ArrayForEach(m, item)
     {
-        if (strcmp(m->string, "from") && strcmp(m->string, "count") && strcmp(m->string, "step")) {
-            steps[depth] = (json_step){m->string, 0};
-            char sub[340];
-            snprintf(sub, sizeof sub, "%s.%s", full, m->string);
-            return perr(c, steps, depth + 1, sub, "unknown key (a range is {from, count[, step]})");
-        }
+        if (strcmp(m->string, "from") && strcmp(m->string, "count") && strcmp(m->string, "step"))
+            return unknown_range_member(c, steps, depth, full, m);
     }
     if (!cJSON_IsNumber(from) || !cJSON_IsNumber(count) || count->valuedouble < 1 ||
         count->valuedouble > 1e6 || count->valuedouble != floor(count->valuedouble) ||
@@ -226,10 +239,11 @@ static int read_key(pctx *c, json_step *steps, int depth, const char *full, cons
     return PST_OK;
 }
 
-/* One grid object: keys and their value lists. */
+/* One grid object: keys and their value lists. steps: "grid", the list item, the key and a
+ * range's member. */
 static int read_grid(pctx *c, const cJSON *g, int gi, int listed, pst_sweep *sw)
 {
-    json_step steps[3] = {{"grid", 0}, {NULL, gi}, {NULL, 0}};
+    json_step steps[4] = {{"grid", 0}, {NULL, gi}, {NULL, 0}, {NULL, 0}};
     int d0 = listed ? 2 : 1;
     if (!cJSON_IsObject(g))
         return perr(c, steps, d0, "grid", "expected an object of key: [values]");
