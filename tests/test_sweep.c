@@ -500,6 +500,57 @@ static void test_hostile_grids(void)
     CHECK(strstr(err, "key 'grid.cloud.seed.stpe'") && strstr(err, "did you mean 'step'?"));
 }
 
+/* A grid of keys[0..n) with ranges of counts[0..n) values, in buf. */
+static const char *range_grid(char *buf, size_t len, int n, const long *counts)
+{
+    static const char *const keys[] = {"cloud.seed", "cloud.spacing", "cloud.jitter",
+                                       "cloud.h_ratio", "cloud.angle", "cloud.lo.0",
+                                       "cloud.hi.0"};
+    size_t used = (size_t)snprintf(buf, len, "{");
+    for (int k = 0; k < n; ++k)
+        used += (size_t)snprintf(buf + used, len - used, "%s\"%s\": {\"from\": 1, \"count\": %ld}",
+                                 k ? ", " : "", keys[k], counts[k]);
+    snprintf(buf + used, len - used, "}");
+    return buf;
+}
+
+/* Combination counts: multiplied without wrapping, and capped at SW_MAX_COMBOS. */
+static void test_combination_cap(void)
+{
+    pst_sweep sw;
+    char err[2048], g1[1024], g2[2048];
+    const long wrap64[] = {65536, 65536, 65536, 65536}; /* 2^64: wrapped to 0 runs */
+    CHECK_INT(parse(&sw, "big", sweep_text("big", range_grid(g1, sizeof g1, 4, wrap64), lap_task),
+                    err, sizeof err),
+              PST_EINPUT);
+    printf("2^64 combinations: %s\n", err);
+    CHECK(strstr(err, "key 'grid': 1.84467440737096e+19 combinations, more than the 100000 a "
+                      "sweep may have") != NULL);
+    const long tera[] = {1000, 1000, 1000, 1000}; /* 10^12: --plan looped for ever */
+    CHECK_INT(parse(&sw, "big", sweep_text("big", range_grid(g1, sizeof g1, 4, tera), lap_task),
+                    err, sizeof err),
+              PST_EINPUT);
+    CHECK(strstr(err, "key 'grid': 1000000000000 combinations, more than the 100000") != NULL);
+    /* seven keys whose product is 2^64 - 2, plus a one-combination grid: a sum that wrapped */
+    const long seven[] = {2, 49, 73, 127, 337, 92737, 649657}, ones[] = {1, 1, 1, 1, 1, 1, 1};
+    char one[1024];
+    snprintf(g2, sizeof g2, "[ %s, %s ]", range_grid(g1, sizeof g1, 7, seven),
+             range_grid(one, sizeof one, 7, ones));
+    CHECK_INT(parse(&sw, "big", sweep_text("big", g2, lap_task), err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "e+19 combinations, more than the 100000") != NULL);
+    /* the cap itself is allowed, one more is not */
+    const long cap[] = {SW_MAX_COMBOS}, over[] = {SW_MAX_COMBOS + 1};
+    CHECK_INT(parse(&sw, "big", sweep_text("big", range_grid(g1, sizeof g1, 1, cap), lap_task),
+                    err, sizeof err),
+              PST_OK);
+    CHECK_INT(sw.ncombos, SW_MAX_COMBOS);
+    pst_sweep_free(&sw);
+    CHECK_INT(parse(&sw, "big", sweep_text("big", range_grid(g1, sizeof g1, 1, over), lap_task),
+                    err, sizeof err),
+              PST_EINPUT);
+    CHECK(strstr(err, "100001 combinations") != NULL);
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_sweep") != 0)
@@ -510,6 +561,7 @@ int main(void)
     test_summary_statistics();
     test_sweep_files();
     test_hostile_grids();
+    test_combination_cap();
     test_remove_dir(dir);
     return check_summary("test_sweep");
 }

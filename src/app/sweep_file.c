@@ -313,13 +313,18 @@ static int read_grids(pctx *c, const cJSON *root, pst_sweep *sw)
             return st;
         sw->ngrids = g + 1;
     }
-    sw->ncombos = 0;
+    /* counted in double (exact up to 2^53, never wrapping) against the cap */
+    double total = 0;
     for (int g = 0; g < sw->ngrids; ++g) {
-        size_t p = 1;
+        double p = 1;
         for (int k = 0; k < sw->nkeys; ++k)
-            p *= (size_t)sw->nvalues[g][k];
-        sw->ncombos += p;
+            p *= sw->nvalues[g][k];
+        total += p;
     }
+    if (total > SW_MAX_COMBOS)
+        return perr(c, steps, 1, "grid", "%.15g combinations, more than the %d a sweep may have",
+                    total, SW_MAX_COMBOS);
+    sw->ncombos = (size_t)total;
     return PST_OK;
 }
 
