@@ -551,6 +551,46 @@ static void test_combination_cap(void)
     CHECK(strstr(err, "100001 combinations") != NULL);
 }
 
+/* A repeated key in any object of the sweep file is refused at its second occurrence (it
+ * leaked and silently won before). `from` in the text of sweep_text(grid) becomes `to`. */
+static void expect_duplicate(const char *grid, const char *from, const char *to,
+                             const char *key)
+{
+    pst_sweep sw;
+    char err[2048], text[8192], want[256];
+    const char *base = sweep_text("dup", grid, lap_task), *at = strstr(base, from);
+    CHECK(at != NULL);
+    if (!at)
+        return;
+    snprintf(text, sizeof text, "%.*s%s%s", (int)(at - base), base, to, at + strlen(from));
+    CHECK_INT(parse(&sw, "dup", text, err, sizeof err), PST_EINPUT);
+    snprintf(want, sizeof want, "key '%s': duplicate key (an earlier", key);
+    if (!strstr(err, want))
+        printf("duplicate %s: %s\n", key, err);
+    CHECK(strstr(err, want) != NULL);
+}
+
+static void test_duplicate_keys(void)
+{
+    const char *grid = "{ \"cloud.spacing\": [0.1], \"cloud.seed\": {\"from\": 1, \"count\": 2} }";
+    expect_duplicate(grid, "\"output\": { \"csv\":", "\"output\": { \"csv\": \"a.csv\", \"csv\":",
+                     "output.csv");
+    expect_duplicate(grid, "\"output\":", "\"grid\": {\"cloud.seed\": [2]}, \"output\":", "grid");
+    expect_duplicate(grid, "\"cloud.seed\": {", "\"cloud.spacing\": [1], \"cloud.seed\": {",
+                     "grid.cloud.spacing");
+    expect_duplicate(grid, "\"count\": 2", "\"count\": 2, \"from\": 3", "grid.cloud.seed.from");
+    expect_duplicate(grid, "\"output\":",
+                     "\"overrides\": {\"cloud.jitter\": 0.1, \"cloud.jitter\": 0.2}, \"output\":",
+                     "overrides.cloud.jitter");
+    /* the position is the second occurrence's */
+    pst_sweep sw;
+    char err[2048];
+    const char *two = "{\"scene\": \"s.json\",\n \"grid\": {\"cloud.seed\": [1]},\n \"title\": \"a\",\n"
+                      " \"title\": \"b\"}";
+    CHECK_INT(parse(&sw, "dup", two, err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "dup.json:4:2: key 'title': duplicate key") != NULL);
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_sweep") != 0)
@@ -562,6 +602,7 @@ int main(void)
     test_sweep_files();
     test_hostile_grids();
     test_combination_cap();
+    test_duplicate_keys();
     test_remove_dir(dir);
     return check_summary("test_sweep");
 }

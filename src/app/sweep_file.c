@@ -40,6 +40,22 @@ static int perr(pctx *c, const json_step *steps, int depth, const char *key, con
     return PST_EINPUT;
 }
 
+/* Member m of obj when an earlier member has its name: "duplicate key" at this second one
+ * (steps[at] is set to it), as the scene loader refuses them. cJSON keeps both, and the
+ * lookups would silently take one. */
+static int refuse_repeat(pctx *c, const cJSON *obj, const cJSON *m, json_step *steps, int at,
+                         const char *full)
+{
+    int n = 0;
+    for (const cJSON *p = obj->child; p != m; p = p->next)
+        n += strcmp(p->string, m->string) == 0;
+    if (n == 0)
+        return PST_OK;
+    steps[at] = (json_step){m->string, n};
+    return perr(c, steps, at + 1, full, "duplicate key (an earlier '%s' is in the same object)",
+                m->string);
+}
+
 /* The table path of a dotted override key: list indices become [], a field name <name>. */
 static int scene_key_known(const char *key)
 {
@@ -175,6 +191,10 @@ static int read_range(pctx *c, json_step *steps, int depth, const char *full,
     {
         if (strcmp(m->string, "from") && strcmp(m->string, "count") && strcmp(m->string, "step"))
             return unknown_range_member(c, steps, depth, full, m);
+        char sub[340];
+        snprintf(sub, sizeof sub, "%s.%s", full, m->string);
+        if (refuse_repeat(c, item, m, steps, depth, sub) != PST_OK)
+            return PST_EINPUT;
     }
     if (!cJSON_IsNumber(from) || !cJSON_IsNumber(count) || count->valuedouble < 1 ||
         count->valuedouble > 1e6 || count->valuedouble != floor(count->valuedouble) ||
@@ -215,8 +235,8 @@ static int read_values(pctx *c, json_step *steps, int depth, const char *full,
     return PST_OK;
 }
 
-/* Grid key k of grid gi: a known scene key, new in the first grid, the first grid's k-th key
- * in the others. */
+/* Grid key k of grid gi: a known scene key, the first grid's k-th key in the others (a key
+ * repeated in one object is refused before). */
 static int read_key(pctx *c, json_step *steps, int depth, const char *full, const char *key,
                     pst_sweep *sw, int gi, int k)
 {
@@ -225,9 +245,6 @@ static int read_key(pctx *c, json_step *steps, int depth, const char *full, cons
     if (!scene_key_known(key))
         return perr(c, steps, depth, full, "unknown scene key (pstencil help scene lists "
                                            "them; list items are numbered from 0)");
-    for (int q = 0; q < k && gi == 0; ++q)
-        if (strcmp(sw->keys[q], key) == 0)
-            return perr(c, steps, depth, full, "repeated key");
     if (gi > 0 && (k >= sw->nkeys || strcmp(sw->keys[k], key) != 0))
         return perr(c, steps, depth, full, "every grid object must have the keys of the "
                                            "first, in the same order");
@@ -254,7 +271,9 @@ static int read_grid(pctx *c, const cJSON *g, int gi, int listed, pst_sweep *sw)
         steps[d0] = (json_step){item->string, 0};
         char full[300];
         snprintf(full, sizeof full, "grid.%s", item->string);
-        int st = read_key(c, steps, d0 + 1, full, item->string, sw, gi, k);
+        int st = refuse_repeat(c, g, item, steps, d0, full);
+        if (st == PST_OK)
+            st = read_key(c, steps, d0 + 1, full, item->string, sw, gi, k);
         if (st == PST_OK)
             st = read_values(c, steps, d0 + 1, full, item, sw, gi, k);
         if (st != PST_OK)
@@ -344,6 +363,8 @@ static int read_overrides(pctx *c, const cJSON *root, pst_sweep *sw)
             return perr(c, steps, 2, full, "more than %d overrides", SW_MAX_OVERRIDES);
         if (!scene_key_known(m->string))
             return perr(c, steps, 2, full, "unknown scene key");
+        if (refuse_repeat(c, ov, m, steps, 1, full) != PST_OK)
+            return PST_EINPUT;
         for (int k = 0; k < sw->nkeys; ++k)
             if (strcmp(sw->keys[k], m->string) == 0)
                 return perr(c, steps, 2, full, "also a grid key");
@@ -392,6 +413,8 @@ static int read_outputs(pctx *c, const cJSON *root, pst_sweep *sw)
                                                          : NULL;
         if (!dst)
             return perr(c, steps, 2, full, "unknown key (output has csv and summary)");
+        if (refuse_repeat(c, out, m, steps, 1, full) != PST_OK)
+            return PST_EINPUT;
         if (!cJSON_IsString(m) || !m->valuestring[0])
             return perr(c, steps, 2, full, "expected a file name");
         if (!(*dst = pst_strdup(m->valuestring)))
@@ -439,6 +462,8 @@ static int read_sweep(pctx *c, const cJSON *root, pst_sweep *sw)
             return perr(c, steps, 1, m->string, "unknown key (a sweep has scene, grid, "
                                                 "overrides, output, slope_key, repeat_key, "
                                                 "title)");
+        if (refuse_repeat(c, root, m, steps, 0, m->string) != PST_OK)
+            return PST_EINPUT;
     }
     int (*const parts[])(pctx *, const cJSON *, pst_sweep *) = {
         read_scene, read_grids, read_overrides, read_outputs, read_stat_keys};
