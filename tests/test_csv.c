@@ -498,6 +498,60 @@ static void test_write_failures(void)
     pst_cloud_destroy(c);
 }
 
+/* HDR plus nf field columns f0, f1, ... (the last one renamed `last` when given), and two
+ * rows whose field k holds k (row 1) and -k (row 2). Malloc'd. */
+static char *wide_csv(size_t nf, const char *last)
+{
+    size_t cap = 64 + nf * 24, n = 0;
+    char *t = malloc(cap);
+    n += (size_t)snprintf(t + n, cap - n, "x,y,V,h,kind,nx,ny");
+    for (size_t k = 0; k < nf; ++k)
+        n += last && k + 1 == nf ? (size_t)snprintf(t + n, cap - n, ",%s", last)
+                                 : (size_t)snprintf(t + n, cap - n, ",f%zu", k);
+    for (int r = 0; r < 2; ++r) {
+        n += (size_t)snprintf(t + n, cap - n, "\n%d,0,1,1,interior,0,0", r);
+        for (size_t k = 0; k < nf; ++k)
+            n += (size_t)snprintf(t + n, cap - n, ",%s%zu", r ? "-" : "", k);
+    }
+    snprintf(t + n, cap - n, "\n");
+    return t;
+}
+
+/* Many fields (issue 16): the duplicate-name check was pairwise and the set-up per field
+ * linear, minutes for a wide file. Now: at most PST_MAX_FIELDS fields, refused with the count
+ * and the cap; a repeat found by sorting is still named with its first column. */
+static void test_many_fields(void)
+{
+    char *t = wide_csv(60000, NULL);
+    expect_error(t, PST_EINPUT, "bad.csv:1:4104: 60000 field columns, more than the 4096 a cloud "
+                                "file may have", NULL);
+    free(t);
+    t = wide_csv(100000, NULL); /* past the tokenizer's cap on cells */
+    expect_error(t, PST_EINPUT, "bad.csv:1:", "more than 65536 cells");
+    free(t);
+    t = wide_csv(PST_MAX_FIELDS, "f17");
+    expect_error(t, PST_EINPUT, "bad.csv:1:4103: duplicate column name 'f17' (also column 25)",
+                 NULL);
+    free(t);
+    t = wide_csv(PST_MAX_FIELDS, NULL);
+    write_text("wide.csv", t);
+    free(t);
+    char err[PST_ERRLEN] = "";
+    pst_cloud *c = NULL;
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("wide.csv"), err), PST_OK);
+    if (!c)
+        return;
+    CHECK_INT(pst_cloud_nfields(c), PST_MAX_FIELDS);
+    CHECK(strcmp(pst_cloud_field_name(c, 4095), "f4095") == 0);
+    const double *f = pst_cloud_field_by_name(c, "f4000");
+    const int64_t *id = pst_cloud_ids(c);
+    int ok = f != NULL;
+    for (size_t i = 0; ok && i < 2; ++i)
+        ok = f[i] == (id[i] ? -4000.0 : 4000.0);
+    CHECK(ok);
+    pst_cloud_destroy(c);
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_test_csv") != 0)
@@ -512,6 +566,7 @@ int main(void)
     test_uniform_h_and_numeric_kinds();
     test_long_line();
     test_bad_input();
+    test_many_fields();
     test_write_failures();
     test_remove_dir(dir);
     return check_summary("test_csv");
