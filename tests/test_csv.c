@@ -435,6 +435,8 @@ static void test_bad_input(void)
     expect_error("x,y,V,h,kind,nx,ny,mx,mz\n", PST_EINPUT, ":1:9:", "'my'");
     expect_error("x,y,V,h,kind,nx,ny,my\n", PST_EINPUT, ":1:8:", "misplaced");
     expect_error("x,y,V,h,kind,nx,ny,2u\n", PST_EINPUT, ":1:8:", "unknown column '2u'");
+    expect_error("x,y,V,h,kind,nx,ny,a\x01\x7f\n", PST_EINPUT, ":1:8:",
+                 "unknown column 'a\\x01\\x7f'"); /* control bytes escaped */
     expect_error("", PST_EINPUT, "bad.csv:1:1:", "empty");
     expect_error("\n  \r\n", PST_EINPUT, "bad.csv:1:1:", "no header");
     /* a missing file */

@@ -591,6 +591,22 @@ static void test_duplicate_keys(void)
     CHECK(strstr(err, "dup.json:4:2: key 'title': duplicate key") != NULL);
 }
 
+/* Nesting past cJSON's limit is said to be that; control bytes in a key are escaped. */
+static void test_deep_and_control(void)
+{
+    pst_sweep sw;
+    char err[2048], text[4096];
+    size_t n = (size_t)snprintf(text, sizeof text, "{\"grid\": ");
+    for (int k = 0; k < 1200; ++k)
+        text[n++] = '[';
+    text[n] = '\0';
+    CHECK_INT(parse(&sw, "deep", text, err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "deep.json:1:1009: JSON nested deeper than 1000 levels") != NULL);
+    CHECK_INT(parse(&sw, "ctl", "{\"scene\": \"s.json\", \"gr\\u0007d\": {}}", err, sizeof err),
+              PST_EINPUT);
+    CHECK(strstr(err, "ctl.json:1:21: key 'gr\\x07d': unknown key") != NULL);
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_sweep") != 0)
@@ -603,6 +619,7 @@ int main(void)
     test_hostile_grids();
     test_combination_cap();
     test_duplicate_keys();
+    test_deep_and_control();
     test_remove_dir(dir);
     return check_summary("test_sweep");
 }

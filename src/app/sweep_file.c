@@ -37,6 +37,7 @@ static int perr(pctx *c, const json_step *steps, int depth, const char *key, con
         snprintf(c->err, c->errlen, "%s:%d:%d: key '%s': %s", c->path, line, col, key, msg);
     else
         snprintf(c->err, c->errlen, "%s:%d:%d: %s", c->path, line, col, msg);
+    pst_escape_controls(c->err, c->errlen); /* keys may hold any byte */
     return PST_EINPUT;
 }
 
@@ -511,7 +512,11 @@ int pst_sweep_parse(pst_sweep *sw, const char *text, const char *path, char *err
     if (!root) {
         int line, col;
         json_pos_error(text, end, &line, &col);
-        snprintf(err, errlen, "%s:%d:%d: JSON syntax error", path, line, col);
+        if (json_pos_too_deep(text, end))
+            snprintf(err, errlen, "%s:%d:%d: JSON nested deeper than %d levels", path, line, col,
+                     CJSON_NESTING_LIMIT);
+        else
+            snprintf(err, errlen, "%s:%d:%d: JSON syntax error", path, line, col);
         return PST_EINPUT;
     }
     sw->path = pst_strdup(path);
