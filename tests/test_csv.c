@@ -554,6 +554,23 @@ static void test_many_fields(void)
     pst_cloud_destroy(c);
 }
 
+/* pst_escape_controls: control bytes as \\xNN, the end cut (never inside an escape) to fit. */
+static void test_escape_controls(void)
+{
+    char m[16] = "a\x01\tb\x7f";
+    pst_escape_controls(m, sizeof m);
+    CHECK(strcmp(m, "a\\x01\\x09b\\x7f") == 0);
+    char cut[8] = "ab\x02" "cd";
+    pst_escape_controls(cut, sizeof cut); /* "ab\x02" is 6 bytes, "c" fits, "d" does not */
+    CHECK(strcmp(cut, "ab\\x02c") == 0);
+    char tight[6] = "ab\x02" "c";
+    pst_escape_controls(tight, sizeof tight); /* the escape does not fit in 5: cut before it */
+    CHECK(strcmp(tight, "ab") == 0);
+    char plain[8] = "\xc3\xa9 ok";
+    pst_escape_controls(plain, sizeof plain); /* UTF-8 is not a control byte */
+    CHECK(strcmp(plain, "\xc3\xa9 ok") == 0);
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_test_csv") != 0)
@@ -569,6 +586,7 @@ int main(void)
     test_long_line();
     test_bad_input();
     test_many_fields();
+    test_escape_controls();
     test_write_failures();
     test_remove_dir(dir);
     return check_summary("test_csv");
