@@ -46,7 +46,8 @@ int pst_find_repeated_name(const char *const *names, size_t n, size_t *first, si
     return found;
 }
 
-/* The names of the cloud's fields followed by names[0..n), for one duplicate search. */
+/* Every name valid, none repeating a field of the cloud or an earlier name: one search by
+ * sorting over the cloud's names followed by the new ones. */
 static int check_new_names(const pst_cloud *c, const char *const *names, size_t n, char *err)
 {
     for (size_t k = 0; k < n; ++k)
@@ -62,9 +63,10 @@ static int check_new_names(const pst_cloud *c, const char *const *names, size_t 
         list[c->nfields + k] = names[k];
     size_t a, b;
     int found = pst_find_repeated_name(list, all, &a, &b);
+    const char *repeated = found > 0 ? list[b] : NULL;
     free(list);
     PST_CHECK(found < 0, PST_ENOMEM, err, "out of memory for %zu field names", all);
-    PST_CHECK(found, PST_EINVAL, err, "field '%s' already exists", names[b - c->nfields]);
+    PST_CHECK(found, PST_EINVAL, err, "field '%s' already exists", repeated);
     return PST_OK;
 }
 
