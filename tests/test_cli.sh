@@ -400,5 +400,13 @@ expect 2 "analyse refuses more than 5000 unknowns" -- "$exe" analyse "$scenes/qs
 contains err "more than 5000" "analyse names the limit"
 check "refused analyse wrote nothing" '[ ! -e "$work/sp3" ]'
 
+# hostile sweep files and clouds (issue 16): caps refuse at once, with the count and the cap
+sed 's/"cloud.seed": { "from": 1, "count": 2 }/"cloud.seed": { "from": 1, "count": 1000000 },\
+  "cloud.jitter": { "from": 0, "count": 1000000, "step": 1e-7 }/' "$work/sw.json" > "$work/swbig.json"
+expect 2 "sweep --plan of 4e12 combinations refuses at once" -- timeout 20 "$exe" sweep \
+  "$work/swbig.json" --plan
+contains err "key 'grid': 4000000000000 combinations, more than the 100000 a sweep may have" \
+  "sweep names the combination count and the cap"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -2,6 +2,7 @@
  * bounds, reproducibility across seeds and thread counts, boundary layers, face particles,
  * rotation, option checking, permutation, validation, fields and mobility. */
 #include "check.h"
+#include "cloud_layout.h"
 #include "internal.h"
 #include "pstencil.h"
 
@@ -545,9 +546,39 @@ static void test_fields_and_mobility(void)
     pst_cloud_destroy(NULL);
 }
 
+/* Fields added at once (the readers' path): a repeat of an existing field or among the new
+ * names refuses them all; otherwise each is there, zero-filled, in order. */
+static void test_add_fields(void)
+{
+    pst_cloud *c;
+    char err[PST_ERRLEN];
+    CHECK_INT(pst_cloud_create(&c, 2, 3, NULL), PST_OK);
+    CHECK_INT(pst_cloud_add_field(c, "u", NULL, NULL), PST_OK);
+    const char *again[] = {"a", "b", "u"}, *twice[] = {"p", "q", "p"}, *bad[] = {"ok", "x"};
+    CHECK_INT(pst_cloud_add_fields(c, again, 3, NULL, err), PST_EINVAL);
+    CHECK(strstr(err, "field 'u' already exists") != NULL);
+    CHECK_INT(pst_cloud_add_fields(c, twice, 3, NULL, err), PST_EINVAL);
+    CHECK(strstr(err, "field 'p' already exists") != NULL);
+    CHECK_INT(pst_cloud_add_fields(c, bad, 2, NULL, err), PST_EINVAL);
+    CHECK_INT(pst_cloud_nfields(c), 1);
+    const char *names[] = {"a", "b"};
+    double *data[2] = {NULL, NULL};
+    CHECK_INT(pst_cloud_add_fields(c, names, 2, data, err), PST_OK);
+    CHECK_INT(pst_cloud_nfields(c), 3);
+    CHECK(strcmp(pst_cloud_field_name(c, 2), "b") == 0 && pst_cloud_field(c, 2) == data[1]);
+    CHECK(data[0] && data[0][2] == 0 && pst_cloud_field_by_name(c, "a") == data[0]);
+    size_t first = 9, rep = 9;
+    const char *list[] = {"c", "a", "b", "a", "c"};
+    CHECK_INT(pst_find_repeated_name(list, 5, &first, &rep), 1);
+    CHECK(first == 1 && rep == 3); /* the earliest repeat, as a scan in order finds it */
+    CHECK_INT(pst_find_repeated_name(list, 3, &first, &rep), 0);
+    pst_cloud_destroy(c);
+}
+
 int main(void)
 {
     test_rng();
+    test_add_fields();
     test_defaults();
     test_lattice_plain();
     test_lattice_jitter();

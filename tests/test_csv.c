@@ -435,6 +435,8 @@ static void test_bad_input(void)
     expect_error("x,y,V,h,kind,nx,ny,mx,mz\n", PST_EINPUT, ":1:9:", "'my'");
     expect_error("x,y,V,h,kind,nx,ny,my\n", PST_EINPUT, ":1:8:", "misplaced");
     expect_error("x,y,V,h,kind,nx,ny,2u\n", PST_EINPUT, ":1:8:", "unknown column '2u'");
+    expect_error("x,y,V,h,kind,nx,ny,a\x01\x7f\n", PST_EINPUT, ":1:8:",
+                 "unknown column 'a\\x01\\x7f'"); /* control bytes escaped */
     expect_error("", PST_EINPUT, "bad.csv:1:1:", "empty");
     expect_error("\n  \r\n", PST_EINPUT, "bad.csv:1:1:", "no header");
     /* a missing file */
@@ -498,6 +500,77 @@ static void test_write_failures(void)
     pst_cloud_destroy(c);
 }
 
+/* HDR plus nf field columns f0, f1, ... (the last one renamed `last` when given), and two
+ * rows whose field k holds k (row 1) and -k (row 2). Malloc'd. */
+static char *wide_csv(size_t nf, const char *last)
+{
+    size_t cap = 64 + nf * 24, n = 0;
+    char *t = malloc(cap);
+    n += (size_t)snprintf(t + n, cap - n, "x,y,V,h,kind,nx,ny");
+    for (size_t k = 0; k < nf; ++k)
+        n += last && k + 1 == nf ? (size_t)snprintf(t + n, cap - n, ",%s", last)
+                                 : (size_t)snprintf(t + n, cap - n, ",f%zu", k);
+    for (int r = 0; r < 2; ++r) {
+        n += (size_t)snprintf(t + n, cap - n, "\n%d,0,1,1,interior,0,0", r);
+        for (size_t k = 0; k < nf; ++k)
+            n += (size_t)snprintf(t + n, cap - n, ",%s%zu", r ? "-" : "", k);
+    }
+    snprintf(t + n, cap - n, "\n");
+    return t;
+}
+
+/* Many fields (issue 16): the duplicate-name check was pairwise and the set-up per field
+ * linear, minutes for a wide file. Now: at most PST_MAX_FIELDS fields, refused with the count
+ * and the cap; a repeat found by sorting is still named with its first column. */
+static void test_many_fields(void)
+{
+    char *t = wide_csv(60000, NULL);
+    expect_error(t, PST_EINPUT, "bad.csv:1:4104: 60000 field columns, more than the 4096 a cloud "
+                                "file may have", NULL);
+    free(t);
+    t = wide_csv(100000, NULL); /* past the tokenizer's cap on cells */
+    expect_error(t, PST_EINPUT, "bad.csv:1:", "more than 65536 cells");
+    free(t);
+    t = wide_csv(PST_MAX_FIELDS, "f17");
+    expect_error(t, PST_EINPUT, "bad.csv:1:4103: duplicate column name 'f17' (also column 25)",
+                 NULL);
+    free(t);
+    t = wide_csv(PST_MAX_FIELDS, NULL);
+    write_text("wide.csv", t);
+    free(t);
+    char err[PST_ERRLEN] = "";
+    pst_cloud *c = NULL;
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("wide.csv"), err), PST_OK);
+    if (!c)
+        return;
+    CHECK_INT(pst_cloud_nfields(c), PST_MAX_FIELDS);
+    CHECK(strcmp(pst_cloud_field_name(c, 4095), "f4095") == 0);
+    const double *f = pst_cloud_field_by_name(c, "f4000");
+    const int64_t *id = pst_cloud_ids(c);
+    int ok = f != NULL;
+    for (size_t i = 0; ok && i < 2; ++i)
+        ok = f[i] == (id[i] ? -4000.0 : 4000.0);
+    CHECK(ok);
+    pst_cloud_destroy(c);
+}
+
+/* pst_escape_controls: control bytes as \\xNN, the end cut (never inside an escape) to fit. */
+static void test_escape_controls(void)
+{
+    char m[16] = "a\x01\tb\x7f";
+    pst_escape_controls(m, sizeof m);
+    CHECK(strcmp(m, "a\\x01\\x09b\\x7f") == 0);
+    char cut[8] = "ab\x02" "cd";
+    pst_escape_controls(cut, sizeof cut); /* "ab\x02" is 6 bytes, "c" fits, "d" does not */
+    CHECK(strcmp(cut, "ab\\x02c") == 0);
+    char tight[6] = "ab\x02" "c";
+    pst_escape_controls(tight, sizeof tight); /* the escape does not fit in 5: cut before it */
+    CHECK(strcmp(tight, "ab") == 0);
+    char plain[8] = "\xc3\xa9 ok";
+    pst_escape_controls(plain, sizeof plain); /* UTF-8 is not a control byte */
+    CHECK(strcmp(plain, "\xc3\xa9 ok") == 0);
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_test_csv") != 0)
@@ -512,6 +585,8 @@ int main(void)
     test_uniform_h_and_numeric_kinds();
     test_long_line();
     test_bad_input();
+    test_many_fields();
+    test_escape_controls();
     test_write_failures();
     test_remove_dir(dir);
     return check_summary("test_csv");

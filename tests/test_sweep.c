@@ -478,6 +478,135 @@ static void test_sweep_files(void)
     CHECK(files >= 7);
 }
 
+/* Hostile sweep files (issue 16): a range object with an unknown member in a list of grids
+ * (once a write past the position stack), with a did-you-mean for a misspelt member. */
+static void test_hostile_grids(void)
+{
+    pst_sweep sw;
+    char err[2048];
+    const char *typo = "[ {\"cloud.seed\": {\"from\": 1, \"cout\": 2}} ]";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", typo, lap_task), err, sizeof err), PST_EINPUT);
+    printf("range typo: %s\n", err);
+    CHECK(strstr(err, "bad.json:12:40: key 'grid.cloud.seed.cout': unknown key (a range is "
+                      "{from, count[, step]}; did you mean 'count'?)") != NULL);
+    const char *extra = "[ {\"cloud.seed\": {\"from\": 1, \"count\": 2, \"x\": 1}} ]";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", extra, lap_task), err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "key 'grid.cloud.seed.x': unknown key (a range is {from, count[, step]})") !=
+          NULL);
+    CHECK(strstr(err, "did you mean") == NULL);
+    /* the same in a single grid object */
+    const char *one = "{\"cloud.seed\": {\"from\": 1, \"stpe\": 2, \"count\": 2}}";
+    CHECK_INT(parse(&sw, "bad", sweep_text("bad", one, lap_task), err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "key 'grid.cloud.seed.stpe'") && strstr(err, "did you mean 'step'?"));
+}
+
+/* A grid of keys[0..n) with ranges of counts[0..n) values, in buf. */
+static const char *range_grid(char *buf, size_t len, int n, const long *counts)
+{
+    static const char *const keys[] = {"cloud.seed", "cloud.spacing", "cloud.jitter",
+                                       "cloud.h_ratio", "cloud.angle", "cloud.lo.0",
+                                       "cloud.hi.0"};
+    size_t used = (size_t)snprintf(buf, len, "{");
+    for (int k = 0; k < n; ++k)
+        used += (size_t)snprintf(buf + used, len - used, "%s\"%s\": {\"from\": 1, \"count\": %ld}",
+                                 k ? ", " : "", keys[k], counts[k]);
+    snprintf(buf + used, len - used, "}");
+    return buf;
+}
+
+/* Combination counts: multiplied without wrapping, and capped at SW_MAX_COMBOS. */
+static void test_combination_cap(void)
+{
+    pst_sweep sw;
+    char err[2048], g1[1024], g2[2048];
+    const long wrap64[] = {65536, 65536, 65536, 65536}; /* 2^64: wrapped to 0 runs */
+    CHECK_INT(parse(&sw, "big", sweep_text("big", range_grid(g1, sizeof g1, 4, wrap64), lap_task),
+                    err, sizeof err),
+              PST_EINPUT);
+    printf("2^64 combinations: %s\n", err);
+    CHECK(strstr(err, "key 'grid': 1.84467440737096e+19 combinations, more than the 100000 a "
+                      "sweep may have") != NULL);
+    const long tera[] = {1000, 1000, 1000, 1000}; /* 10^12: --plan looped for ever */
+    CHECK_INT(parse(&sw, "big", sweep_text("big", range_grid(g1, sizeof g1, 4, tera), lap_task),
+                    err, sizeof err),
+              PST_EINPUT);
+    CHECK(strstr(err, "key 'grid': 1000000000000 combinations, more than the 100000") != NULL);
+    /* seven keys whose product is 2^64 - 2, plus a one-combination grid: a sum that wrapped */
+    const long seven[] = {2, 49, 73, 127, 337, 92737, 649657}, ones[] = {1, 1, 1, 1, 1, 1, 1};
+    char one[1024];
+    snprintf(g2, sizeof g2, "[ %s, %s ]", range_grid(g1, sizeof g1, 7, seven),
+             range_grid(one, sizeof one, 7, ones));
+    CHECK_INT(parse(&sw, "big", sweep_text("big", g2, lap_task), err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "e+19 combinations, more than the 100000") != NULL);
+    /* the cap itself is allowed, one more is not */
+    const long cap[] = {SW_MAX_COMBOS}, over[] = {SW_MAX_COMBOS + 1};
+    CHECK_INT(parse(&sw, "big", sweep_text("big", range_grid(g1, sizeof g1, 1, cap), lap_task),
+                    err, sizeof err),
+              PST_OK);
+    CHECK_INT(sw.ncombos, SW_MAX_COMBOS);
+    pst_sweep_free(&sw);
+    CHECK_INT(parse(&sw, "big", sweep_text("big", range_grid(g1, sizeof g1, 1, over), lap_task),
+                    err, sizeof err),
+              PST_EINPUT);
+    CHECK(strstr(err, "100001 combinations") != NULL);
+}
+
+/* A repeated key in any object of the sweep file is refused at its second occurrence (it
+ * leaked and silently won before). `from` in the text of sweep_text(grid) becomes `to`. */
+static void expect_duplicate(const char *grid, const char *from, const char *to,
+                             const char *key)
+{
+    pst_sweep sw;
+    char err[2048], text[8192], want[256];
+    const char *base = sweep_text("dup", grid, lap_task), *at = strstr(base, from);
+    CHECK(at != NULL);
+    if (!at)
+        return;
+    snprintf(text, sizeof text, "%.*s%s%s", (int)(at - base), base, to, at + strlen(from));
+    CHECK_INT(parse(&sw, "dup", text, err, sizeof err), PST_EINPUT);
+    snprintf(want, sizeof want, "key '%s': duplicate key (an earlier", key);
+    if (!strstr(err, want))
+        printf("duplicate %s: %s\n", key, err);
+    CHECK(strstr(err, want) != NULL);
+}
+
+static void test_duplicate_keys(void)
+{
+    const char *grid = "{ \"cloud.spacing\": [0.1], \"cloud.seed\": {\"from\": 1, \"count\": 2} }";
+    expect_duplicate(grid, "\"output\": { \"csv\":", "\"output\": { \"csv\": \"a.csv\", \"csv\":",
+                     "output.csv");
+    expect_duplicate(grid, "\"output\":", "\"grid\": {\"cloud.seed\": [2]}, \"output\":", "grid");
+    expect_duplicate(grid, "\"cloud.seed\": {", "\"cloud.spacing\": [1], \"cloud.seed\": {",
+                     "grid.cloud.spacing");
+    expect_duplicate(grid, "\"count\": 2", "\"count\": 2, \"from\": 3", "grid.cloud.seed.from");
+    expect_duplicate(grid, "\"output\":",
+                     "\"overrides\": {\"cloud.jitter\": 0.1, \"cloud.jitter\": 0.2}, \"output\":",
+                     "overrides.cloud.jitter");
+    /* the position is the second occurrence's */
+    pst_sweep sw;
+    char err[2048];
+    const char *two = "{\"scene\": \"s.json\",\n \"grid\": {\"cloud.seed\": [1]},\n \"title\": \"a\",\n"
+                      " \"title\": \"b\"}";
+    CHECK_INT(parse(&sw, "dup", two, err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "dup.json:4:2: key 'title': duplicate key") != NULL);
+}
+
+/* Nesting past cJSON's limit is said to be that; control bytes in a key are escaped. */
+static void test_deep_and_control(void)
+{
+    pst_sweep sw;
+    char err[2048], text[4096];
+    size_t n = (size_t)snprintf(text, sizeof text, "{\"grid\": ");
+    for (int k = 0; k < 1200; ++k)
+        text[n++] = '[';
+    text[n] = '\0';
+    CHECK_INT(parse(&sw, "deep", text, err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "deep.json:1:1009: JSON nested deeper than 1000 levels") != NULL);
+    CHECK_INT(parse(&sw, "ctl", "{\"scene\": \"s.json\", \"gr\\u0007d\": {}}", err, sizeof err),
+              PST_EINPUT);
+    CHECK(strstr(err, "ctl.json:1:21: key 'gr\\x07d': unknown key") != NULL);
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_sweep") != 0)
@@ -487,6 +616,10 @@ int main(void)
     test_errors();
     test_summary_statistics();
     test_sweep_files();
+    test_hostile_grids();
+    test_combination_cap();
+    test_duplicate_keys();
+    test_deep_and_control();
     test_remove_dir(dir);
     return check_summary("test_sweep");
 }

@@ -1045,6 +1045,52 @@ static void test_read_fuzz(void)
     fuzz_file("poly.vtp", 1000, 4);
 }
 
+/* The ascii file with nf more field arrays f0, f1, ... (the last named `last` when given)
+ * after T, field k holding k, k + 1, k + 2; written as `name`. */
+static const char *wide_vtu(const char *name, size_t nf, const char *last)
+{
+    const char *at = strstr(ascii_vtu, "      </PointData>");
+    size_t cap = sizeof ascii_vtu + nf * 100, n = 0;
+    char *t = malloc(cap);
+    n += (size_t)snprintf(t, cap, "%.*s", (int)(at - ascii_vtu), ascii_vtu);
+    for (size_t k = 0; k < nf; ++k) {
+        char nm[32];
+        snprintf(nm, sizeof nm, "f%zu", k);
+        n += (size_t)snprintf(t + n, cap - n, "        <DataArray type=\"Float64\" Name=\"%s\" "
+                              "format=\"ascii\">%zu %zu %zu</DataArray>\n",
+                              last && k + 1 == nf ? last : nm, k, k + 1, k + 2);
+    }
+    n += (size_t)snprintf(t + n, cap - n, "%s", at);
+    spit(path_of(name), t, n);
+    free(t);
+    return path_of(name);
+}
+
+/* Many arrays (issue 16): the pairwise name check and the per-field set-up took over a
+ * minute for 20 000 arrays. Now at most PST_MAX_FIELDS fields, the cap and the array named. */
+static void test_many_arrays(void)
+{
+    expect_fail(wide_vtu("w.vtu", 20000, NULL), PST_EINPUT,
+                "PointData array 'f4095': more than the 4096 fields a cloud file may have", NULL);
+    expect_fail(wide_vtu("w.vtu", PST_MAX_FIELDS, NULL), PST_EINPUT, "'f4095': more than", NULL);
+    expect_fail(wide_vtu("w.vtu", PST_MAX_FIELDS - 1, "T"), PST_EINPUT,
+                "two PointData arrays are named 'T'", NULL);
+    char err[PST_ERRLEN] = "";
+    pst_cloud *r = NULL;
+    CHECK_INT(pst_cloud_read_vtu(&r, wide_vtu("w.vtu", PST_MAX_FIELDS - 1, NULL), err), PST_OK);
+    if (!r)
+        return;
+    CHECK_INT(pst_cloud_nfields(r), PST_MAX_FIELDS);
+    CHECK(strcmp(pst_cloud_field_name(r, 0), "T") == 0);
+    CHECK(strcmp(pst_cloud_field_name(r, 4001), "f4000") == 0);
+    const double *f = pst_cloud_field_by_name(r, "f4000"), *T = pst_cloud_field(r, 0);
+    int ok = f != NULL;
+    for (size_t i = 0; ok && i < 3; ++i) /* T tells the file row: -1.5, 2.5, 0.125 */
+        ok = f[i] == 4000.0 + (T[i] == -1.5 ? 0 : T[i] == 2.5 ? 1 : 2);
+    CHECK(ok);
+    pst_cloud_destroy(r);
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_test_vtu") != 0)
@@ -1055,6 +1101,7 @@ int main(void)
     test_read_roundtrip();
     test_read_formats();
     test_read_errors();
+    test_many_arrays();
     test_read_fuzz();
     test_remove_dir(dir);
     return check_summary("test_vtu");

@@ -16,6 +16,9 @@ extern "C" {
  * the terminating 0) that are not one of the CSV format's own column names (x, y, z, V, h,
  * kind, nx, ny, nz, m, mx, my, mz, id). The two checks, each 1 when it holds: */
 #define PST_MAX_NAME 64
+/* The most fields the cloud readers take from one file (CSV columns after the required ones,
+ * VTU PointData arrays that are fields): more is refused as bad input (docs/io.md). */
+#define PST_MAX_FIELDS 4096
 int pst_is_identifier(const char *name);
 int pst_is_reserved_column(const char *name);
 

@@ -37,6 +37,11 @@ const char *pst_version(void);
  * for more than one reason; NULL is allowed and then no message is written). */
 #define PST_ERRLEN 512
 
+/* Rewrite the control bytes (0x01-0x1f, 0x7f) of the string msg, in its buffer of cap bytes,
+ * as \xNN, cutting the end (never inside an escape) when it no longer fits: a message that
+ * quotes input stays one printable line. The library's messages are written so. */
+void pst_escape_controls(char *msg, size_t cap);
+
 /* ------------------------------------------------------------------------------------------ */
 /* Files                                                                                      */
 /* ------------------------------------------------------------------------------------------ */

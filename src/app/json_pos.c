@@ -4,6 +4,8 @@
  * never faults: every read checks for the terminating NUL first. */
 #include "json_pos.h"
 
+#include <cjson/cJSON.h>
+
 #include <string.h>
 
 void json_pos_offset(const char *text, size_t offset, int *line, int *col)
@@ -29,6 +31,29 @@ void json_pos_error(const char *text, const char *at, int *line, int *col)
     if (at && at >= text && at <= text + len)
         off = (size_t)(at - text);
     json_pos_offset(text, off, line, col);
+}
+
+int json_pos_too_deep(const char *text, const char *at)
+{
+    size_t len = strlen(text);
+    if (!at || at < text || at >= text + len || (*at != '[' && *at != '{'))
+        return 0;
+    int depth = 0, in_string = 0;
+    for (const char *p = text; p < at; ++p) {
+        if (in_string) {
+            if (*p == '\\' && p + 1 < at)
+                ++p;
+            else if (*p == '"')
+                in_string = 0;
+        } else if (*p == '"') {
+            in_string = 1;
+        } else if (*p == '[' || *p == '{') {
+            ++depth;
+        } else if (*p == ']' || *p == '}') {
+            --depth;
+        }
+    }
+    return !in_string && depth >= CJSON_NESTING_LIMIT;
 }
 
 /* cJSON's whitespace: every byte up to and including the space. */

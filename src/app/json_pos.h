@@ -29,4 +29,8 @@ int json_pos_find(const char *text, const json_step *path, int depth, int *line,
  * the end of the text. */
 void json_pos_error(const char *text, const char *at, int *line, int *col);
 
+/* 1 when cJSON's syntax error at `at` is an array or object opened past its nesting limit
+ * (CJSON_NESTING_LIMIT levels): a file to refuse as too deep, not as malformed. */
+int json_pos_too_deep(const char *text, const char *at);
+
 #endif

@@ -32,6 +32,9 @@ static int syntax_error(ctx *c, const char *at)
     if (c->text[strspn(c->text, " \t\r\n")] == '\0') {
         snprintf(c->err, c->errlen, "%s:%d:%d: empty file (expected a JSON object)", c->path,
                  line, col);
+    } else if (json_pos_too_deep(c->text, c->text + off)) {
+        snprintf(c->err, c->errlen, "%s:%d:%d: JSON nested deeper than %d levels", c->path, line,
+                 col, CJSON_NESTING_LIMIT);
     } else if (off >= len) {
         snprintf(c->err, c->errlen, "%s:%d:%d: JSON syntax error: unexpected end of the text",
                  c->path, line, col);

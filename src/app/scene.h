@@ -195,6 +195,10 @@ extern const int sc_nparams;
 /* The table entry of a table path ("tasks[].rtol"), or NULL. */
 const sc_param *sc_param_find(const char *key);
 
+/* The word of words[0..n) nearest to a misspelt `word` when it is a likely typo ("did you
+ * mean"), else NULL. */
+const char *sc_suggest_word(const char *word, const char *const *words, int n);
+
 /* The complete example scene of docs/scenes.md (the tests check that it loads). */
 const char *pst_scene_example(void);
 

@@ -59,6 +59,7 @@ int scene_error(ctx *c, const char *extra, const char *fmt, ...)
     int ov = override_of(c, extra);
     if (ov >= 0) {
         snprintf(c->err, c->errlen, "override '%s': key '%s': %s", c->overrides[ov], key, msg);
+        pst_escape_controls(c->err, c->errlen);
         return PST_EINPUT;
     }
     json_step steps[MAX_DEPTH + 1];
@@ -72,6 +73,7 @@ int scene_error(ctx *c, const char *extra, const char *fmt, ...)
         snprintf(c->err, c->errlen, "%s:%d:%d: %s", c->path, line, col, msg);
     else
         snprintf(c->err, c->errlen, "%s:%d:%d: key '%s': %s", c->path, line, col, key, msg);
+    pst_escape_controls(c->err, c->errlen); /* keys and values may hold any byte */
     return PST_EINPUT;
 }
 

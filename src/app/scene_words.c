@@ -45,6 +45,15 @@ void scene_consider(const char *word, const char *cand, const char **best, int *
     }
 }
 
+const char *sc_suggest_word(const char *word, const char *const *words, int n)
+{
+    const char *best = NULL;
+    int bestd = 1000;
+    for (int k = 0; k < n; ++k)
+        scene_consider(word, words[k], &best, &bestd);
+    return best;
+}
+
 /* Index of `word` in the '|'-separated list `values`, or -1. */
 int scene_value_index(const char *values, const char *word)
 {

@@ -13,6 +13,9 @@
 struct cJSON;
 
 enum { SW_MAX_KEYS = 16, SW_MAX_GRIDS = 16, SW_MAX_OVERRIDES = 64 };
+/* The most combinations (runs) a sweep may have: a larger grid is refused when it is read,
+ * its product counted without overflow (docs/sweeps.md). */
+#define SW_MAX_COMBOS 100000
 
 typedef struct {
     char *path;              /* the sweep file (messages)                                       */

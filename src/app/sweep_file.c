@@ -37,7 +37,24 @@ static int perr(pctx *c, const json_step *steps, int depth, const char *key, con
         snprintf(c->err, c->errlen, "%s:%d:%d: key '%s': %s", c->path, line, col, key, msg);
     else
         snprintf(c->err, c->errlen, "%s:%d:%d: %s", c->path, line, col, msg);
+    pst_escape_controls(c->err, c->errlen); /* keys may hold any byte */
     return PST_EINPUT;
+}
+
+/* Member m of obj when an earlier member has its name: "duplicate key" at this second one
+ * (steps[at] is set to it), as the scene loader refuses them. cJSON keeps both, and the
+ * lookups would silently take one. */
+static int refuse_repeat(pctx *c, const cJSON *obj, const cJSON *m, json_step *steps, int at,
+                         const char *full)
+{
+    int n = 0;
+    for (const cJSON *p = obj->child; p != m; p = p->next)
+        n += strcmp(p->string, m->string) == 0;
+    if (n == 0)
+        return PST_OK;
+    steps[at] = (json_step){m->string, n};
+    return perr(c, steps, at + 1, full, "duplicate key (an earlier '%s' is in the same object)",
+                m->string);
 }
 
 /* The table path of a dotted override key: list indices become [], a field name <name>. */
@@ -147,7 +164,24 @@ static int alloc_values(pst_sweep *sw, int gi, int k, int n)
     return PST_OK;
 }
 
-/* A range {from, count[, step]}: count numbers from `from`, `step` apart (default 1). */
+/* "unknown key (a range is {from, count[, step]}; did you mean 'count'?)" at member m of the
+ * range object at steps[0..depth). */
+static int unknown_range_member(pctx *c, json_step *steps, int depth, const char *full,
+                                const cJSON *m)
+{
+    static const char *const members[] = {"from", "count", "step"};
+    const char *best = sc_suggest_word(m->string, members, 3);
+    char sub[340], hint[64] = "";
+    snprintf(sub, sizeof sub, "%s.%s", full, m->string);
+    if (best)
+        snprintf(hint, sizeof hint, "; did you mean '%s'?", best);
+    steps[depth] = (json_step){m->string, 0};
+    return perr(c, steps, depth + 1, sub, "unknown key (a range is {from, count[, step]}%s)",
+                hint);
+}
+
+/* A range {from, count[, step]}: count numbers from `from`, `step` apart (default 1). steps
+ * has room for one more step past depth (a member's). */
 static int read_range(pctx *c, json_step *steps, int depth, const char *full,
                       const cJSON *item, pst_sweep *sw, int gi, int k)
 {
@@ -156,12 +190,12 @@ static int read_range(pctx *c, json_step *steps, int depth, const char *full,
                 *step = cJSON_GetObjectItemCaseSensitive(item, "step"), *m;
     cJSON_ArrayForEach(m, item)
     {
-        if (strcmp(m->string, "from") && strcmp(m->string, "count") && strcmp(m->string, "step")) {
-            steps[depth] = (json_step){m->string, 0};
-            char sub[340];
-            snprintf(sub, sizeof sub, "%s.%s", full, m->string);
-            return perr(c, steps, depth + 1, sub, "unknown key (a range is {from, count[, step]})");
-        }
+        if (strcmp(m->string, "from") && strcmp(m->string, "count") && strcmp(m->string, "step"))
+            return unknown_range_member(c, steps, depth, full, m);
+        char sub[340];
+        snprintf(sub, sizeof sub, "%s.%s", full, m->string);
+        if (refuse_repeat(c, item, m, steps, depth, sub) != PST_OK)
+            return PST_EINPUT;
     }
     if (!cJSON_IsNumber(from) || !cJSON_IsNumber(count) || count->valuedouble < 1 ||
         count->valuedouble > 1e6 || count->valuedouble != floor(count->valuedouble) ||
@@ -202,8 +236,8 @@ static int read_values(pctx *c, json_step *steps, int depth, const char *full,
     return PST_OK;
 }
 
-/* Grid key k of grid gi: a known scene key, new in the first grid, the first grid's k-th key
- * in the others. */
+/* Grid key k of grid gi: a known scene key, the first grid's k-th key in the others (a key
+ * repeated in one object is refused before). */
 static int read_key(pctx *c, json_step *steps, int depth, const char *full, const char *key,
                     pst_sweep *sw, int gi, int k)
 {
@@ -212,9 +246,6 @@ static int read_key(pctx *c, json_step *steps, int depth, const char *full, cons
     if (!scene_key_known(key))
         return perr(c, steps, depth, full, "unknown scene key (pstencil help scene lists "
                                            "them; list items are numbered from 0)");
-    for (int q = 0; q < k && gi == 0; ++q)
-        if (strcmp(sw->keys[q], key) == 0)
-            return perr(c, steps, depth, full, "repeated key");
     if (gi > 0 && (k >= sw->nkeys || strcmp(sw->keys[k], key) != 0))
         return perr(c, steps, depth, full, "every grid object must have the keys of the "
                                            "first, in the same order");
@@ -226,10 +257,11 @@ static int read_key(pctx *c, json_step *steps, int depth, const char *full, cons
     return PST_OK;
 }
 
-/* One grid object: keys and their value lists. */
+/* One grid object: keys and their value lists. steps: "grid", the list item, the key and a
+ * range's member. */
 static int read_grid(pctx *c, const cJSON *g, int gi, int listed, pst_sweep *sw)
 {
-    json_step steps[3] = {{"grid", 0}, {NULL, gi}, {NULL, 0}};
+    json_step steps[4] = {{"grid", 0}, {NULL, gi}, {NULL, 0}, {NULL, 0}};
     int d0 = listed ? 2 : 1;
     if (!cJSON_IsObject(g))
         return perr(c, steps, d0, "grid", "expected an object of key: [values]");
@@ -240,7 +272,9 @@ static int read_grid(pctx *c, const cJSON *g, int gi, int listed, pst_sweep *sw)
         steps[d0] = (json_step){item->string, 0};
         char full[300];
         snprintf(full, sizeof full, "grid.%s", item->string);
-        int st = read_key(c, steps, d0 + 1, full, item->string, sw, gi, k);
+        int st = refuse_repeat(c, g, item, steps, d0, full);
+        if (st == PST_OK)
+            st = read_key(c, steps, d0 + 1, full, item->string, sw, gi, k);
         if (st == PST_OK)
             st = read_values(c, steps, d0 + 1, full, item, sw, gi, k);
         if (st != PST_OK)
@@ -299,13 +333,18 @@ static int read_grids(pctx *c, const cJSON *root, pst_sweep *sw)
             return st;
         sw->ngrids = g + 1;
     }
-    sw->ncombos = 0;
+    /* counted in double (exact up to 2^53, never wrapping) against the cap */
+    double total = 0;
     for (int g = 0; g < sw->ngrids; ++g) {
-        size_t p = 1;
+        double p = 1;
         for (int k = 0; k < sw->nkeys; ++k)
-            p *= (size_t)sw->nvalues[g][k];
-        sw->ncombos += p;
+            p *= sw->nvalues[g][k];
+        total += p;
     }
+    if (total > SW_MAX_COMBOS)
+        return perr(c, steps, 1, "grid", "%.15g combinations, more than the %d a sweep may have",
+                    total, SW_MAX_COMBOS);
+    sw->ncombos = (size_t)total;
     return PST_OK;
 }
 
@@ -325,6 +364,8 @@ static int read_overrides(pctx *c, const cJSON *root, pst_sweep *sw)
             return perr(c, steps, 2, full, "more than %d overrides", SW_MAX_OVERRIDES);
         if (!scene_key_known(m->string))
             return perr(c, steps, 2, full, "unknown scene key");
+        if (refuse_repeat(c, ov, m, steps, 1, full) != PST_OK)
+            return PST_EINPUT;
         for (int k = 0; k < sw->nkeys; ++k)
             if (strcmp(sw->keys[k], m->string) == 0)
                 return perr(c, steps, 2, full, "also a grid key");
@@ -373,6 +414,8 @@ static int read_outputs(pctx *c, const cJSON *root, pst_sweep *sw)
                                                          : NULL;
         if (!dst)
             return perr(c, steps, 2, full, "unknown key (output has csv and summary)");
+        if (refuse_repeat(c, out, m, steps, 1, full) != PST_OK)
+            return PST_EINPUT;
         if (!cJSON_IsString(m) || !m->valuestring[0])
             return perr(c, steps, 2, full, "expected a file name");
         if (!(*dst = pst_strdup(m->valuestring)))
@@ -420,6 +463,8 @@ static int read_sweep(pctx *c, const cJSON *root, pst_sweep *sw)
             return perr(c, steps, 1, m->string, "unknown key (a sweep has scene, grid, "
                                                 "overrides, output, slope_key, repeat_key, "
                                                 "title)");
+        if (refuse_repeat(c, root, m, steps, 0, m->string) != PST_OK)
+            return PST_EINPUT;
     }
     int (*const parts[])(pctx *, const cJSON *, pst_sweep *) = {
         read_scene, read_grids, read_overrides, read_outputs, read_stat_keys};
@@ -467,7 +512,11 @@ int pst_sweep_parse(pst_sweep *sw, const char *text, const char *path, char *err
     if (!root) {
         int line, col;
         json_pos_error(text, end, &line, &col);
-        snprintf(err, errlen, "%s:%d:%d: JSON syntax error", path, line, col);
+        if (json_pos_too_deep(text, end))
+            snprintf(err, errlen, "%s:%d:%d: JSON nested deeper than %d levels", path, line, col,
+                     CJSON_NESTING_LIMIT);
+        else
+            snprintf(err, errlen, "%s:%d:%d: JSON syntax error", path, line, col);
         return PST_EINPUT;
     }
     sw->path = pst_strdup(path);

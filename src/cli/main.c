@@ -26,8 +26,11 @@ int cli_exit_code(int status)
 
 int cli_fail(int status, const char *what, const char *detail)
 {
-    fprintf(stderr, "pstencil: %s: %s%s%s\n", what, pst_strerror(status),
-            detail && *detail ? ": " : "", detail ? detail : "");
+    char msg[4 * PST_ERRLEN];
+    snprintf(msg, sizeof msg, "%s: %s%s%s", what, pst_strerror(status),
+             detail && *detail ? ": " : "", detail ? detail : "");
+    pst_escape_controls(msg, sizeof msg); /* whatever made the message, one printable line */
+    fprintf(stderr, "pstencil: %s\n", msg);
     return cli_exit_code(status);
 }
 

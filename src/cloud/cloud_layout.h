@@ -26,6 +26,18 @@ struct pst_cloud {
  * such pair in lexicographic position order), 0 when all positions differ, PST_ENOMEM. */
 int pst_cloud_find_duplicate(const pst_cloud *c, size_t *a, size_t *b);
 
+/* The first name of names[0..n) that an earlier one repeats: returns 1 with *again its index
+ * and *first the earliest index with that name (*again the smallest such repeat, as a scan in
+ * order would find), 0 when all differ, PST_ENOMEM. O(n log n). */
+int pst_find_repeated_name(const char *const *names, size_t n, size_t *first, size_t *again);
+
+/* pst_cloud_add_field for names[0..n) at once, data[k] (may be NULL) the k-th new array:
+ * every name checked (PST_EINVAL for an invalid one or one that repeats an existing field or
+ * an earlier name) before anything is added, then the arrays grown once. On PST_ENOMEM the
+ * fields allocated so far stay in the cloud. */
+int pst_cloud_add_fields(pst_cloud *c, const char *const *names, size_t n, double **data,
+                         char *err);
+
 /* h of particle i whatever the layout. */
 static inline double pst_cloud_h_at(const pst_cloud *c, size_t i)
 {

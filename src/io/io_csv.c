@@ -74,16 +74,23 @@ static int check_mobility(layout *l, const pst_csv_reader *r, size_t *k, char *e
     return PST_OK;
 }
 
-/* Field columns from k on: unique identifiers that are not reserved names. */
+/* Field columns from k on: at most PST_MAX_FIELDS, unique identifiers that are not reserved
+ * names; each column's first problem is reported, in column order. */
 static int check_fields(const layout *l, const pst_csv_reader *r, size_t k, char *err)
 {
     const char *path = pst_csv_path(r);
     const size_t line = pst_csv_line(r);
+    PST_CHECK(l->ncols - k > PST_MAX_FIELDS, PST_EINPUT, err,
+              "%s:%zu:%zu: %zu field columns, more than the %d a cloud file may have", path, line,
+              k + PST_MAX_FIELDS + 1, l->ncols - k, PST_MAX_FIELDS);
+    size_t first = 0, again = SIZE_MAX;
+    int found = pst_find_repeated_name(l->name, l->ncols, &first, &again);
+    PST_CHECK(found < 0, PST_ENOMEM, err, "%s:%zu:1: out of memory reading the header", path,
+              line);
     for (; k < l->ncols; ++k) {
-        for (size_t j = 0; j < k; ++j)
-            PST_CHECK(strcmp(l->name[j], l->name[k]) == 0, PST_EINPUT, err,
-                      "%s:%zu:%zu: duplicate column name '%s' (also column %zu)", path, line,
-                      k + 1, l->name[k], j + 1);
+        PST_CHECK(found && k == again, PST_EINPUT, err,
+                  "%s:%zu:%zu: duplicate column name '%s' (also column %zu)", path, line,
+                  k + 1, l->name[k], first + 1);
         PST_CHECK(pst_is_reserved_column(l->name[k]), PST_EINPUT, err,
                   "%s:%zu:%zu: misplaced column '%s'", path, line, k + 1, l->name[k]);
         PST_CHECK(!pst_is_identifier(l->name[k]), PST_EINPUT, err,
@@ -192,8 +199,8 @@ static int build_cloud(pst_cloud **out, const layout *l, const rows *r)
     double **fields = malloc((nf ? nf : 1) * sizeof *fields);
     if (!fields)
         st = PST_ENOMEM;
-    for (size_t f = 0; st == PST_OK && f < nf; ++f)
-        st = pst_cloud_add_field(c, l->name[col_field(l) + f], &fields[f], NULL);
+    if (st == PST_OK) /* names checked in the header: only memory can fail */
+        st = pst_cloud_add_fields(c, l->name + col_field(l), nf, fields, NULL);
     if (st != PST_OK) {
         free(fields);
         pst_cloud_destroy(c);

@@ -75,11 +75,24 @@ static int check_arrays(reader *r, size_t *idx_h)
     size_t idx_V = SIZE_MAX;
     *idx_h = SIZE_MAX;
     int have_m = 0;
+    size_t nfields = 0, first = 0, again = SIZE_MAX;
+    for (size_t k = 0; k < r->na; ++k)
+        if (role_of(r->a[k].name) == R_FIELD && ++nfields > PST_MAX_FIELDS)
+            return vtu_fail_at(r, r->a[k].at, "PointData array '%.64s': more than the %d fields "
+                               "a cloud file may have", r->a[k].name, PST_MAX_FIELDS);
+    const char **names = malloc((r->na ? r->na : 1) * sizeof *names);
+    if (!names)
+        return vtu_oom(r);
+    for (size_t k = 0; k < r->na; ++k)
+        names[k] = r->a[k].name;
+    int found = pst_find_repeated_name(names, r->na, &first, &again);
+    free(names);
+    if (found < 0)
+        return vtu_oom(r);
     for (size_t k = 0; k < r->na; ++k) {
         vtu_in_array *a = &r->a[k];
-        for (size_t j = 0; j < k; ++j)
-            if (!strcmp(r->a[j].name, a->name))
-                return vtu_fail_at(r, a->at, "two PointData arrays are named '%.64s'", a->name);
+        if (found && k == again)
+            return vtu_fail_at(r, a->at, "two PointData arrays are named '%.64s'", a->name);
         int role = role_of(a->name);
         if (role == R_STATUS)
             continue;
@@ -242,23 +255,36 @@ static int store_h(reader *r, pst_cloud *c, vtu_in_array *a, double *tmp,
     return PST_OK;
 }
 
+/* The fields (arrays of no other role), added to the cloud at once. */
+static int add_fields(reader *r, pst_cloud *c)
+{
+    const char **names = malloc((r->na ? r->na : 1) * sizeof *names);
+    if (!names)
+        return vtu_oom(r);
+    size_t n = 0;
+    for (size_t k = 0; k < r->na; ++k)
+        if (role_of(r->a[k].name) == R_FIELD)
+            names[n++] = r->a[k].name;
+    char why[PST_ERRLEN] = "";
+    int st = pst_cloud_add_fields(c, names, n, NULL, why); /* names checked: memory only */
+    free(names);
+    return st == PST_OK ? PST_OK : vtu_oom(r);
+}
+
 /* Every PointData array but h, id and status, in file order. */
 static int store_others(reader *r, pst_cloud *c, size_t ih, double *tmp, const size_t *part)
 {
+    size_t nfield = c->nfields; /* the first new field's index */
+    PST_TRY(add_fields(r, c));
     for (size_t k = 0; k < r->na; ++k) {
         vtu_in_array *a = &r->a[k];
         int role = role_of(a->name), st = PST_OK;
         if (k == ih || role == R_ID || role == R_STATUS)
             continue;
-        size_t field = 0;
+        size_t field = role == R_FIELD ? nfield++ : 0;
         char why[PST_ERRLEN] = "";
-        if (role == R_MSCALAR || role == R_MDIAG) {
+        if (role == R_MSCALAR || role == R_MDIAG)
             st = pst_cloud_set_mobility(c, role == R_MSCALAR ? 1 : c->dim, why);
-        } else if (role == R_FIELD) {
-            double *data;
-            st = pst_cloud_add_field(c, a->name, &data, why);
-            field = c->nfields - 1;
-        }
         if (st != PST_OK)
             return st == PST_ENOMEM ? vtu_oom(r)
                                     : vtu_fail_at(r, a->at, "array '%s': %s", a->name, why);
