@@ -2,7 +2,8 @@
 # Build the libFuzzer harnesses (tests/fuzz, docs/fuzzing.md) with clang and run each for a few
 # seconds: first every committed seed and crash reproducer (ctest -L fuzz), then the short
 # fuzzing run of the `fuzz` target. Skips (exit 0) with a message when clang or libFuzzer is
-# missing. Exit status 1 when a harness finds a crash; its input is in build-fuzz/fuzz-artifacts/.
+# missing. A non-zero exit status when a harness finds a crash; its input is in
+# build-fuzz/fuzz-artifacts/.
 # Usage: bash scripts/fuzz.sh [SECONDS]   (per harness; default $PSTENCIL_FUZZ_SECONDS or 30)
 set -euo pipefail
 cd "$(dirname "$0")/.."
