@@ -4,7 +4,8 @@
 # fuzzing run of the `fuzz` target. Skips (exit 0) with a message when clang or libFuzzer is
 # missing. A non-zero exit status when a harness finds a crash; its input is in
 # build-fuzz/fuzz-artifacts/.
-# Usage: bash scripts/fuzz.sh [SECONDS]   (per harness; default $PSTENCIL_FUZZ_SECONDS or 30)
+# Usage: bash scripts/fuzz.sh [SECONDS]   (per harness; default $PSTENCIL_FUZZ_SECONDS or 30;
+#        the compiler is $PSTENCIL_FUZZ_CC, default clang)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -14,15 +15,20 @@ case $seconds in
 esac
 cc=${PSTENCIL_FUZZ_CC:-clang}
 if ! command -v "$cc" >/dev/null; then
-  echo "fuzz.sh: $cc not found: fuzzing skipped (Debian: apt-get install clang libclang-rt-dev libomp-dev)"
+  echo "fuzz.sh: $cc not found: fuzzing skipped" \
+       "(Debian: apt-get install clang libclang-rt-dev libomp-dev)"
   exit 0
 fi
 probe=$(mktemp -d)
 trap 'rm -rf "$probe"' EXIT
-printf '#include <stddef.h>\n#include <stdint.h>\nint LLVMFuzzerTestOneInput(const uint8_t *d, size_t n) { (void)d; (void)n; return 0; }\n' \
-  > "$probe/probe.c"
+cat > "$probe/probe.c" <<'EOF_PROBE'
+#include <stddef.h>
+#include <stdint.h>
+int LLVMFuzzerTestOneInput(const uint8_t *d, size_t n) { (void)d; (void)n; return 0; }
+EOF_PROBE
 if ! "$cc" -fsanitize=fuzzer,address,undefined "$probe/probe.c" -o "$probe/probe" 2>/dev/null; then
-  echo "fuzz.sh: $cc cannot link with -fsanitize=fuzzer: fuzzing skipped (Debian: apt-get install libclang-rt-dev)"
+  echo "fuzz.sh: $cc cannot link with -fsanitize=fuzzer: fuzzing skipped" \
+       "(Debian: apt-get install libclang-rt-dev)"
   exit 0
 fi
 
