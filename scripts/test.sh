@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Build and run every test: a Release build with warnings as errors (all tests: unit, CLI,
-# install), then an address + undefined sanitizer build running the unit tests.
+# install), then an address + undefined sanitizer build running the unit tests, then a short
+# libFuzzer run of every parser (scripts/fuzz.sh; skipped without clang).
 # Usage: bash scripts/test.sh   (from the repository root; installs dependencies if missing)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,3 +22,6 @@ cmake --build build-sanitize -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:fast_unwind_on_malloc=0:print_suppressions=0" \
   ctest --test-dir build-sanitize --output-on-failure -L unit -j "$jobs"
+
+# About 30 s per parser (PSTENCIL_FUZZ_SECONDS to change it); skipped cleanly without clang.
+bash scripts/fuzz.sh
