@@ -400,5 +400,31 @@ expect 2 "analyse refuses more than 5000 unknowns" -- "$exe" analyse "$scenes/qs
 contains err "more than 5000" "analyse names the limit"
 check "refused analyse wrote nothing" '[ ! -e "$work/sp3" ]'
 
+# issue 16: the writer. A link is followed (the link stays), devices are written into and
+# their write errors reported, a directory is refused, SIGTERM removes the temporary file.
+expect 0 "cloud into a symbolic link" -- sh -c "cd '$work' && ln -s lt.csv l.csv && '$(readlink -f "$exe")' cloud -o l.csv"
+check "the link stays a link to its updated target" '[ -L "$work/l.csv" ] && [ "$(wc -l < "$work/lt.csv")" -eq 122 ]'
+expect 0 "cloud into /dev/null" -- "$exe" cloud -o /dev/null
+check "/dev/null is still a device" '[ -c /dev/null ]'
+if [ -c /dev/full ]; then
+  expect 2 "cloud into /dev/full" -- "$exe" cloud -o /dev/full
+  contains err "/dev/full: write error: No space left on device" "/dev/full names the reason"
+fi
+mkdir "$work/outdir"
+expect 2 "cloud onto a directory" -- "$exe" cloud -o "$work/outdir"
+contains err "outdir: is a directory" "a directory in the way is named"
+mkdir "$work/sig"
+"$exe" cloud --dim 3 --s0 0.01 -o "$work/sig/big.csv" > /dev/null 2>&1 &
+pid=$!
+for _ in $(seq 200); do
+  ls "$work/sig" | grep -q '\.tmp\.' && break
+  sleep 0.05
+done
+kill -TERM "$pid" 2> /dev/null
+wait "$pid"
+sig_rc=$?
+check "SIGTERM kills the writer with the signal (exit $sig_rc)" '[ "$sig_rc" -eq 143 ]'
+check "SIGTERM leaves no temporary file" '[ -z "$(ls -A "$work/sig")" ]'
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
