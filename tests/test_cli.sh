@@ -408,5 +408,44 @@ expect 2 "sweep --plan of 4e12 combinations refuses at once" -- timeout 20 "$exe
 contains err "key 'grid': 4000000000000 combinations, more than the 100000 a sweep may have" \
   "sweep names the combination count and the cap"
 
+# issue 16: the writer. A link is followed (the link stays), devices are written into and
+# their write errors reported, a directory is refused, SIGTERM removes the temporary file.
+expect 0 "cloud into a symbolic link" -- sh -c "cd '$work' && ln -s lt.csv l.csv && '$(readlink -f "$exe")' cloud -o l.csv"
+check "the link stays a link to its updated target" '[ -L "$work/l.csv" ] && [ "$(wc -l < "$work/lt.csv")" -eq 122 ]'
+expect 0 "cloud into /dev/null" -- "$exe" cloud -o /dev/null
+check "/dev/null is still a device" '[ -c /dev/null ]'
+if [ -c /dev/full ]; then
+  expect 2 "cloud into /dev/full" -- "$exe" cloud -o /dev/full
+  contains err "/dev/full: write error: No space left on device" "/dev/full names the reason"
+fi
+mkdir "$work/outdir"
+expect 2 "cloud onto a directory" -- "$exe" cloud -o "$work/outdir"
+contains err "outdir: is a directory" "a directory in the way is named"
+mkdir "$work/sig"
+"$exe" cloud --dim 3 --s0 0.01 -o "$work/sig/big.csv" > /dev/null 2>&1 &
+pid=$!
+for _ in $(seq 200); do
+  ls "$work/sig" | grep -q '\.tmp\.' && break
+  sleep 0.05
+done
+kill -TERM "$pid" 2> /dev/null
+wait "$pid"
+sig_rc=$?
+check "SIGTERM kills the writer with the signal (exit $sig_rc)" '[ "$sig_rc" -eq 143 ]'
+check "SIGTERM leaves no temporary file" '[ -z "$(ls -A "$work/sig")" ]'
+
+# issue 16: exit 2 (bad input) for a task the scheme cannot take, an h whose support radius
+# overflows, and an expression that does not compile, in --plan as in the run
+expect 2 "run: a scheme without the task's gradient" -- "$exe" run cloud.spacing=0.1 operator.scheme=brookshaw
+contains err "scheme 'brookshaw' has no gradient" "the refusal names the scheme"
+expect 2 "run --plan: a scheme without the task's gradient" -- "$exe" run operator.scheme=brookshaw --plan
+expect 2 "apply --h 1e300" -- "$exe" apply --scheme lv --in "$work/au.csv" --field u --h 1e300 --out "$work/e.csv"
+contains err "is too large" "the overflowing support radius is named"
+expect 2 "run --plan: an expression that does not compile" -- "$exe" run "fields.u=sin(" --plan
+contains err "fields.u: column 5:" "--plan gives the run's message"
+sed 's/"sin(6\*x + 8\*y)"/"sin(6*x +"/' "$work/sw.json" > "$work/swexpr.json"
+expect 2 "sweep --plan: an expression that does not compile" -- "$exe" sweep "$work/swexpr.json" --plan
+contains err "fields.u: column" "sweep --plan names the expression"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

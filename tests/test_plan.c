@@ -237,13 +237,13 @@ static void test_refusals(void)
         const char *words;
     } bad[] = {
         {{"tasks=[{\"type\":\"hessian\",\"field\":\"u\"}]", "operator.scheme=lv"}, 2,
-         PST_EINVAL, "has no Hessian"},
+         PST_EINPUT, "has no Hessian"},
         {{"tasks=[{\"type\":\"solve\",\"rhs\":\"1\",\"exact\":\"0\",\"solver\":\"cg\"}]"}, 1,
-         PST_EINVAL, "CG needs"},
+         PST_EINPUT, "CG needs"},
         {{"tasks=[{\"type\":\"laplacian\",\"field\":\"u\"}]", "mobility.type=constant",
-          "mobility.value=2"}, 3, PST_EINVAL, "use type 'divergence'"},
+          "mobility.value=2"}, 3, PST_EINPUT, "use type 'divergence'"},
         {{"tasks=[{\"type\":\"divergence\",\"field\":\"u\"}]", "mobility.type=expression",
-          "mobility.expression=1+x"}, 3, PST_EINVAL, "plain Laplacian only"},
+          "mobility.expression=1+x"}, 3, PST_EINPUT, "plain Laplacian only"},
         {{"tasks=[{\"type\":\"laplacian\",\"field\":\"u\",\"exact\":\"sinn(x)\"}]"}, 1,
          PST_EINPUT, "unknown function 'sinn'"},
         {{"fields.v=log(x - 2)", "tasks=[{\"type\":\"laplacian\",\"field\":\"v\"}]"}, 2,

@@ -731,6 +731,27 @@ static void test_docs(void)
     free(have);
 }
 
+/* Two outputs on one file would overwrite each other: refused, both keys named, the paths
+ * compared after normalisation ("./x" is "x", "/tmp/../tmp/x" is "/tmp/x"). */
+static void test_output_paths(void)
+{
+    EXPECT_ERROR("{\"outputs\": {\"csv\": \"out.txt\", \"vtu\": \"out.txt\"}}",
+                 "t.json:1:32: key 'outputs.vtu': outputs.csv and outputs.vtu are the same file "
+                 "'out.txt': one would overwrite the other");
+    EXPECT_ERROR("{\"outputs\": {\"vtu\": \"x.out\", \"report\": \".//./x.out\"}}",
+                 "t.json:1:30: key 'outputs.report': outputs.vtu and outputs.report are the same "
+                 "file './/./x.out': one would overwrite the other");
+    const char *ov[] = {"outputs.report=/tmp/../tmp/r.json"};
+    EXPECT_ERROR_OV("{\"outputs\": {\"csv\": \"/tmp/r.json\"}}", ov,
+                    "override 'outputs.report=/tmp/../tmp/r.json': key 'outputs.report': "
+                    "outputs.csv and outputs.report are the same file '/tmp/../tmp/r.json': one "
+                    "would overwrite the other");
+    pst_scene s;
+    CHECK_INT(parse(&s, "{\"outputs\": {\"csv\": \"a.csv\", \"vtu\": \"a.vtu\", "
+                        "\"report\": \"sub/a.csv\"}}", NULL, 0), PST_OK);
+    pst_scene_free(&s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc == 3 && strcmp(argv[1], "--write-docs") == 0) {
@@ -752,6 +773,7 @@ int main(int argc, char **argv)
     test_load();
     test_fuzz();
     test_docs();
+    test_output_paths();
     printf("test_scene: %.2f s\n", omp_get_wtime() - t0);
     return check_summary("test_scene");
 }

@@ -47,10 +47,16 @@ void pst_escape_controls(char *msg, size_t cap);
 /* ------------------------------------------------------------------------------------------ */
 
 /* Write `path` all or nothing: write(f, job) fills a temporary file in the same directory,
- * which is synced and renamed over `path`. PST_EIO (message in err) on any failure, and then
- * `path` is untouched and no temporary file is left. */
+ * which is synced and renamed over `path`, and the directory is synced. A symbolic link is
+ * followed (its target is replaced, the link stays a link); a device, FIFO or socket is written
+ * into directly (no temporary); a directory is refused. PST_EIO (message in err) on any
+ * failure, and then a regular `path` is untouched and no temporary file is left. */
 int pst_write_atomic(const char *path, void (*write)(FILE *f, const void *job), const void *job,
                      char *err);
+
+/* Remove the temporary files of the pst_write_atomic calls in progress. Async-signal-safe: for
+ * a SIGINT/SIGTERM/SIGHUP handler that then re-raises the signal (the program installs one). */
+void pst_write_atomic_cleanup(void);
 
 /* ------------------------------------------------------------------------------------------ */
 /* Threads                                                                                    */

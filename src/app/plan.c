@@ -73,6 +73,7 @@ static int task_fields(const sc_task *t, int dim)
     }
 }
 
+/* A task the scheme or the scene cannot take: bad input (exit 2, docs/cli.md). */
 static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t errlen)
 {
     const sc_task *t = &s->tasks[k];
@@ -86,24 +87,24 @@ static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t
                  need == PST_SUPPORTS_GRADIENT  ? "gradient"
                  : need == PST_SUPPORTS_HESSIAN ? "Hessian"
                                                 : "interpolation");
-        return PST_EINVAL;
+        return PST_EINPUT;
     }
     if (t->type == SC_TASK_DIVERGENCE && s->mobility.type == SC_MOB_NONE) {
         snprintf(err, errlen, "task '%s': a divergence task needs a mobility (mobility.type)",
                  t->name);
-        return PST_EINVAL;
+        return PST_EINPUT;
     }
     if (t->type == SC_TASK_LAPLACIAN && s->mobility.type != SC_MOB_NONE) {
         snprintf(err, errlen, "task '%s': the scene has a mobility, so its operator is "
                               "div(M grad u): use type 'divergence'", t->name);
-        return PST_EINVAL;
+        return PST_EINPUT;
     }
     if (mobility && (t->type == SC_TASK_DIVERGENCE || t->type == SC_TASK_SOLVE) &&
         !pst_scheme_supports(scheme, PST_SUPPORTS_MOBILITY)) {
         snprintf(err, errlen, "task '%s': scheme '%s' discretises the plain Laplacian only; "
                               "a variable mobility needs another scheme (e.g. lv)",
                  t->name, scheme);
-        return PST_EINVAL;
+        return PST_EINPUT;
     }
     if (t->type == SC_TASK_SOLVE && t->solver == PST_SOLVER_CG) {
         int neumann = 0;
@@ -114,7 +115,7 @@ static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t
             snprintf(err, errlen, "task '%s': CG needs a symmetrisable operator (brookshaw or "
                                   "cb with gradient G1 and no Neumann rows); use gmres",
                      t->name);
-            return PST_EINVAL;
+            return PST_EINPUT;
         }
     }
     return PST_OK;
@@ -300,6 +301,9 @@ static double fit_solves(pst_plan *p, const pst_scene *s, double list, double bu
 int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
+    int bad = pst_scene_compile_exprs(s, err, errlen);
+    if (bad != PST_OK)
+        return bad;
     const int dim = s->dim;
     p->particles = particles;
     p->kernel = s->op.kernel >= 0 ? s->op.kernel : pst_scheme_default_kernel(s->op.scheme);

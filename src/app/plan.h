@@ -59,9 +59,10 @@ typedef struct {
 } pst_plan;
 
 /* Make the plan of scene `s` for a cloud of `particles` particles (pst_plan_particles gives
- * the count of a generated cloud before generating it). Errors (PST_EINVAL, with the reason
- * in err) for tasks the scheme cannot do (a Hessian from a scheme without one, CG on a
- * non-symmetrisable operator, a divergence task without mobility, ...); PST_ENOMEM with the
+ * the count of a generated cloud before generating it). Errors (PST_EINPUT, with the reason
+ * in err) for an expression that does not compile (pst_scene_compile_exprs) and for tasks the
+ * scheme cannot do (a Hessian from a scheme without one, CG on a non-symmetrisable operator, a
+ * divergence task without mobility, ...); PST_ENOMEM with the
  * estimate when the plan does not fit in limits.memory_fraction of the available memory. */
 int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen);
 

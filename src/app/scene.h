@@ -145,6 +145,12 @@ int pst_scene_default(pst_scene *s, const char *const *overrides, int noverrides
                       size_t errlen);
 void pst_scene_free(pst_scene *s);
 
+/* Compile every expression of the scene (fields, mobility, exact values, right-hand sides,
+ * boundary values) and discard it: PST_EINPUT with the message the run would give ("PATH:
+ * KEY: WHY") for the first that does not compile. The planner calls it, so that a plan refuses
+ * what the run would refuse. */
+int pst_scene_compile_exprs(const pst_scene *s, char *err, size_t errlen);
+
 /* The parameter table as help text (`pstencil help scene`) or as the markdown of
  * docs/scenes.md. */
 void pst_scene_print_help(FILE *f, int markdown);

@@ -386,6 +386,8 @@ int scene_read_outputs(ctx *c, const cJSON *root, pst_scene *s)
         rc = scene_set_str(c, &out->vtu, scene_get_string(o, "outputs.vtu"));
     if (rc == PST_OK)
         rc = scene_set_str(c, &out->report, scene_get_string(o, "outputs.report"));
+    if (rc == PST_OK)
+        rc = scene_check_output_paths(c, s);
     const cJSON *list = scene_member(o, "fields");
     if (list && rc == PST_OK) {
         scene_enter(c, o, "fields");

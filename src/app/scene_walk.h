@@ -77,6 +77,10 @@ int scene_check_object(ctx *c, const cJSON *obj, const sc_param *p, const char *
  * on the way, and set the value (JSON when it parses as JSON, else a string). */
 int scene_apply_override(ctx *c, cJSON *root, int idx);
 
+/* Refuse two of outputs.csv, .vtu, .report on one file (normalised paths), naming both keys;
+ * called inside the "outputs" object. */
+int scene_check_output_paths(ctx *c, const pst_scene *s);
+
 /* Member `name` of obj, NULL when absent or obj is no object. */
 const cJSON *scene_member(const cJSON *obj, const char *name);
 /* Enter member `name` of obj for the messages that follow; the node may be absent. */

@@ -1,12 +1,15 @@
 /* The pstencil program: command dispatch, option parsing and the main job.
  *
  * Exit codes (docs/cli.md): 0 ok, 1 usage, 2 bad input, 3 numerical failure, 4 out of memory. */
+#define _POSIX_C_SOURCE 200809L /* sigaction */
+
 #include "cli.h"
 
 #include <errno.h>
 #include <math.h>
 #include <mpi.h>
 #include <omp.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -136,9 +139,34 @@ int cli_start_mpi(void)
     return mpi_started == 1 ? 0 : -1;
 }
 
+/* SIGINT, SIGTERM, SIGHUP: remove the temporary files of the writes in progress, then die of
+ * the signal as if there were no handler (SA_RESETHAND restored the default action). */
+static void on_signal(int sig)
+{
+    pst_write_atomic_cleanup();
+    raise(sig);
+}
+
+static void install_signal_cleanup(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sa.sa_flags = SA_RESETHAND;
+    sigemptyset(&sa.sa_mask);
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
+    for (size_t k = 0; k < sizeof sigs / sizeof *sigs; ++k) {
+        struct sigaction old;
+        /* a signal ignored by the parent (nohup) stays ignored */
+        if (sigaction(sigs[k], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+            sigaction(sigs[k], &sa, NULL);
+    }
+}
+
 int main(int argc, char **argv)
 {
     cli_ctx ctx = {.quiet = 0};
+    install_signal_cleanup();
     /* Global options may appear anywhere; strip them so that commands see only their own. */
     int nargs = 0;
     char **args = calloc((size_t)argc + 1, sizeof *args);
