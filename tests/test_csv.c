@@ -480,10 +480,10 @@ static void test_write_failures(void)
     CHECK(test_file_holds(path_of("keep.csv"), old));
     CHECK_INT(leftovers(), 0);
 
-    /* rename onto a directory fails after the write: the temporary file is removed */
+    /* a directory in the way is refused before anything is written */
     mkdir(path_of("a_dir"), 0755);
     CHECK_INT(pst_cloud_write_csv(c, path_of("a_dir"), err), PST_EIO);
-    CHECK(strstr(err, "rename") != NULL);
+    CHECK(strstr(err, "is a directory") != NULL);
     CHECK_INT(leftovers(), 0);
     rmdir(path_of("a_dir"));
 
