@@ -26,6 +26,11 @@ struct pst_cloud {
  * such pair in lexicographic position order), 0 when all positions differ, PST_ENOMEM. */
 int pst_cloud_find_duplicate(const pst_cloud *c, size_t *a, size_t *b);
 
+/* The whole-cloud checks of pst_cloud_validate that the readers' per-value checks cannot make:
+ * a finite extent along every axis, a non-zero normal on every Neumann particle. PST_EINPUT
+ * with the axis or the particle (by id) in err. */
+int pst_cloud_check_extent_normals(const pst_cloud *c, char *err);
+
 /* h of particle i whatever the layout. */
 static inline double pst_cloud_h_at(const pst_cloud *c, size_t i)
 {
