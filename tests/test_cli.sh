@@ -447,5 +447,64 @@ sed 's/"sin(6\*x + 8\*y)"/"sin(6*x +"/' "$work/sw.json" > "$work/swexpr.json"
 expect 2 "sweep --plan: an expression that does not compile" -- "$exe" sweep "$work/swexpr.json" --plan
 contains err "fields.u: column" "sweep --plan names the expression"
 
+# Hostile clouds and paths (issue 16 items 4, 7, 9): refused with exit 2 and a reason, never a hang.
+printf 'x,y,V,h,kind,nx,ny,u\n-1e308,0,1,1,interior,0,0,0\n1e308,0,1,1,interior,0,0,0\n' > "$work/wide.csv"
+expect 2 "neighbours: a cloud spanning +-1e308" -- timeout 20 "$exe" neighbours "$work/wide.csv"
+contains err "extent overflows" "neighbours names the overflowing extent"
+expect 2 "apply: a cloud spanning +-1e308" -- timeout 20 "$exe" apply --scheme lv --field u \
+  --in "$work/wide.csv" --out "$work/wide_lu.csv"
+contains err "extent overflows" "apply names the overflowing extent"
+expect 2 "stencil: a cloud spanning +-1e308" -- timeout 20 "$exe" stencil --scheme lv \
+  --in "$work/wide.csv" --out "$work/wide.mtx"
+contains err "extent overflows" "stencil names the overflowing extent"
+cat > "$work/wide_scene.json" <<'EOF'
+{ "dim": 2, "cloud": { "source": "file", "file": "wide.csv" },
+  "fields": { "w": "x" }, "tasks": [ { "type": "laplacian", "field": "w" } ] }
+EOF
+expect 2 "run: a cloud spanning +-1e308" -- timeout 20 "$exe" run "$work/wide_scene.json"
+contains err "extent overflows" "run names the overflowing extent"
+printf 'x,y,V,h,kind,nx,ny,u\n0,0,1,1,interior,0,0,0\n0.5,0,1,1,interior,0,0,0\n' > "$work/two_u.csv"
+expect 2 "apply: h = 1e300" -- timeout 20 "$exe" apply --scheme lv --in "$work/two_u.csv" \
+  --field u --h 1e300 --out "$work/h_lu.csv"
+contains err "smoothing length" "apply names the absurd h"
+printf 'x,y,V,h,kind,nx,ny\n' > "$work/empty.csv"
+expect 2 "neighbours: a cloud without particles" -- "$exe" neighbours "$work/empty.csv"
+contains err "the cloud has no particles" "neighbours says the cloud is empty"
+sed 's/wide.csv/empty.csv/' "$work/wide_scene.json" > "$work/empty_scene.json"
+expect 2 "run: a cloud without particles" -- "$exe" run "$work/empty_scene.json"
+contains err "the cloud has no particles" "run says the cloud is empty"
+printf 'x,y,V,h,kind,nx,ny\n0,0,1,1,interior,0,0\n1,0,1,1,neumann,0,0\n' > "$work/nonormal.csv"
+expect 2 "neighbours: a Neumann particle with a zero normal" -- "$exe" neighbours \
+  "$work/nonormal.csv"
+contains err "particle 1: Neumann particle with a zero normal" "the zero normal's particle named"
+mkdir -p "$work/adir.json"
+expect 2 "run: a directory as the scene" -- "$exe" run "$work/adir.json"
+contains err "Is a directory" "the directory's reason given"
+sed 's/wide.csv/c.vtp/' "$work/wide_scene.json" > "$work/vtp_scene.json"
+sed 's/UnstructuredGrid/PolyData/g' "$work/c.vtu" > "$work/c.vtp"
+expect 0 "run: a .vtp cloud.file goes to the VTK reader" -- "$exe" run "$work/vtp_scene.json"
+contains out "441 particles" "the .vtp cloud read as VTK PolyData, not as CSV"
+sed 's/wide.csv/c.txt/' "$work/wide_scene.json" > "$work/txt_scene.json"
+cp "$work/two_u.csv" "$work/c.txt"
+expect 2 "run: an unknown cloud.file extension" -- "$exe" run "$work/txt_scene.json"
+contains err "unknown extension (expected .csv, .vtu or .vtp)" "the extension refusal says what is read"
+expect 1 "cloud --jitter 5" -- "$exe" cloud --jitter 5 -o "$work/j.csv"
+contains err "option --jitter: a number in \[0, 1) expected" "the jitter limit of the scenes"
+check "cloud --jitter 5 wrote nothing" '[ ! -e "$work/j.csv" ]'
+
+# The memory estimate under an address-space limit (issue 16 item 8): refused up front, the
+# limit named, by run and by cloud alike; sysinfo says which limit applies.
+expect 0 "run --plan of 10^6 particles fits without a limit" -- "$exe" run cloud.spacing=0.01 --plan
+expect 4 "run under ulimit -v 800000 is refused by the estimate" -- \
+  bash -c 'ulimit -v 800000 && exec "$0" run cloud.spacing=0.01 --plan' "$exe"
+contains err "the limit that applies: RLIMIT_AS" "the refusal names RLIMIT_AS"
+expect 4 "cloud under ulimit -v 800000 is refused by the estimate" -- \
+  bash -c 'ulimit -v 800000 && exec "$0" cloud --s0 0.0002 -o "$1"' "$exe" "$work/big.csv"
+contains err "pstencil: cloud: the cloud needs about 1.23 GB" "cloud gives its estimate"
+contains err "the limit that applies: RLIMIT_AS" "cloud names RLIMIT_AS"
+check "the refused cloud wrote nothing" '[ ! -e "$work/big.csv" ]'
+expect 0 "sysinfo under ulimit -v 800000" -- bash -c 'ulimit -v 800000 && exec "$0" sysinfo' "$exe"
+contains out "memory available .*(limit: RLIMIT_AS" "sysinfo names the limit that applies"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

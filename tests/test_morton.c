@@ -213,10 +213,43 @@ static void test_threads_and_limits(void)
     pst_cloud_destroy(c);
 }
 
+/* Finite coordinates whose extent overflows (+-1e308) are refused by the validation, the Morton
+ * sort and the cell grid, where the coarsening loops once never ended (issue 16); an extent
+ * just inside the range sorts, even from the smallest cell size. */
+static void test_wide_extent(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        pst_cloud *c;
+        pst_cloud_create(&c, dim, 2, NULL);
+        pst_cloud_coord(c, 0)[0] = -1e308;
+        pst_cloud_coord(c, 0)[1] = 1e308;
+        char err[PST_ERRLEN] = "";
+        CHECK_INT(pst_cloud_validate(c, err), PST_EINPUT);
+        CHECK(strstr(err, "extent overflows") != NULL);
+        err[0] = 0;
+        CHECK_INT(pst_cloud_morton_sort(c, 1.0, err), PST_EINPUT);
+        CHECK(strstr(err, "extent overflows") != NULL);
+        pst_cells g;
+        err[0] = 0;
+        CHECK_INT(pst_cells_build(&g, c, 1.0, err), PST_EINPUT);
+        CHECK(strstr(err, "extent overflows") != NULL);
+        CHECK_INT(pst_cells_build(&g, c, INFINITY, err), PST_EINPUT);
+        pst_cloud_coord(c, 0)[0] = -8e307;
+        pst_cloud_coord(c, 0)[1] = 8e307;
+        CHECK_INT(pst_cloud_validate(c, NULL), PST_OK);
+        CHECK_INT(pst_cloud_morton_sort(c, 5e-324, NULL), PST_OK);
+        CHECK_INT(pst_cells_build(&g, c, 5e-324, NULL), PST_OK);
+        CHECK(g.ncells <= 8 * 2 + 1024);
+        pst_cells_free(&g);
+        pst_cloud_destroy(c);
+    }
+}
+
 int main(void)
 {
     test_keys();
     test_sort();
     test_threads_and_limits();
+    test_wide_extent();
     return check_summary("test_morton");
 }

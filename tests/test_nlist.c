@@ -347,8 +347,12 @@ static void test_errors(void)
     }
     pst_cloud_h_per_particle(c)[3] = 0.0;
     err[0] = 0;
-    CHECK_INT(pst_nlist_build(&nl, c, 2.0, err), PST_EINVAL);
+    CHECK_INT(pst_nlist_build(&nl, c, 2.0, err), PST_EINPUT);
     CHECK(strstr(err, "particle 3") != NULL);
+    /* an h whose kernel powers leave a double's range is bad data too (issue 16) */
+    pst_cloud_h_per_particle(c)[3] = 1e300;
+    CHECK_INT(pst_nlist_build(&nl, c, 2.0, err), PST_EINPUT);
+    CHECK(strstr(err, "particle 3: smoothing length h = 1e+300") != NULL);
     pst_cloud_h_per_particle(c)[3] = 1.0;
     pst_cloud_coord(c, 1)[4] = NAN;
     CHECK_INT(pst_nlist_build(&nl, c, 2.0, err), PST_EINPUT);

@@ -751,7 +751,7 @@ static void test_read_formats(void)
     {
         const float pts[9] = {0, 0, 0, 1, 0, 0.5f, 0, 1, -0.25f};
         const double V[3] = {1, 2, 3}, h[3] = {0.1, 0.2, 0.3}, m[3] = {4, 5, 6};
-        const uint8_t kind[3] = {1, 0, 2};
+        const uint8_t kind[3] = {1, 0, 1}; /* no normals: no Neumann particle */
         unsigned char raw[128];
         char b64[5][200];
         block(raw, 4, 0, pts, 9, 4);

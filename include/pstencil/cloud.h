@@ -82,8 +82,9 @@ double *pst_cloud_field_by_name(pst_cloud *c, const char *name);   /* NULL when 
  * gives lo = hi = 0. */
 void pst_cloud_bbox(const pst_cloud *c, double lo[3], double hi[3]);
 
-/* Check a cloud: finite positions, V > 0, h > 0, known kinds, finite normals, mobility > 0,
- * no two particles at the same coordinates. On failure the cloud's error names the first
+/* Check a cloud: finite positions whose extent along every axis is finite too, V > 0, h > 0,
+ * known kinds, finite normals (non-zero on Neumann particles), mobility > 0, no two particles
+ * at the same coordinates. On failure the cloud's error names the first
  * offending particle; returns PST_EINPUT. */
 int pst_cloud_validate(pst_cloud *c, char *err);
 

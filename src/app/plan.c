@@ -8,10 +8,11 @@
  *   - the memory estimate is checked before the cloud is generated. */
 #include "plan.h"
 
+#include "memory_avail.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-#include <unistd.h>
 
 #define PLAN_PI 3.14159265358979323846
 
@@ -25,24 +26,6 @@
  * one (pst_scheme_amg_radius) is wider. */
 #define PLAN_MIN_RESTART 20
 #define PLAN_AMG_TIGHT_RADIUS 1.3
-
-/* Bytes the machine can give a run: MemAvailable from /proc/meminfo, else physical memory. */
-static double available_bytes(void)
-{
-    FILE *f = fopen("/proc/meminfo", "r");
-    if (f) {
-        char line[256];
-        while (fgets(line, sizeof line, f)) {
-            unsigned long long kb;
-            if (sscanf(line, "MemAvailable: %llu kB", &kb) == 1) {
-                fclose(f);
-                return (double)kb * 1024.0;
-            }
-        }
-        fclose(f);
-    }
-    return (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
-}
 
 size_t pst_plan_particles(const pst_scene *s)
 {
@@ -357,7 +340,10 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
         nops += s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].ngroups > 0;
     /* the scheme's per-particle data and the row status */
     p->bytes_operators = nops * n * (1.0 + pst_scheme_data_bytes(s->op.scheme, dim));
-    p->bytes_available = available_bytes();
+    pst_memory_avail avail;
+    pst_memory_probe(&avail);
+    p->bytes_available = avail.bytes;
+    p->memory_limit = avail.limit;
     double budget = s->memory_fraction * p->bytes_available;
     p->base_keep = base_keep(p, s);
     p->bytes_total = fit_solves(p, s, p->bytes_neighbours, budget, 0);
@@ -379,11 +365,12 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
     if (p->bytes_total > budget) {
         snprintf(err, errlen, "the run needs about %.2f GB (cloud %.2f, neighbours %.2f, "
                               "half list %.2f, operators %.2f, weights %.2f, solver %.2f), more "
-                              "than %.0f %% of the %.2f GB available (limits.memory_fraction); "
-                              "use a coarser spacing or fewer tasks",
+                              "than %.0f %% of the %.2f GB available (limits.memory_fraction; the limit "
+                              "that applies: %s); use a coarser spacing or fewer tasks",
                  p->bytes_total * 1e-9, p->bytes_cloud * 1e-9, p->bytes_neighbours * 1e-9,
                  p->bytes_half_list * 1e-9, p->bytes_operators * 1e-9, p->bytes_weights * 1e-9,
-                 p->bytes_solver * 1e-9, 100 * s->memory_fraction, p->bytes_available * 1e-9);
+                 p->bytes_solver * 1e-9, 100 * s->memory_fraction, p->bytes_available * 1e-9,
+                 p->memory_limit);
         return PST_ENOMEM;
     }
     return PST_OK;
@@ -464,7 +451,7 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
             gb ? "GB" : "MB", p->bytes_cloud * unit, p->bytes_neighbours * unit);
     if (p->half_list)
         fprintf(f, ", half list %.2f", p->bytes_half_list * unit);
-    fprintf(f, ", operators %.2f, weights %.2f, solver %.2f) of %.2f GB available\n",
+    fprintf(f, ", operators %.2f, weights %.2f, solver %.2f) of %.2f GB available (%s)\n",
             p->bytes_operators * unit, p->bytes_weights * unit, p->bytes_solver * unit,
-            p->bytes_available * 1e-9);
+            p->bytes_available * 1e-9, p->memory_limit);
 }

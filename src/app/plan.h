@@ -56,6 +56,7 @@ typedef struct {
      * whole one where half_list). */
     double bytes_cloud, bytes_neighbours, bytes_half_list, bytes_operators, bytes_weights;
     double bytes_solver, bytes_total, bytes_available;
+    const char *memory_limit; /* what bounds bytes_available (pst_memory_avail.limit)         */
 } pst_plan;
 
 /* Make the plan of scene `s` for a cloud of `particles` particles (pst_plan_particles gives

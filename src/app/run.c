@@ -137,11 +137,9 @@ static int build(run_state *r)
     cli_progress pg;
     progress_begin(&pg, !r->o->quiet, "neighbours");
     double cell = r->plan.support * pst_cloud_h_max(r->c);
-    st = pst_cloud_morton_sort(r->c, cell, NULL);
+    st = pst_cloud_morton_sort(r->c, cell, msg);
     if (st == PST_OK)
         st = pst_nlist_build(&r->nl, r->c, r->plan.support, msg);
-    else
-        snprintf(msg, sizeof msg, "Morton sort: %s", pst_strerror(st));
     progress_end(&pg);
     if (st != PST_OK)
         return run_fail(r, st, "%s: neighbours: %s", s->path, msg);

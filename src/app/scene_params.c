@@ -23,8 +23,8 @@ const sc_param sc_params[] = {
      .doc = "A jittered node lattice, the Lukyanov-Vuik cell-centred layout with face "
             "particles, or a CSV file (docs/clouds.md)."},
     {.key = "cloud.file", .type = SC_T_PATH, .applies = "file", .flags = SC_F_REQUIRED,
-     .doc = "The cloud: a CSV file, or a VTU file when the name ends in .vtu (docs/io.md), "
-            "relative to the scene file's folder."},
+     .doc = "The cloud, read by its extension: .csv, or VTK XML .vtu / .vtp (docs/io.md); "
+            "another extension is refused. Relative to the scene file's folder."},
     {.key = "cloud.lo", .type = SC_T_VEC, .def = "0", .units = "length", .applies = GENERATED,
      .doc = "Lower corner of the box."},
     {.key = "cloud.hi", .type = SC_T_VEC, .def = "1", .units = "length", .applies = GENERATED,

@@ -32,12 +32,13 @@ char *pst_read_text(const char *path, size_t *len_out, char *err, size_t errlen,
         got = fread(text + len, 1, cap - 1 - len, f);
         len += got;
     }
-    int bad = ferror(f);
+    int bad = ferror(f), e = errno; /* a directory opens, then fails to read: EISDIR */
     fclose(f);
     if (!text || bad) {
         free(text);
         if (err && errlen)
-            snprintf(err, errlen, "%s: %s", path, bad ? "read error" : "out of memory");
+            snprintf(err, errlen, "%s: %s%s", path, bad ? "read error: " : "out of memory",
+                     bad ? strerror(e) : "");
         *status = bad ? PST_EIO : PST_ENOMEM;
         return NULL;
     }

@@ -1,6 +1,7 @@
 /* Commands that generate clouds: `pstencil cloud` (to CSV) and `pstencil run` (the main job on
  * the built-in default scene). */
 #include "cli.h"
+#include "memory_avail.h"
 
 #include <math.h>
 #include <omp.h>
@@ -37,7 +38,7 @@ void cli_cloud_options_help(void)
            "  --lo X,Y[,Z]            lower corner of the box\n"
            "  --hi X,Y[,Z]            upper corner (hi - lo a whole number of spacings)\n"
            "  --s0 S                  lattice spacing\n"
-           "  --jitter K              jitter K*delta*s0, delta uniform in [-1,1]\n"
+           "  --jitter K              jitter K*delta*s0, delta uniform in [-1,1]; K in [0, 1)\n"
            "  --seed N                seed of the counter-based RNG\n"
            "  --boundary-layer        keep the outer layer unjittered and mark it Dirichlet\n"
            "  --h-ratio F             smoothing length h = F*s0\n"
@@ -83,8 +84,9 @@ int cli_parse_cloud_option(int argc, char **argv, int *i, cli_cloud_opts *o)
         return 1;
     }
     if (cli_option(argc, argv, i, "--jitter", &v)) {
-        if (!v || cli_parse_double(v, &d) != 0 || d < 0)
-            return bad_value("--jitter", v, "a number >= 0");
+        /* the limit of the scenes' cloud.jitter: K >= 1 lets particles cross (or meet) */
+        if (!v || cli_parse_double(v, &d) != 0 || !(d >= 0 && d < 1))
+            return bad_value("--jitter", v, "a number in [0, 1)");
         l->jitter = d;
         return 1;
     }
@@ -166,6 +168,40 @@ static int wants_help(int argc, char **argv)
     return 0;
 }
 
+/* The share of the available memory a generated cloud may take: the scenes' default
+ * limits.memory_fraction. */
+#define CLOUD_MEMORY_FRACTION 0.8
+
+/* Refuse, before generating, a cloud that cannot fit: its particles (the generators' count;
+ * a bad box is left to them to report) times 8 bytes per coordinate, normal component, volume
+ * and id plus a kind byte, against the memory a run may use (pst_memory_probe). CLI_OK, or
+ * CLI_NOMEM after a message. */
+static int cloud_fits(const cli_cloud_opts *o)
+{
+    const pst_lattice_opts *l = &o->lattice;
+    double cells[3], nodes = 1, inner = 1, faces = 0;
+    for (int d = 0; d < l->dim; ++d) {
+        cells[d] = round((l->hi[d] - l->lo[d]) / l->s0);
+        if (!(cells[d] >= 1))
+            return CLI_OK;
+        nodes *= cells[d] + 1;
+        inner *= cells[d];
+    }
+    for (int d = 0; d < l->dim; ++d)
+        faces += 2 * inner / cells[d];
+    double n = o->cell_centred ? inner + faces : nodes;
+    double bytes = n * (8.0 * (2 * l->dim + 2) + 1);
+    pst_memory_avail m;
+    pst_memory_probe(&m);
+    if (bytes <= CLOUD_MEMORY_FRACTION * m.bytes)
+        return CLI_OK;
+    fprintf(stderr, "pstencil: cloud: the cloud needs about %.2f GB (%.4g particles), more than "
+                    "%.0f %% of the %.2f GB available (the limit that applies: %s); use a "
+                    "coarser --s0 or a smaller box\n",
+            bytes * 1e-9, n, 100 * CLOUD_MEMORY_FRACTION, m.bytes * 1e-9, m.limit);
+    return CLI_NOMEM;
+}
+
 int cli_cloud(const cli_ctx *ctx, int argc, char **argv)
 {
     if (wants_help(argc, argv)) {
@@ -185,6 +221,9 @@ int cli_cloud(const cli_ctx *ctx, int argc, char **argv)
         fprintf(stderr, "pstencil: cloud: an output file is needed (-o FILE.csv)\n");
         return CLI_USAGE;
     }
+    rc = cloud_fits(&o);
+    if (rc != CLI_OK)
+        return rc;
     pst_cloud *c = NULL;
     double t0 = omp_get_wtime();
     rc = cli_generate(&o, &c);

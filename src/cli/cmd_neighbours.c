@@ -96,6 +96,11 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv)
     int st = pst_cloud_read_csv(&c, path, err);
     if (st != PST_OK)
         return cli_fail(st, "cannot read the cloud", err);
+    if (pst_cloud_size(c) == 0) { /* as apply, stencil and run */
+        fprintf(stderr, "pstencil: %s: the cloud has no particles\n", path);
+        pst_cloud_destroy(c);
+        return CLI_BAD_INPUT;
+    }
     int rc = cli_neighbour_report(ctx, c, kernel, omp_get_wtime() - t0, "read");
     pst_cloud_destroy(c);
     return rc;

@@ -4,8 +4,10 @@
 #define _DEFAULT_SOURCE /* sysconf(_SC_PHYS_PAGES) */
 #include "cli.h"
 #include "machine.h"
+#include "memory_avail.h"
 
 #include <cblas.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -49,6 +51,16 @@ int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv)
     double phys = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
     printf("memory               %.1f GiB (in hwloc's NUMA nodes: %.1f GiB)\n", phys / (1 << 30),
            m.numa_memory_bytes / (1 << 30));
+    /* what a run's memory estimate is checked against, and which limit sets it */
+    pst_memory_avail avail;
+    pst_memory_probe(&avail);
+    printf("memory available     %.2f GiB (limit: %s; MemAvailable %.2f GiB",
+           avail.bytes / (1 << 30), avail.limit, avail.mem_available / (1 << 30));
+    if (isfinite(avail.rlimit_headroom))
+        printf(", RLIMIT_AS headroom %.2f GiB", avail.rlimit_headroom / (1 << 30));
+    if (isfinite(avail.cgroup_headroom))
+        printf(", cgroup room %.2f GiB", avail.cgroup_headroom / (1 << 30));
+    printf(")\n");
     print_cache(&m.l1d, "L1 data cache");
     print_cache(&m.l2, "L2 cache");
     print_cache(&m.l3, "L3 cache");

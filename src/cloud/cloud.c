@@ -316,10 +316,34 @@ static int validate_particle(const pst_cloud *c, size_t i, char *err)
     return PST_OK;
 }
 
+int pst_cloud_check_extent_normals(const pst_cloud *c, char *err)
+{
+    /* finite coordinates can still span more than a double holds (+-1e308): the cell grids
+     * could then neither size nor coarsen their cells */
+    double lo[3], hi[3];
+    pst_cloud_bbox(c, lo, hi);
+    for (int d = 0; d < c->dim; ++d)
+        PST_CHECK(!isfinite(hi[d] - lo[d]), PST_EINPUT, err,
+                  "the cloud spans [%g, %g] along %c: the extent overflows a double", lo[d],
+                  hi[d], "xyz"[d]);
+    /* a flux row needs a direction: a zero normal would make it a zero row, silently */
+    for (size_t i = 0; i < c->n; ++i) {
+        double len = 0;
+        for (int d = 0; d < c->dim; ++d)
+            len += c->normal[d][i] * c->normal[d][i];
+        PST_CHECK(c->kind[i] == PST_NEUMANN && !(len > 0), PST_EINPUT, err,
+                  "particle %lld: Neumann particle with a zero normal (its flux row needs the "
+                  "outward normal)",
+                  (long long)c->id[i]);
+    }
+    return PST_OK;
+}
+
 int pst_cloud_validate(pst_cloud *c, char *err)
 {
     for (size_t i = 0; i < c->n; ++i)
         PST_TRY(validate_particle(c, i, err));
+    PST_TRY(pst_cloud_check_extent_normals(c, err));
     size_t a, b;
     int dup = pst_cloud_find_duplicate(c, &a, &b);
     PST_CHECK(dup < 0, dup, err, "out of memory for the duplicate check of %zu particles", c->n);

@@ -38,6 +38,11 @@ int pst_find_repeated_name(const char *const *names, size_t n, size_t *first, si
 int pst_cloud_add_fields(pst_cloud *c, const char *const *names, size_t n, double **data,
                          char *err);
 
+/* The whole-cloud checks of pst_cloud_validate that the readers' per-value checks cannot make:
+ * a finite extent along every axis, a non-zero normal on every Neumann particle. PST_EINPUT
+ * with the axis or the particle (by id) in err. */
+int pst_cloud_check_extent_normals(const pst_cloud *c, char *err);
+
 /* h of particle i whatever the layout. */
 static inline double pst_cloud_h_at(const pst_cloud *c, size_t i)
 {

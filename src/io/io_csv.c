@@ -238,6 +238,15 @@ static int check_duplicates(const pst_cloud *c, const rows *r, const char *path,
     return PST_OK;
 }
 
+/* The extent and the Neumann normals (pst_cloud_check_extent_normals), the file named. */
+static int check_shape(const pst_cloud *c, const char *path, char *err)
+{
+    char why[PST_ERRLEN] = "";
+    int st = pst_cloud_check_extent_normals(c, why);
+    PST_CHECK(st != PST_OK, st, err, "%s: %s", path, why);
+    return PST_OK;
+}
+
 /* The data records of an open reader into rows, each value checked where it stands. */
 static int read_rows(const layout *l, pst_csv_reader *csv, rows *r, char *err)
 {
@@ -269,7 +278,8 @@ int pst_cloud_read_csv(pst_cloud **out, const char *path, char *err)
     st = build_cloud(&c, &l, &r);
     PST_CHECK_GOTO(st != PST_OK, st, st, done, err, "%s: %zu particles: %s", path, r.n,
                    st == PST_EINVAL ? "more than the 32-bit index limit" : "out of memory");
-    if ((st = check_duplicates(c, &r, path, err)) != PST_OK) {
+    if ((st = check_duplicates(c, &r, path, err)) != PST_OK ||
+        (st = check_shape(c, path, err)) != PST_OK) {
         pst_cloud_destroy(c);
         c = NULL;
     }

@@ -338,7 +338,11 @@ static int fill_cloud(reader *r, const build_buffers *b, size_t ih, pst_cloud **
             (*c)->x[d][b->part[k]] = b->pts[3 * k + (size_t)d];
     PST_TRY(store_h(r, *c, &r->a[ih], b->tmp, b->part));
     PST_TRY(store_others(r, *c, ih, b->tmp, b->part));
-    return check_duplicates(r, *c, b->row);
+    st = check_duplicates(r, *c, b->row);
+    char why[PST_ERRLEN] = "";
+    if (st == PST_OK && pst_cloud_check_extent_normals(*c, why) != PST_OK)
+        st = vtu_fail(r, "%s", why);
+    return st;
 }
 
 static int build(reader *r, pst_cloud **out)

@@ -3,6 +3,7 @@
  * the cells laid out in Morton order. The counting sort is stable, so its output is unique and
  * the same for any thread count. */
 #include "cells.h"
+#include "check.h"
 
 #include <math.h>
 #include <omp.h>
@@ -20,12 +21,21 @@ void pst_cells_free(pst_cells *g)
 }
 
 /* Choose the cell size: min_size doubled until the grid is small enough. Doubling (rather
- * than any other growth) keeps the grid nested with Morton cells of the same base size. */
-static void choose_grid(pst_cells *g, const double hi[3], size_t n, double min_size)
+ * than any other growth) keeps the grid nested with Morton cells of the same base size.
+ * PST_EINPUT (message in err) for a cell size or an extent that is not finite. */
+static int choose_grid(pst_cells *g, const double hi[3], size_t n, double min_size, char *err)
 {
+    PST_CHECK(!(min_size > 0) || !isfinite(min_size), PST_EINPUT, err,
+              "cell grid: the cell size (support times h) must be finite and > 0 (got %g)",
+              min_size);
+    for (int d = 0; d < g->dim; ++d)
+        PST_CHECK(!isfinite(hi[d] - g->lo[d]), PST_EINPUT, err,
+                  "cell grid: the cloud spans [%g, %g] along axis %d, too wide (the extent "
+                  "overflows a double)",
+                  g->lo[d], hi[d], d);
     double limit = fmin(8.0 * (double)n + 1024.0, (double)UINT32_MAX - 1); /* ranks: uint32 */
     double size = min_size;
-    for (;;) {
+    for (int k = 0; k < PST_MAX_DOUBLINGS; ++k) {
         double inv = 1.0 / size, total = 1.0;
         int fits = isfinite(inv);
         for (int d = 0; d < g->dim; ++d) {
@@ -41,10 +51,12 @@ static void choose_grid(pst_cells *g, const double hi[3], size_t n, double min_s
                 g->dims[d] = d < g->dim ? (uint32_t)(floor((hi[d] - g->lo[d]) * inv) + 1.0) : 1;
                 g->ncells *= g->dims[d];
             }
-            return;
+            return PST_OK;
         }
         size *= 2.0;
     }
+    pst_set_err(err, "cell grid: no cell size fits the cloud's extent");
+    return PST_EINPUT;
 }
 
 /* Number the cells of the 2^level cube with lower corner (x, y, z) in Morton order: children
@@ -86,7 +98,7 @@ int pst_cells_build(pst_cells *g, const pst_cloud *c, double min_size, char *err
     size_t n = c->n;
     double hi[3];
     pst_cloud_bbox(c, g->lo, hi);
-    choose_grid(g, hi, n, min_size);
+    PST_TRY(choose_grid(g, hi, n, min_size, err));
     size_t nc = g->ncells;
 
     /* Chunks of particles, each with its own histogram; capped so that the histograms stay

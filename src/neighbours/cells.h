@@ -20,6 +20,10 @@ typedef struct {
                          * increasing inside each cell                                      */
 } pst_cells;
 
+/* More doublings of a cell size than the double exponent range holds (2^-1074 .. 2^1024):
+ * the bound of the coarsening loops of the cell grid and the Morton sort. */
+#define PST_MAX_DOUBLINGS 2200
+
 /* Cell coordinate of position x along one axis: floor((x - lo)*inv), clamped to the grid.
  * morton.c uses the same expression, so a grid of size cell*2^k nests exactly inside the Morton
  * cells of size cell (1/(2^k cell) = inv/2^k exactly), and the result is monotone in x, which
@@ -52,7 +56,8 @@ static inline void pst_exclusive_scan(int64_t *v, size_t nblocks)
  * out in Morton order of their coordinates (the order of pst_morton_key, extended to any number
  * of bits), so on a cloud Morton-sorted with cells of edge min_size (or a power-of-two fraction
  * of it) `order` is the identity. The result does not depend on the thread count. PST_ENOMEM
- * on allocation failure (message in err). */
+ * on allocation failure, PST_EINPUT for a min_size or an extent that is not finite (message in
+ * err). */
 int pst_cells_build(pst_cells *g, const pst_cloud *c, double min_size, char *err);
 
 void pst_cells_free(pst_cells *g);

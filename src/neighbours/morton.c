@@ -113,22 +113,30 @@ int pst_cloud_morton_sort(pst_cloud *c, double cell, char *err)
         return PST_OK;
     double lo[3], hi[3];
     pst_cloud_bbox(c, lo, hi);
-    for (int d = 0; d < dim; ++d)
+    for (int d = 0; d < dim; ++d) {
         PST_CHECK(!isfinite(lo[d]) || !isfinite(hi[d]), PST_EINPUT, err,
                   "Morton sort: coordinates are not finite");
+        PST_CHECK(!isfinite(hi[d] - lo[d]), PST_EINPUT, err,
+                  "Morton sort: the cloud spans [%g, %g] along axis %d, too wide (the extent "
+                  "overflows a double)",
+                  lo[d], hi[d], d);
+    }
     /* A key holds 21 (3D) or 32 (2D) bits per axis: coarsen the cells by doubling (which keeps
-     * them nested with the finer grid) until the box fits. */
+     * them nested with the finer grid) until the box fits. With a finite extent this ends
+     * before the exponent range does (about 2100 doublings); the bound makes sure of it. */
     double maxcells = dim == 3 ? 2097152.0 : 4294967295.0; /* 2D: the count fits uint32 */
     double inv = 1.0 / cell;
-    for (;;) {
-        int fits = isfinite(inv);
+    int fits = 0;
+    for (int k = 0; k < PST_MAX_DOUBLINGS && !fits; ++k) {
+        fits = isfinite(inv);
         for (int d = 0; d < dim; ++d)
             fits = fits && floor((hi[d] - lo[d]) * inv) + 1.0 <= maxcells;
-        if (fits)
-            break;
-        cell *= 2.0;
-        inv = 1.0 / cell;
+        if (!fits) {
+            cell *= 2.0;
+            inv = 1.0 / cell;
+        }
     }
+    PST_CHECK(!fits, PST_EINPUT, err, "Morton sort: no cell size fits the cloud's extent");
     uint32_t dims[3] = {1, 1, 1};
     for (int d = 0; d < dim; ++d)
         dims[d] = (uint32_t)floor((hi[d] - lo[d]) * inv) + 1u;

@@ -303,24 +303,35 @@ static size_t first_cell(const pst_cells *g, size_t pos)
     return lo;
 }
 
+/* The smoothing lengths a list accepts: the kernels scale as h^-dim and their second
+ * derivatives as h^-(dim+2), which leave a double's range outside about 1e+-60 in 3D. */
+#define PST_H_MIN 1e-60
+#define PST_H_MAX 1e60
+
+static int h_in_range(double h)
+{
+    return h >= PST_H_MIN && h <= PST_H_MAX; /* false for NaN */
+}
+
 static int check_input(const pst_cloud *c, double support, char *err)
 {
     PST_CHECK(!(support > 0) || !isfinite(support), PST_EINVAL, err,
               "neighbour list: support must be finite and > 0 (got %g)", support);
     size_t n = c->n, bad_h = n, bad_x = n;
-    PST_CHECK(!c->h && (!(c->h_uniform > 0) || !isfinite(c->h_uniform)), PST_EINVAL, err,
-              "neighbour list: smoothing length h = %g must be finite and > 0", c->h_uniform);
+    PST_CHECK(!c->h && !h_in_range(c->h_uniform), PST_EINPUT, err,
+              "neighbour list: smoothing length h = %g must be in [%g, %g]", c->h_uniform,
+              PST_H_MIN, PST_H_MAX);
 #pragma omp parallel for schedule(static) reduction(min : bad_h, bad_x)
     for (size_t i = 0; i < n; ++i) {
-        if (c->h && (!(c->h[i] > 0) || !isfinite(c->h[i])))
+        if (c->h && !h_in_range(c->h[i]))
             bad_h = i < bad_h ? i : bad_h;
         for (int d = 0; d < c->dim; ++d)
             if (!isfinite(c->x[d][i]))
                 bad_x = i < bad_x ? i : bad_x;
     }
-    PST_CHECK(bad_h < n, PST_EINVAL, err,
-              "neighbour list: particle %lld: h = %g must be finite and > 0",
-              (long long)c->id[bad_h], c->h[bad_h]);
+    PST_CHECK(bad_h < n, PST_EINPUT, err,
+              "neighbour list: particle %lld: smoothing length h = %g must be in [%g, %g]",
+              (long long)c->id[bad_h], c->h[bad_h], PST_H_MIN, PST_H_MAX);
     PST_CHECK(bad_x < n, PST_EINPUT, err,
               "neighbour list: particle %lld: a coordinate is not finite",
               (long long)c->id[bad_x]);

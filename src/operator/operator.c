@@ -54,9 +54,14 @@ static int check_boundary(const pst_op_opts *o, const pst_cloud *c, char *err)
     for (size_t i = 0; i < c->n; ++i) {
         PST_CHECK(kind[i] > PST_NEUMANN, PST_EINVAL, err,
                   "boundary kinds: particle %zu has unknown kind %d", i, kind[i]);
-        for (int a = 0; a < c->dim && o->normals[0] && kind[i] == PST_NEUMANN; ++a)
+        double len = 0;
+        for (int a = 0; a < c->dim && o->normals[0] && kind[i] == PST_NEUMANN; ++a) {
             PST_CHECK(!isfinite(o->normals[a][i]), PST_EINVAL, err,
                       "boundary normals: Neumann particle %zu has a non-finite normal", i);
+            len += o->normals[a][i] * o->normals[a][i];
+        }
+        PST_CHECK(o->normals[0] && kind[i] == PST_NEUMANN && !(len > 0), PST_EINVAL, err,
+                  "boundary normals: Neumann particle %zu has a zero normal", i);
     }
     return PST_OK;
 }
