@@ -336,8 +336,7 @@ static int check_input(const pst_cloud *c, double support, char *err)
               "neighbour list: particle %lld: a coordinate is not finite",
               (long long)c->id[bad_x]);
     double hmax = pst_cloud_h_max(c), rmax = support * hmax;
-    /* the h of the data, not a bad argument: bad input (exit 2) */
-    PST_CHECK(!isfinite(rmax * rmax) || !isfinite(2 * hmax), PST_EINPUT, err,
+    PST_CHECK(!isfinite(rmax * rmax) || !isfinite(2 * hmax), PST_EINVAL, err,
               "neighbour list: support radius %g * %g is too large", support, hmax);
     return PST_OK;
 }
