@@ -413,14 +413,19 @@ typedef struct {
     double A[9], N[3], Nt[3], G[9], Gs[9];
 } lv_sums;
 
-/* sum_c p_c q_c over a chunk, in vector lanes (a fixed order: the same for every thread). */
+/* sum_c p_c q_c over a chunk in PST_DOT_LANES partial sums (pst_dot_du's order): vector lanes,
+ * and one order for every vector width and thread count, so that the precompute is the same
+ * in every build (the stability table's solve counts depend on its last bits). */
 PST_KHOT double chunk_dot(int n, const double *restrict p, const double *restrict q)
 {
-    double s = 0;
-#pragma omp simd reduction(+ : s)
-    for (int c = 0; c < n; ++c)
-        s += p[c] * q[c];
-    return s;
+    double acc[PST_DOT_LANES] = {0};
+    int c = 0;
+    for (; c + PST_DOT_LANES <= n; c += PST_DOT_LANES)
+        for (int l = 0; l < PST_DOT_LANES; ++l)
+            acc[l] += p[c + l] * q[c + l];
+    for (; c < n; ++c)
+        acc[c % PST_DOT_LANES] += p[c] * q[c];
+    return pst_dot_sum(acc);
 }
 
 /* The sums of row i for constant D and G, a chunk of neighbours at a time: the chunk's geometry

@@ -12,17 +12,6 @@
 
 enum { NPOINTS = 5 };
 
-int LLVMFuzzerInitialize(int *argc, char ***argv);
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-
-int LLVMFuzzerInitialize(int *argc, char ***argv)
-{
-    (void)argc;
-    (void)argv;
-    fuzz_one_thread();
-    return 0;
-}
-
 /* Two results agree when their bits do, or both are NaN (the payload of a NaN is not
  * specified). */
 static int same(double a, double b)

@@ -53,7 +53,10 @@ int fuzz_split(char *text, char sep, char **piece, int max)
     return n;
 }
 
-void fuzz_one_thread(void)
+int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
+    (void)argc;
+    (void)argv;
     omp_set_num_threads(1);
+    return 0;
 }

@@ -21,8 +21,11 @@ int fuzz_memfile(const uint8_t *data, size_t size, char *path, size_t cap);
  * the last piece keeps any further separators. Returns the number of pieces (>= 1). */
 int fuzz_split(char *text, char sep, char **piece, int max);
 
-/* One OpenMP thread: each input runs the same way every time, and the short runs spend the
- * CPU on inputs rather than on thread start-up. */
-void fuzz_one_thread(void);
+/* libFuzzer's entry points. Every harness defines TestOneInput (one input: it must return 0
+ * and leave nothing allocated); Initialize, shared by all (fuzz_input.c), sets one OpenMP
+ * thread, so each input runs the same way every time and the short runs spend the CPU on
+ * inputs rather than on thread start-up. */
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int LLVMFuzzerInitialize(int *argc, char ***argv);
 
 #endif

@@ -12,17 +12,6 @@
 /* Combinations checked from each end of a sweep. */
 enum { NCHECK = 32 };
 
-int LLVMFuzzerInitialize(int *argc, char ***argv);
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-
-int LLVMFuzzerInitialize(int *argc, char ***argv)
-{
-    (void)argc;
-    (void)argv;
-    fuzz_one_thread();
-    return 0;
-}
-
 static void check_combo(const pst_sweep *sw, size_t k)
 {
     const char *vals[SW_MAX_KEYS] = {0};

@@ -11,17 +11,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-int LLVMFuzzerInitialize(int *argc, char ***argv);
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-
-int LLVMFuzzerInitialize(int *argc, char ***argv)
-{
-    (void)argc;
-    (void)argv;
-    fuzz_one_thread();
-    return 0;
-}
-
 /* The plots of table t with its summary; the summary must print (it is written as JSON). */
 static void plot(const pst_csv_table *t, cJSON *summary)
 {
