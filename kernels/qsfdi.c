@@ -114,6 +114,14 @@ PST_KHOT void qs_keep_row(const qs_ctx *k, const qs_data *d, int D, size_t i, in
     }
 }
 
+/* One row's inversions in the widest vector ISA (called from the OpenMP region, which the
+ * clones do not reach). */
+PST_ISA_DISPATCH static uint8_t qs_invert_row(const qs_ctx *k, int D, const double *m,
+                                              qs_state *st)
+{
+    return qs_invert(k, D, m, m + QS_N2(D), st);
+}
+
 PST_KHOT int qs_precompute_t(pst_op *op, int D)
 {
     qs_ctx k = make_ctx(op);
@@ -151,7 +159,7 @@ PST_KHOT int qs_precompute_t(pst_op *op, int D)
             uint8_t st = PST_ROW_OK;
             if (keep || k.c.kind[i] != PST_DIRICHLET) {
                 const double *m = mom + (size_t)t * QS_NMOM;
-                st = live[t] < mn ? PST_ROW_TOO_FEW : qs_invert(&k, D, m, m + n2, &state[t]);
+                st = live[t] < mn ? PST_ROW_TOO_FEW : qs_invert_row(&k, D, m, &state[t]);
             }
             fit[t] = st < PST_ROW_RANK_DEFICIENT;
             op->status[i] = k.c.kind[i] == PST_DIRICHLET ? PST_ROW_OK : st;

@@ -7,6 +7,7 @@
 #include "operator.h"
 
 #include "internal.h"
+#include "isa.h"
 #include "small_matrix.h"
 
 #include <math.h>
@@ -102,10 +103,10 @@ static inline __attribute__((always_inline)) void moments(const pst_op *op, int 
 }
 
 /* The instantiations: dimension, and per-particle (PH = 1) or uniform smoothing length. */
-static void moments2u(const pst_op *op, size_t i, double *s) { moments(op, 2, 0, i, s); }
-static void moments2p(const pst_op *op, size_t i, double *s) { moments(op, 2, 1, i, s); }
-static void moments3u(const pst_op *op, size_t i, double *s) { moments(op, 3, 0, i, s); }
-static void moments3p(const pst_op *op, size_t i, double *s) { moments(op, 3, 1, i, s); }
+PST_ISA_DISPATCH static void moments2u(const pst_op *op, size_t i, double *s) { moments(op, 2, 0, i, s); }
+PST_ISA_DISPATCH static void moments2p(const pst_op *op, size_t i, double *s) { moments(op, 2, 1, i, s); }
+PST_ISA_DISPATCH static void moments3u(const pst_op *op, size_t i, double *s) { moments(op, 3, 0, i, s); }
+PST_ISA_DISPATCH static void moments3p(const pst_op *op, size_t i, double *s) { moments(op, 3, 1, i, s); }
 
 /* The spread of row i's live neighbours; the eigenvectors only for near-flat rows. */
 static spread row_spread(const pst_op *op, size_t i)
