@@ -102,11 +102,24 @@ static inline __attribute__((always_inline)) void moments(const pst_op *op, int 
         s[k] = v[k];
 }
 
-/* The instantiations: dimension, and per-particle (PH = 1) or uniform smoothing length. */
-PST_ISA_DISPATCH static void moments2u(const pst_op *op, size_t i, double *s) { moments(op, 2, 0, i, s); }
-PST_ISA_DISPATCH static void moments2p(const pst_op *op, size_t i, double *s) { moments(op, 2, 1, i, s); }
-PST_ISA_DISPATCH static void moments3u(const pst_op *op, size_t i, double *s) { moments(op, 3, 0, i, s); }
-PST_ISA_DISPATCH static void moments3p(const pst_op *op, size_t i, double *s) { moments(op, 3, 1, i, s); }
+/* The instantiations: dimension, and per-particle (PH = 1) or uniform smoothing length; in the
+ * widest vector ISA (row_spread runs inside an OpenMP region, which the clones do not reach). */
+PST_ISA_DISPATCH static void moments2u(const pst_op *op, size_t i, double *s)
+{
+    moments(op, 2, 0, i, s);
+}
+PST_ISA_DISPATCH static void moments2p(const pst_op *op, size_t i, double *s)
+{
+    moments(op, 2, 1, i, s);
+}
+PST_ISA_DISPATCH static void moments3u(const pst_op *op, size_t i, double *s)
+{
+    moments(op, 3, 0, i, s);
+}
+PST_ISA_DISPATCH static void moments3p(const pst_op *op, size_t i, double *s)
+{
+    moments(op, 3, 1, i, s);
+}
 
 /* The spread of row i's live neighbours; the eigenvectors only for near-flat rows. */
 static spread row_spread(const pst_op *op, size_t i)
