@@ -122,13 +122,28 @@ PST_ISA_DISPATCH static uint8_t qs_invert_row(const qs_ctx *k, int D, const doub
     return qs_invert(k, D, m, m + QS_N2(D), st);
 }
 
+/* One row's WEIGHTS phase in the widest vector ISA: its kappa and its kept kappas, in the
+ * ISA that qs_deriv_row (qsfdi_derivs.c) computes them in, so that the two agree bit for bit. */
+PST_ISA_DISPATCH static void qs_weights_row(const qs_ctx *k, const qs_data *d, int D, size_t i,
+                                            uint8_t status, int fit, const double *m,
+                                            const qs_state *st)
+{
+    double *kap = d->kap + (size_t)QS_NK(D) * i;
+    if (k->c.kind[i] == PST_DIRICHLET)
+        memset(kap, 0, (size_t)QS_NK(D) * sizeof *kap);
+    else
+        qs_row_kappa(k, D, i, status, m, m + QS_N2(D), st, kap);
+    if (d->gkap || d->hkap)
+        qs_keep_row(k, d, D, i, fit, m, m + QS_N2(D), st);
+}
+
 PST_KHOT int qs_precompute_t(pst_op *op, int D)
 {
     qs_ctx k = make_ctx(op);
     qs_data *d = op->data;
     const int64_t *off = op->poff;
     const uint32_t *idx = op->pidx;
-    const int n2 = QS_N2(D), nk = QS_NK(D), mn = qs_min(D);
+    const int mn = qs_min(D);
     /* kept derivatives are needed at Dirichlet rows too, whose Laplacian row is the identity */
     const int keep = d->gkap || d->hkap;
     double *mom = pst_alloc((size_t)QS_BLOCK * QS_NMOM * sizeof *mom);
@@ -168,14 +183,8 @@ PST_KHOT int qs_precompute_t(pst_op *op, int D)
 #pragma omp parallel for schedule(static)
         for (long t = 0; t < nb; ++t) {
             size_t i = b0 + (size_t)t;
-            double *kap = d->kap + (size_t)nk * i;
-            const double *m = mom + (size_t)t * QS_NMOM;
-            if (k.c.kind[i] == PST_DIRICHLET)
-                memset(kap, 0, (size_t)nk * sizeof *kap);
-            else
-                qs_row_kappa(&k, D, i, op->status[i], m, m + n2, &state[t], kap);
-            if (keep)
-                qs_keep_row(&k, d, D, i, fit[t], m, m + n2, &state[t]);
+            qs_weights_row(&k, d, D, i, op->status[i], fit[t], mom + (size_t)t * QS_NMOM,
+                           &state[t]);
         }
         double t3 = omp_get_wtime();
         op->phase[PST_PHASE_MOMENTS] += t1 - t0;

@@ -417,7 +417,8 @@ PST_KHOT void qs_functional(int D, const qs_state *st, const double *lg, const d
                           const double *lc, double *kap)
 {
     const int ns = D, nc = QS_NC(D), nq = QS_NQ(D);
-    double gc[3], lsp[3], gs[3], lgp[3], gg[3], t[3], ss[3], sc[3], rho[3];
+    /* rho zeroed: inlined into a dispatched clone, GCC cannot see that ns <= 3 fills it */
+    double gc[3], lsp[3], gs[3], lgp[3], gg[3], t[3], ss[3], sc[3], rho[3] = {0, 0, 0};
     for (int c = 0; c < nc; ++c) { /* gamma_c = M2c^-1 l_c */
         gc[c] = 0;
         for (int e = 0; e < nc; ++e)
