@@ -2,17 +2,19 @@
  * a replaced file keeping its mode, a write cut short by a file-size limit, a folder in the
  * way and a missing folder, each with its message and no temporary file left behind; a
  * symbolic link followed, devices and FIFOs written into, the temporaries a signal handler
- * removes. */
-#define _POSIX_C_SOURCE 200809L /* chmod, stat, rmdir, symlink, mkfifo, readlink */
+ * removes and those of killed writers that a later writer sweeps. */
+#define _XOPEN_SOURCE 700 /* chmod, stat, rmdir, symlink, mkfifo, readlink, gethostname */
 
 #include "check.h"
 #include "support.h"
 #include "pstencil.h"
 
+#include <ctype.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 static char dir[64];
@@ -154,6 +156,51 @@ static void test_cleanup(void)
     CHECK(test_file_holds(path, "new\n"));
 }
 
+/* "<host>-" as the writer tags its temporaries (io_atomic.c, writer_tag). */
+static void host_tag(char tag[48])
+{
+    char host[64] = "";
+    if (gethostname(host, sizeof host - 1) != 0)
+        host[0] = '\0';
+    host[32] = '\0';
+    for (char *c = host; *c; ++c)
+        if (!(isalnum((unsigned char)*c) || *c == '-'))
+            *c = '-';
+    snprintf(tag, 48, "%s-", host[0] ? host : "host");
+}
+
+/* Temporaries of a writer that is gone (a child that has exited) are removed by the next write
+ * into their directory; those of a live process, of another host and lookalike names stay. */
+static void test_stale_sweep(void)
+{
+    char err[PST_ERRLEN] = "", sub[128], host[48], name[5][320];
+    snprintf(sub, sizeof sub, "%s", test_path_in(dir, "stale"));
+    CHECK(mkdir(sub, 0755) == 0);
+    host_tag(host);
+    pid_t child = fork();
+    if (child == 0)
+        _exit(0);
+    CHECK(child > 0 && waitpid(child, NULL, 0) == child);
+    snprintf(name[0], sizeof name[0], "%s/out.csv.tmp.%s%ld.a1B2c3", sub, host, (long)child);
+    snprintf(name[1], sizeof name[1], "%s/other.vtu.tmp.%s%ld.zzzzzz", sub, host, (long)child);
+    snprintf(name[2], sizeof name[2], "%s/out.csv.tmp.%s%ld.a1B2c3", sub, host, (long)getppid());
+    snprintf(name[3], sizeof name[3], "%s/out.csv.tmp.elsewhere-%ld.a1B2c3", sub, (long)child);
+    snprintf(name[4], sizeof name[4], "%s/out.csv.tmp.%s%ld.txt", sub, host, (long)child);
+    for (int k = 0; k < 5; ++k)
+        CHECK(test_write_text(name[k], "left\n") == 0);
+    char out[200];
+    snprintf(out, sizeof out, "%s/out.csv", sub);
+    CHECK_INT(pst_write_atomic(out, write_text, "new\n", err), PST_OK);
+    CHECK(test_file_holds(out, "new\n"));
+    for (int k = 0; k < 5; ++k) {
+        int gone = access(name[k], F_OK) != 0;
+        CHECK_INT(gone, k < 2); /* the dead writer's two temporaries, of any output */
+        unlink(name[k]);
+    }
+    unlink(out);
+    rmdir(sub);
+}
+
 int main(void)
 {
     if (test_scratch_dir(dir, sizeof dir, "pst_test_atomic") != 0)
@@ -163,6 +210,7 @@ int main(void)
     test_symlink();
     test_devices();
     test_cleanup();
+    test_stale_sweep();
     test_remove_dir(dir);
     return check_summary("test_atomic");
 }

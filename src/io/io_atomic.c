@@ -3,14 +3,17 @@
  * the whole new one and a failed write never leaves a half-written file. A symbolic link is
  * followed (its target is replaced, the link stays), a device or FIFO is written through
  * directly, a directory is refused. Live temporaries are listed so that a signal handler can
- * remove them (docs/io.md). */
-#define _XOPEN_SOURCE 700 /* mkstemp, fdopen, fchmod, fsync, lstat, realpath */
+ * remove them, and those of killed writers are swept by later ones (docs/io.md). */
+#define _XOPEN_SOURCE 700 /* mkstemp, fdopen, fchmod, fsync, lstat, realpath, dirfd, kill */
 
 #include "check.h"
 
+#include <ctype.h>
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -80,15 +83,99 @@ static int fill(int fd, void (*write)(FILE *, const void *), const void *job, in
     return e;
 }
 
-/* The destination's name with a mkstemp template appended (malloc'd; NULL on OOM). */
+/* ---- temporaries left by killed writers --------------------------------------------------- */
+
+/* The temporary's name records its writer, `<path>.tmp.<host>-<pid>.XXXXXX`, so that a later
+ * writer on the same host can tell a temporary whose process is gone (SIGKILL, power cut) from
+ * one being written now. The host name is kept to [A-Za-z0-9-] and 32 characters. */
+static void writer_tag(char tag[48])
+{
+    char host[64] = "";
+    if (gethostname(host, sizeof host - 1) != 0)
+        host[0] = '\0';
+    host[32] = '\0';
+    for (char *c = host; *c; ++c)
+        if (!(isalnum((unsigned char)*c) || *c == '-'))
+            *c = '-';
+    snprintf(tag, 48, "%s-%ld", host[0] ? host : "host", (long)getpid());
+}
+
+/* The pid of `name` when it is a temporary of this host's writers (`*.tmp.<host>-<pid>.` and
+ * six characters), else 0. `host` is ".tmp.<host>-". */
+static long temp_owner(const char *name, const char *host)
+{
+    size_t n = strlen(name), hl = strlen(host);
+    if (n < hl + 9 || name[n - 7] != '.')
+        return 0;
+    for (const char *p = name; (p = strstr(p, host)) != NULL; ++p) {
+        const char *q = p + hl;
+        long pid = 0;
+        while (*q >= '0' && *q <= '9' && pid < 100000000)
+            pid = 10 * pid + (*q++ - '0');
+        if (q == name + n - 7 && pid > 0)
+            return pid;
+    }
+    return 0;
+}
+
+/* Remove the temporaries in `dir` whose writer on this host is no longer running. Each
+ * directory is swept once per process (the first SWEPT_DIRS of them), so that a sweep
+ * writing thousands of files into one directory reads it once. */
+enum { SWEPT_DIRS = 16 };
+static void sweep_stale(const char *dir)
+{
+    static char swept[SWEPT_DIRS][PATH_MAX];
+    static int nswept;
+    int fresh = 1;
+#pragma omp critical(pst_sweep_stale)
+    {
+        for (int k = 0; k < nswept && fresh; ++k)
+            fresh = strcmp(swept[k], dir) != 0;
+        fresh = fresh && nswept < SWEPT_DIRS;
+        if (fresh)
+            strcpy(swept[nswept++], dir); /* dir_of keeps it below PATH_MAX */
+    }
+    if (!fresh)
+        return;
+    char tag[48], host[64];
+    writer_tag(tag);
+    snprintf(host, sizeof host, ".tmp.%.*s", (int)(strrchr(tag, '-') - tag + 1), tag);
+    DIR *d = opendir(dir);
+    if (!d)
+        return;
+    for (struct dirent *e; (e = readdir(d)) != NULL;) {
+        long pid = temp_owner(e->d_name, host);
+        if (pid > 0 && pid != (long)getpid() && kill((pid_t)pid, 0) != 0 && errno == ESRCH)
+            (void)unlinkat(dirfd(d), e->d_name, 0);
+    }
+    closedir(d);
+}
+
+/* The directory part of `path` into dir ("." without one); 0 or ENAMETOOLONG. */
+static int dir_of(const char *path, char dir[PATH_MAX])
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        strcpy(dir, ".");
+    else if (slash == path)
+        strcpy(dir, "/");
+    else if ((size_t)(slash - path) < PATH_MAX)
+        snprintf(dir, PATH_MAX, "%.*s", (int)(slash - path), path);
+    else
+        return ENAMETOOLONG;
+    return 0;
+}
+
+/* The destination's name with the writer's tag and a mkstemp template appended (malloc'd;
+ * NULL on OOM). */
 static char *temp_template(const char *path)
 {
-    size_t plen = strlen(path);
-    char *tmp = malloc(plen + sizeof ".tmp.XXXXXX");
-    if (tmp) {
-        memcpy(tmp, path, plen);
-        memcpy(tmp + plen, ".tmp.XXXXXX", sizeof ".tmp.XXXXXX");
-    }
+    char tag[48];
+    writer_tag(tag);
+    size_t plen = strlen(path), n = plen + strlen(tag) + sizeof ".tmp..XXXXXX";
+    char *tmp = malloc(n);
+    if (tmp)
+        snprintf(tmp, n, "%s.tmp.%s.XXXXXX", path, tag);
     return tmp;
 }
 
@@ -96,15 +183,8 @@ static char *temp_template(const char *path)
  * that cannot sync a directory (EINVAL) are not an error. */
 static int sync_dir(const char *path)
 {
-    const char *slash = strrchr(path, '/');
     char dir[PATH_MAX];
-    if (!slash)
-        strcpy(dir, ".");
-    else if (slash == path)
-        strcpy(dir, "/");
-    else if ((size_t)(slash - path) < sizeof dir)
-        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    else
+    if (dir_of(path, dir) != 0)
         return ENAMETOOLONG;
     int fd = open(dir, O_RDONLY);
     if (fd < 0)
@@ -204,6 +284,9 @@ int pst_write_atomic(const char *path, void (*write)(FILE *, const void *), cons
     PST_CHECK(exists && S_ISDIR(sb.st_mode), PST_EIO, err, "%s: is a directory", path);
     if (exists && !S_ISREG(sb.st_mode))
         return write_into(path, write, job, err);
+    char dir[PATH_MAX];
+    if (dir_of(target, dir) == 0)
+        sweep_stale(dir);
     char *tmp = temp_template(target);
     PST_CHECK_ALLOC(tmp, err, "%s: out of memory", path);
     int st = replace(path, target, tmp, write, job, err);
