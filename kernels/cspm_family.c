@@ -138,7 +138,7 @@ PST_KHOT void cs_gather(const cs_ctx *k, int D, int withV, const double xi[3],
  * division by 0): arithmetic on the mask rather than selects of computed values, which GCC
  * turns back into branches (it may not speculate the division). */
 #define CS_LIVE(kc, d, in, id)                                                                 \
-    double in = ((d) > (kc)->lo) & ((d) < (kc)->hi) ? 1.0 : 0.0;                               \
+    double in = (((d) > (kc)->lo) & ((d) < (kc)->hi)) ? 1.0 : 0.0;                             \
     double id = in / ((d) + (1.0 - in))
 
 /* B, A and C (file comment) of the chunk from V_j (g->b) and d (g->c), in place; 0 for a dead

@@ -72,7 +72,7 @@ static inline qs_ctx make_ctx(const pst_op *op)
 PST_KHOT double qs_omega(pst_kernel K, int D, double supp, double eps, double d2, double *o2,
                          double *o4)
 {
-    double q = sqrt(d2), in = (q > eps) & (q < supp) ? 1.0 : 0.0;
+    double q = sqrt(d2), in = ((q > eps) & (q < supp)) ? 1.0 : 0.0;
     double w = pst_sph_shape(K, D, q, 0); /* the constant C_D cancels */
     double id2 = in / (d2 + (1.0 - in)); /* 1 / d^2, or 0 / (d^2 + 1) */
     *o2 = w * id2;

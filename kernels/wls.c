@@ -138,7 +138,7 @@ PST_KHOT void gather(const wls_ctx *k, int D, pst_kernel K, const double *xc, do
     const double supp = pst_sph_support[K], eps = k->c.pair_eps;
 #pragma omp simd
     for (int c = 0; c < n; ++c)
-        w[c] = (q[c] < supp) & (q[c] > eps) ? w[c] : 0.0;
+        w[c] = ((q[c] < supp) & (q[c] > eps)) ? w[c] : 0.0;
 }
 
 /* The same sums for qsfdi.c (wls.h), in the widest vector ISA. */

@@ -34,8 +34,9 @@ fi
 
 jobs=$(nproc)
 export OMP_WAIT_POLICY=PASSIVE
-# No -Werror: the warnings gate is the gcc build of scripts/test.sh; clang warns about other things.
-CC=$cc cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DPSTENCIL_FUZZ=ON \
+# Warnings are errors here too: clang warns about things gcc does not (operator precedence,
+# implicit declarations that a glibc header lets through for gcc).
+CC=$cc cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DPSTENCIL_FUZZ=ON -DPSTENCIL_WERROR=ON \
   -DPSTENCIL_FUZZ_SECONDS="$seconds" -DPSTENCIL_BUILD_TESTS=OFF -DPSTENCIL_BUILD_BENCH=OFF
 cmake --build build-fuzz -j "$jobs"
 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir build-fuzz --output-on-failure -L fuzz -j "$jobs"

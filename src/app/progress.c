@@ -1,3 +1,5 @@
+#define _POSIX_C_SOURCE 200809L /* fileno */
+
 #include "progress.h"
 
 #include <omp.h>
