@@ -485,7 +485,15 @@ contains out "441 particles" "the .vtp cloud read as VTK PolyData, not as CSV"
 sed 's/wide.csv/c.txt/' "$work/wide_scene.json" > "$work/txt_scene.json"
 cp "$work/two_u.csv" "$work/c.txt"
 expect 2 "run: an unknown cloud.file extension" -- "$exe" run "$work/txt_scene.json"
-contains err "unknown extension (expected .csv, .vtu or .vtp)" "the extension refusal says what is read"
+contains err "unknown extension (a cloud file is .csv, .vtu or .vtp)" "the extension refusal says what is read"
+expect 0 "neighbours: a .vtp cloud goes to the VTK reader" -- "$exe" neighbours "$work/c.vtp"
+contains out "particles            441 (2D)" "neighbours reads the .vtp as VTK PolyData, not as CSV"
+expect 0 "apply: a .vtu cloud goes to the VTK reader" -- "$exe" apply --scheme qsfdi \
+  --in "$work/c.vtu" --field p --out "$work/vtu_apply.csv"
+contains out "441 rows" "apply reads the .vtu as VTK"
+expect 2 "apply: an unknown cloud extension" -- "$exe" apply --scheme qsfdi --in "$work/c.txt" \
+  --field p --out "$work/txt_apply.csv"
+contains err "c.txt: unknown extension" "apply names the file and the rule"
 expect 1 "cloud --jitter 5" -- "$exe" cloud --jitter 5 -o "$work/j.csv"
 contains err "option --jitter: a number in \[0, 1) expected" "the jitter limit of the scenes"
 check "cloud --jitter 5 wrote nothing" '[ ! -e "$work/j.csv" ]'

@@ -145,6 +145,12 @@ int pst_cloud_write_vtu(const pst_cloud *c, const char *path, const uint8_t *row
  * into the appended data), PST_ENOMEM. On failure *out is NULL. */
 int pst_cloud_read_vtu(pst_cloud **out, const char *path, char *err);
 
+/* Read a cloud with the reader its file name's extension names (case-insensitive): .vtu and
+ * .vtp by pst_cloud_read_vtu, .csv by pst_cloud_read_csv; nothing is guessed from the
+ * contents. Any other name is PST_EINPUT ("PATH: unknown extension ..."); otherwise the
+ * reader's own errors. The command line and the scenes' cloud.file read through it. */
+int pst_cloud_read(pst_cloud **out, const char *path, char *err);
+
 #ifdef __cplusplus
 }
 #endif

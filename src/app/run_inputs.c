@@ -7,7 +7,6 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-#include <strings.h>
 
 /* Evaluate expression `text` (scene key `key`) at n positions cols[d][k] into out[]. Its
  * variables are the coordinates x, y (and z in 3D). A non-finite value is an error naming the
@@ -53,15 +52,7 @@ int run_make_cloud(run_state *r)
     char msg[PST_ERRLEN];
     int st;
     if (sc->source == SC_CLOUD_FILE) {
-        /* the reader by the extension: VTK XML (.vtu, .vtp) or CSV; nothing is guessed */
-        const char *ext = strrchr(sc->file, '.');
-        int vtk = ext && (strcasecmp(ext, ".vtu") == 0 || strcasecmp(ext, ".vtp") == 0);
-        if (!vtk && !(ext && strcasecmp(ext, ".csv") == 0))
-            return run_fail(r, PST_EINPUT,
-                            "%s: cloud.file %s: unknown extension (expected .csv, .vtu or .vtp)",
-                            s->path, sc->file);
-        st = vtk ? pst_cloud_read_vtu(&r->c, sc->file, msg)
-                 : pst_cloud_read_csv(&r->c, sc->file, msg);
+        st = pst_cloud_read(&r->c, sc->file, msg); /* the reader by the extension */
         if (st == PST_OK && pst_cloud_size(r->c) == 0) /* as apply, stencil and neighbours */
             return run_fail(r, PST_EINPUT, "%s: cloud.file %s: the cloud has no particles",
                             s->path, sc->file);

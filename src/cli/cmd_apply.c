@@ -1,6 +1,6 @@
 /* `pstencil apply` (L u of a field column, written per particle) and `pstencil stencil` (the
- * assembled matrix of L as MatrixMarket). Both read a CSV cloud, Morton-sort it for locality,
- * build an operator and write their result in input order, all or nothing. */
+ * assembled matrix of L as MatrixMarket). Both read a cloud (pst_cloud_read), Morton-sort it
+ * for locality, build an operator and write their result in input order, all or nothing. */
 #include "cli.h"
 #include "pstencil.h"
 
@@ -85,14 +85,14 @@ static int bad_option(const char *cmd, const char *name, const char *value, cons
 static void print_help(const char *cmd)
 {
     if (strcmp(cmd, "apply") == 0)
-        printf("usage: pstencil apply --scheme NAME --in CLOUD.csv --field COLUMN --out RESULT.csv\n"
+        printf("usage: pstencil apply --scheme NAME --in CLOUD --field COLUMN --out RESULT.csv\n"
                "                      [--mobility COLUMN] [--kernel NAME] [--h VALUE]\n"
                "                      [--gradient G1..G4] [--mean arithmetic|harmonic]\n"
                "                      [--stored]\n\n"
                "Apply the operator L u = div(M grad u) of a scheme to the field COLUMN of a cloud\n"
                "(docs/clouds.md) and write 'id,Lu,status', one row per particle in input order.\n\n");
     else
-        printf("usage: pstencil stencil --scheme NAME --in CLOUD.csv --out A.mtx\n"
+        printf("usage: pstencil stencil --scheme NAME --in CLOUD --out A.mtx\n"
                "                        [--mobility COLUMN] [--kernel NAME] [--h VALUE]\n"
                "                        [--gradient G1..G4] [--mean arithmetic|harmonic]\n\n"
                "Assemble the matrix of L (with its diagonal) and write it as MatrixMarket\n"
@@ -252,7 +252,7 @@ static int setup(const apply_args *a, apply_setup *s)
 {
     char err[PST_ERRLEN] = "", why[PST_ERRLEN] = "";
     double t0 = omp_get_wtime();
-    int st = pst_cloud_read_csv(&s->c, a->in, err);
+    int st = pst_cloud_read(&s->c, a->in, err);
     if (st != PST_OK)
         return cli_fail(st, "cannot read the cloud", err);
     s->t_read = omp_get_wtime() - t0;

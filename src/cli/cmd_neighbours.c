@@ -65,7 +65,7 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv)
     for (int i = 0; i < argc; ++i) {
         const char *v;
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
-            printf("usage: pstencil neighbours FILE.csv [--kernel NAME]\n\n"
+            printf("usage: pstencil neighbours CLOUD [--kernel NAME]\n\n"
                    "Read a cloud (docs/clouds.md), Morton-sort it, build the neighbour list of\n"
                    "spec choice 1 (|x_j - x_i| < support * (h_i + h_j)/2) and print min/mean/max\n"
                    "neighbours, memory and timings. --kernel sets the support radius: cubic,\n"
@@ -93,7 +93,7 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv)
     char err[PST_ERRLEN] = "";
     pst_cloud *c = NULL;
     double t0 = omp_get_wtime();
-    int st = pst_cloud_read_csv(&c, path, err);
+    int st = pst_cloud_read(&c, path, err);
     if (st != PST_OK)
         return cli_fail(st, "cannot read the cloud", err);
     if (pst_cloud_size(c) == 0) { /* as apply, stencil and run */

@@ -62,7 +62,7 @@ static void print_help(void)
            "                      maximum principle; CSV, PNG and JSON (--out DIR)\n"
            "  help scene          every scene key: type, default, units, meaning\n"
            "  cloud [OPTIONS]     generate a particle cloud and write it as CSV\n"
-           "  neighbours FILE     read a CSV cloud, build its neighbour list, print statistics\n"
+           "  neighbours FILE     read a cloud (CSV, VTU), build its neighbour list, print statistics\n"
            "  apply [OPTIONS]     apply a scheme's operator to a field of a CSV cloud, write\n"
            "                      L u and the row status per particle as CSV\n"
            "  stencil [OPTIONS]   assemble a scheme's operator on a CSV cloud, write it as\n"
