@@ -3,13 +3,13 @@
  * way and a missing folder, each with its message and no temporary file left behind; a
  * symbolic link followed, devices and FIFOs written into, the temporaries a signal handler
  * removes and those of killed writers that a later writer sweeps. */
-#define _XOPEN_SOURCE 700 /* chmod, stat, rmdir, symlink, mkfifo, readlink, gethostname */
+#define _POSIX_C_SOURCE 200809L /* chmod, stat, rmdir, symlink, mkfifo, readlink */
 
 #include "check.h"
 #include "support.h"
 #include "pstencil.h"
 
-#include <ctype.h>
+#include <dirent.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <string.h>
@@ -156,17 +156,21 @@ static void test_cleanup(void)
     CHECK(test_file_holds(path, "new\n"));
 }
 
-/* "<host>-" as the writer tags its temporaries (io_atomic.c, writer_tag). */
-static void host_tag(char tag[48])
+/* The live temporary's name, seen from inside a write: "<host>-" of its writer's tag goes to
+ * the job (io_atomic.c: "<path>.tmp.<host>-<pid>.XXXXXX"). */
+static void write_seeing_tag(FILE *f, const void *job)
 {
-    char host[64] = "";
-    if (gethostname(host, sizeof host - 1) != 0)
-        host[0] = '\0';
-    host[32] = '\0';
-    for (char *c = host; *c; ++c)
-        if (!(isalnum((unsigned char)*c) || *c == '-'))
-            *c = '-';
-    snprintf(tag, 48, "%s-", host[0] ? host : "host");
+    char *tag = (char *)job;
+    DIR *d = opendir(dir);
+    for (struct dirent *e; d && (e = readdir(d));) {
+        const char *t = strstr(e->d_name, ".tmp.");
+        const char *dash = t ? strrchr(e->d_name, '-') : NULL;
+        if (dash && dash > t + 5)
+            snprintf(tag, 48, "%.*s", (int)(dash - (t + 5) + 1), t + 5);
+    }
+    if (d)
+        closedir(d);
+    fputs("tagged\n", f);
 }
 
 /* Temporaries of a writer that is gone (a child that has exited) are removed by the next write
@@ -176,7 +180,10 @@ static void test_stale_sweep(void)
     char err[PST_ERRLEN] = "", sub[128], host[48], name[5][320];
     snprintf(sub, sizeof sub, "%s", test_path_in(dir, "stale"));
     CHECK(mkdir(sub, 0755) == 0);
-    host_tag(host);
+    host[0] = '\0';
+    CHECK_INT(pst_write_atomic(test_path_in(dir, "tagged.txt"), write_seeing_tag, host, err),
+              PST_OK);
+    CHECK(host[0] != '\0');
     pid_t child = fork();
     if (child == 0)
         _exit(0);

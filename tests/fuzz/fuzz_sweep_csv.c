@@ -3,6 +3,7 @@
  * summary file (pst_sweep_summary), and turned into plots (pst_plot_build). Every step must
  * succeed or fail cleanly. */
 #include "fuzz_input.h"
+#include "fuzz_plot_check.h"
 #include "plot.h"
 #include "pstencil.h"
 #include "sweep.h"
@@ -20,18 +21,7 @@ static void plot(const pst_csv_table *t, cJSON *summary)
         abort();
     }
     free(json);
-    pst_plot_set ps;
-    char err[PST_ERRLEN + 512] = "";
-    int st = pst_plot_build(t, summary, NULL, &ps, err, sizeof err);
-    if (st == PST_OK) {
-        for (int i = 0; i < ps.nplots; ++i)
-            if (!pst_plot_find(&ps, ps.plots[i].name))
-                abort();
-        pst_plot_set_free(&ps);
-    } else if (!err[0]) {
-        fprintf(stderr, "pst_plot_build: status %d without a message\n", st);
-        abort();
-    }
+    fuzz_check_plots(t, summary, NULL);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
