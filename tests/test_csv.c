@@ -459,6 +459,41 @@ static int write_keep(const void *job)
     return pst_cloud_write_csv(j->c, j->path, j->err);
 }
 
+/* kind and the normals are optional: without them every particle is interior with a zero
+ * normal; normals may come without kind, kind without normals (then no particle may be
+ * Neumann: its flux row needs the normal). */
+static void test_minimal_columns(void)
+{
+    char err[PST_ERRLEN] = "";
+    pst_cloud *c = NULL;
+    write_text("min.csv", "x,y,V,h,u\n0,0,1,0.5,3\n1,0,1,0.5,4\n");
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("min.csv"), err), PST_OK);
+    if (c) {
+        CHECK_INT(pst_cloud_size(c), 2);
+        CHECK(pst_cloud_kinds(c)[0] == PST_INTERIOR && pst_cloud_kinds(c)[1] == PST_INTERIOR);
+        CHECK(pst_cloud_normal(c, 0)[1] == 0 && pst_cloud_normal(c, 1)[1] == 0); /* axis, particle */
+        CHECK_INT(pst_cloud_nfields(c), 1);
+        CHECK(pst_cloud_field(c, 0)[1] == 4);
+    }
+    pst_cloud_destroy(c);
+    write_text("min3.csv", "x,y,z,V,h,nx,ny,nz,m,u\n0,0,0,1,0.5,0,0,1,2,3\n");
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("min3.csv"), err), PST_OK);
+    if (c) {
+        CHECK(pst_cloud_dim(c) == 3 && pst_cloud_kinds(c)[0] == PST_INTERIOR);
+        CHECK(pst_cloud_normal(c, 2)[0] == 1 && pst_cloud_mobility_ncomp(c) == 1);
+        CHECK(pst_cloud_field(c, 0)[0] == 3);
+    }
+    pst_cloud_destroy(c);
+    write_text("kinds.csv", "x,y,V,h,kind,u\n0,0,1,0.5,dirichlet,3\n1,0,1,0.5,0,4\n");
+    CHECK_INT(pst_cloud_read_csv(&c, path_of("kinds.csv"), err), PST_OK);
+    CHECK(c && pst_cloud_kinds(c)[0] == PST_DIRICHLET && pst_cloud_normal(c, 0)[0] == 0);
+    pst_cloud_destroy(c);
+    expect_error("x,y,V,h,kind\n0,0,1,0.5,neumann\n", PST_EINPUT, "bad.csv: particle 0",
+                 "zero normal");
+    expect_error("x,y,V,h,nx,u\n", PST_EINPUT, "bad.csv:1:6:", "'ny' of the normal");
+    expect_error("x,y,V\n", PST_EINPUT, "bad.csv:1:4:", "missing column 'h'");
+}
+
 static void test_write_failures(void)
 {
     char err[PST_ERRLEN] = "";
@@ -583,6 +618,7 @@ int main(void)
     check_round_trip(3, 3);
     check_round_trip(2, 2);
     test_uniform_h_and_numeric_kinds();
+    test_minimal_columns();
     test_long_line();
     test_bad_input();
     test_many_fields();

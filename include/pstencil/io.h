@@ -104,9 +104,10 @@ int pst_csv_table_column(const pst_csv_table *t, const char *name, int below);
 
 /* --- CSV clouds --------------------------------------------------------------------------- */
 
-/* Read a cloud from CSV. The header names the columns: x,y[,z],V,h,kind,nx,ny[,nz], then
- * optionally m (scalar mobility) or mx,my[,mz] (diagonal), then any named fields. kind is
- * "interior", "dirichlet", "neumann" (or 0, 1, 2). Errors (PST_EINPUT / PST_EIO) name the file,
+/* Read a cloud from CSV. The header names the columns: x,y[,z],V,h, then optionally kind
+ * (default interior), optionally nx,ny[,nz] (default zero), optionally m (scalar mobility) or
+ * mx,my[,mz] (diagonal), then any named fields, in that order. kind is "interior",
+ * "dirichlet", "neumann" (or 0, 1, 2). Errors (PST_EINPUT / PST_EIO) name the file,
  * line and column in `err`: NaN/Inf, wrong column count, unknown kind, V or h <= 0, duplicate
  * particles. The cloud is Morton-unsorted: particle i is data line i. */
 int pst_cloud_read_csv(pst_cloud **out, const char *path, char *err);

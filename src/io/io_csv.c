@@ -16,42 +16,60 @@ static const char *const mob_names[] = {"mx", "my", "mz"};
 
 /* ---- reader ---------------------------------------------------------------------------- */
 
-/* The column layout of a file: coordinates, V, h, kind, normals, mobility, fields. */
+/* The column layout of a file: coordinates, V, h, then optionally kind, the normals and the
+ * mobility, then fields. An absent kind or normal column is NO_COL. */
+#define NO_COL SIZE_MAX
 typedef struct {
     int dim, mob;         /* mobility components: 0, 1 or dim                  */
     size_t ncols, nfields;
+    size_t kind, normal, mob0, field; /* first column of each group, or NO_COL  */
     const char **name;    /* ncols names, the reader's header (valid while open) */
 } layout;
 
 static size_t col_V(const layout *l) { return (size_t)l->dim; }
 static size_t col_h(const layout *l) { return (size_t)l->dim + 1; }
-static size_t col_kind(const layout *l) { return (size_t)l->dim + 2; }
-static size_t col_normal(const layout *l) { return (size_t)l->dim + 3; }
-static size_t col_mob(const layout *l) { return 2 * (size_t)l->dim + 3; }
-static size_t col_field(const layout *l) { return 2 * (size_t)l->dim + 3 + (size_t)l->mob; }
 
-/* The required columns, first and in order. */
-static int check_required(const layout *l, const pst_csv_reader *r, size_t *k, char *err)
+/* The columns at *k on named names[0..n), in order; `what` names the group in messages. The
+ * group is absent when its first name is not there (nothing is read, 0 returned in *found). */
+static int check_group(const layout *l, const pst_csv_reader *r, size_t *k,
+                       const char *const *names, int n, int required, const char *what,
+                       int *found, char *err)
 {
-    const char *req[9];
-    size_t nreq = 0;
-    for (int d = 0; d < l->dim; ++d)
-        req[nreq++] = coord_names[d];
-    req[nreq++] = "V";
-    req[nreq++] = "h";
-    req[nreq++] = "kind";
-    for (int d = 0; d < l->dim; ++d)
-        req[nreq++] = normal_names[d];
     const char *path = pst_csv_path(r);
     const size_t line = pst_csv_line(r);
-    for (*k = 0; *k < nreq; ++*k) {
+    *found = *k < l->ncols && strcmp(l->name[*k], names[0]) == 0;
+    if (!*found && !required)
+        return PST_OK;
+    for (int a = 0; a < n; ++a, ++*k) {
         PST_CHECK(*k >= l->ncols, PST_EINPUT, err,
                   "%s:%zu:%zu: missing column '%s' (the header starts %s)", path, line, *k + 1,
-                  req[*k], l->dim == 2 ? "x,y,V,h,kind,nx,ny" : "x,y,z,V,h,kind,nx,ny,nz");
-        PST_CHECK(strcmp(l->name[*k], req[*k]) != 0, PST_EINPUT, err,
-                  "%s:%zu:%zu: expected column '%s' here, found '%s'", path, line, *k + 1,
-                  req[*k], l->name[*k]);
+                  names[a], l->dim == 2 ? "x,y,V,h" : "x,y,z,V,h");
+        PST_CHECK(strcmp(l->name[*k], names[a]) != 0, PST_EINPUT, err,
+                  "%s:%zu:%zu: expected column '%s'%s here, found '%s'", path, line, *k + 1,
+                  names[a], what, l->name[*k]);
     }
+    *found = 1;
+    return PST_OK;
+}
+
+/* The required columns x,y[,z],V,h first and in order, then the optional kind and normals. */
+static int check_required(layout *l, const pst_csv_reader *r, size_t *k, char *err)
+{
+    const char *req[5];
+    int n = 0, found;
+    for (int d = 0; d < l->dim; ++d)
+        req[n++] = coord_names[d];
+    req[n++] = "V";
+    req[n++] = "h";
+    *k = 0;
+    PST_TRY(check_group(l, r, k, req, n, 1, "", &found, err));
+    static const char *const kind[1] = {"kind"};
+    l->kind = *k;
+    PST_TRY(check_group(l, r, k, kind, 1, 0, "", &found, err));
+    l->kind = found ? l->kind : NO_COL;
+    l->normal = *k;
+    PST_TRY(check_group(l, r, k, normal_names, l->dim, 0, " of the normal", &found, err));
+    l->normal = found ? l->normal : NO_COL;
     return PST_OK;
 }
 
@@ -59,6 +77,7 @@ static int check_required(const layout *l, const pst_csv_reader *r, size_t *k, c
 static int check_mobility(layout *l, const pst_csv_reader *r, size_t *k, char *err)
 {
     l->mob = 0;
+    l->mob0 = *k;
     if (*k < l->ncols && strcmp(l->name[*k], "m") == 0) {
         l->mob = 1;
         ++*k;
@@ -118,6 +137,7 @@ static int parse_header(layout *l, const pst_csv_reader *r, char *err)
     size_t k;
     PST_TRY(check_required(l, r, &k, err));
     PST_TRY(check_mobility(l, r, &k, err));
+    l->field = k;
     l->nfields = l->ncols - k;
     return check_fields(l, r, k, err);
 }
@@ -127,7 +147,7 @@ static int parse_cell(const layout *l, const pst_csv_reader *r, size_t k, double
                       char *err)
 {
     const char *cell = pst_csv_cell(r, k);
-    if (k == col_kind(l)) {
+    if (k == l->kind) {
         for (int t = 0; t <= PST_NEUMANN; ++t) {
             char digit[2] = {(char)('0' + t), '\0'};
             if (strcmp(cell, kind_names[t]) == 0 || strcmp(cell, digit) == 0) {
@@ -145,7 +165,7 @@ static int parse_cell(const layout *l, const pst_csv_reader *r, size_t k, double
     if (k == col_h(l) && !(v > 0))
         return pst_csv_cell_error(r, k, PST_EINPUT, err,
                                   "smoothing length h = %.17g must be > 0", v);
-    if (k >= col_mob(l) && k < col_field(l) && !(v > 0))
+    if (k >= l->mob0 && k < l->field && !(v > 0))
         return pst_csv_cell_error(r, k, PST_EINPUT, err, "mobility %.17g must be > 0", v);
     *value = v;
     return PST_OK;
@@ -200,7 +220,7 @@ static int build_cloud(pst_cloud **out, const layout *l, const rows *r)
     if (!fields)
         st = PST_ENOMEM;
     if (st == PST_OK) /* names checked in the header: only memory can fail */
-        st = pst_cloud_add_fields(c, l->name + col_field(l), nf, fields, NULL);
+        st = pst_cloud_add_fields(c, l->name + l->field, nf, fields, NULL);
     if (st != PST_OK) {
         free(fields);
         pst_cloud_destroy(c);
@@ -210,16 +230,16 @@ static int build_cloud(pst_cloud **out, const layout *l, const rows *r)
         const double *v = r->val + i * nc;
         for (int d = 0; d < l->dim; ++d) {
             c->x[d][i] = v[d];
-            c->normal[d][i] = v[col_normal(l) + (size_t)d];
+            c->normal[d][i] = l->normal == NO_COL ? 0.0 : v[l->normal + (size_t)d];
         }
         c->V[i] = v[col_V(l)];
         if (h)
             h[i] = v[col_h(l)];
-        c->kind[i] = (uint8_t)v[col_kind(l)];
+        c->kind[i] = l->kind == NO_COL ? PST_INTERIOR : (uint8_t)v[l->kind];
         for (int m = 0; m < l->mob; ++m)
-            c->mob[m][i] = v[col_mob(l) + (size_t)m];
+            c->mob[m][i] = v[l->mob0 + (size_t)m];
         for (size_t f = 0; f < nf; ++f)
-            fields[f][i] = v[col_field(l) + f];
+            fields[f][i] = v[l->field + f];
     }
     free(fields);
     *out = c;
