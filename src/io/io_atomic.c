@@ -88,7 +88,8 @@ static int fill(int fd, void (*write)(FILE *, const void *), const void *job, in
 /* The temporary's name records its writer, `<path>.tmp.<host>-<pid>.XXXXXX`, so that a later
  * writer on the same host can tell a temporary whose process is gone (SIGKILL, power cut) from
  * one being written now. The host name is kept to [A-Za-z0-9-] and 32 characters. */
-static void writer_tag(char tag[48])
+enum { WRITER_TAG = 64 }; /* 32 of host, '-', 20 digits of pid */
+static void writer_tag(char tag[WRITER_TAG])
 {
     char host[64] = "";
     if (gethostname(host, sizeof host - 1) != 0)
@@ -97,7 +98,7 @@ static void writer_tag(char tag[48])
     for (char *c = host; *c; ++c)
         if (!(isalnum((unsigned char)*c) || *c == '-'))
             *c = '-';
-    snprintf(tag, 48, "%s-%ld", host[0] ? host : "host", (long)getpid());
+    snprintf(tag, WRITER_TAG, "%.32s-%ld", host[0] ? host : "host", (long)getpid());
 }
 
 /* The pid of `name` when it is a temporary of this host's writers (`*.tmp.<host>-<pid>.` and
@@ -137,7 +138,7 @@ static void sweep_stale(const char *dir)
     }
     if (!fresh)
         return;
-    char tag[48], host[64];
+    char tag[WRITER_TAG], host[WRITER_TAG + 8];
     writer_tag(tag);
     snprintf(host, sizeof host, ".tmp.%.*s", (int)(strrchr(tag, '-') - tag + 1), tag);
     DIR *d = opendir(dir);
@@ -170,7 +171,7 @@ static int dir_of(const char *path, char dir[PATH_MAX])
  * NULL on OOM). */
 static char *temp_template(const char *path)
 {
-    char tag[48];
+    char tag[WRITER_TAG];
     writer_tag(tag);
     size_t plen = strlen(path), n = plen + strlen(tag) + sizeof ".tmp..XXXXXX";
     char *tmp = malloc(n);
