@@ -494,6 +494,24 @@ contains out "441 rows" "apply reads the .vtu as VTK"
 expect 2 "apply: an unknown cloud extension" -- "$exe" apply --scheme qsfdi --in "$work/c.txt" \
   --field p --out "$work/txt_apply.csv"
 contains err "c.txt: unknown extension" "apply names the file and the rule"
+# A file cloud's plan reads the file (its size, its h / s0), and cloud.h_ratio on a file cloud
+# scales each particle's own spacing V^(1/D) unless cloud.spacing is given.
+"$exe" --quiet cloud --s0 0.05 --h-ratio 2.6 -o "$work/f26.csv"
+cat > "$work/f26.json" <<EOF
+{ "dim": 2, "cloud": { "source": "file", "file": "f26.csv" }, "fields": { "u": "x*x" },
+  "tasks": [ { "name": "lap", "type": "laplacian", "field": "u", "exact": "2",
+               "region": "interior" } ] }
+EOF
+expect 0 "run --plan on a file cloud" -- "$exe" run "$work/f26.json" --plan
+contains out "441 particles from" "the plan counts the file's particles"
+contains out "h = 2.6 s0 (mean h / V^(1/2))" "the plan measures the file's h / s0"
+contains out "about 190 per particle" "the neighbour estimate from the file's h"
+expect 0 "plan: cloud.h_ratio on a file cloud" -- "$exe" run "$work/f26.json" --plan \
+  cloud.h_ratio=1.3
+contains out "h = 1.3 s0" "h_ratio scales the file's own spacing, not the default cloud.spacing"
+expect 0 "plan: cloud.h_ratio and cloud.spacing on a file cloud" -- "$exe" run \
+  "$work/f26.json" --plan cloud.h_ratio=1.3 cloud.spacing=0.1
+contains out "h = 2.6 s0" "with cloud.spacing given, h = h_ratio * spacing"
 expect 1 "cloud --jitter 5" -- "$exe" cloud --jitter 5 -o "$work/j.csv"
 contains err "option --jitter: a number in \[0, 1) expected" "the jitter limit of the scenes"
 check "cloud --jitter 5 wrote nothing" '[ ! -e "$work/j.csv" ]'

@@ -126,7 +126,7 @@ static double amg_entries_per_row(const pst_plan *p, const pst_scene *s, int k)
     double reach = p->support;
     if (amg_uses_proxy(p, s, k) && radius > 0 && radius < reach)
         reach = radius;
-    reach *= s->cloud.h_ratio; /* in spacings */
+    reach *= p->h_ratio; /* in spacings */
     double pairs = s->dim == 2 ? PLAN_PI * reach * reach : 4.0 / 3.0 * PLAN_PI * pow(reach, 3);
     return fmax(pairs - 1, 1) + 1;
 }
@@ -281,7 +281,9 @@ static double fit_solves(pst_plan *p, const pst_scene *s, double list, double bu
     return without + p->bytes_weights;
 }
 
-int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen)
+/* The plan for `particles` particles with h = h_ratio s0. */
+static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h_ratio, char *err,
+                     size_t errlen)
 {
     memset(p, 0, sizeof *p);
     int bad = pst_scene_compile_exprs(s, err, errlen);
@@ -289,9 +291,10 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
         return bad;
     const int dim = s->dim;
     p->particles = particles;
+    p->h_ratio = h_ratio;
     p->kernel = s->op.kernel >= 0 ? s->op.kernel : pst_scheme_default_kernel(s->op.scheme);
     p->support = pst_kernel_support(p->kernel);
-    double reach = p->support * s->cloud.h_ratio; /* in spacings */
+    double reach = p->support * p->h_ratio; /* in spacings */
     p->neighbours = (dim == 2 ? PLAN_PI * reach * reach : 4.0 / 3.0 * PLAN_PI * pow(reach, 3)) - 1;
 
     p->mobility_factor = 1;
@@ -376,6 +379,23 @@ int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, 
     return PST_OK;
 }
 
+int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen)
+{
+    return plan_make(p, s, particles, s->cloud.source == SC_CLOUD_FILE ? 0 : s->cloud.h_ratio,
+                     err, errlen);
+}
+
+int pst_plan_make_for_cloud(pst_plan *p, const pst_scene *s, const pst_cloud *c, char *err,
+                            size_t errlen)
+{
+    size_t n = pst_cloud_size(c);
+    const double *V = pst_cloud_volume_const(c), *h = pst_cloud_h_array(c);
+    double sum = 0, e = 1.0 / pst_cloud_dim(c), hu = pst_cloud_h_uniform(c);
+    for (size_t i = 0; i < n; ++i)
+        sum += (h ? h[i] : hu) / pow(V[i], e);
+    return plan_make(p, s, n, n ? sum / (double)n : 0, err, errlen);
+}
+
 static const char *task_type_name(int type)
 {
     static const char *const names[] = {"laplacian", "divergence", "gradient",
@@ -413,8 +433,12 @@ static void print_solve(FILE *f, const pst_plan *p, int k, const sc_task *t)
 void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
 {
     fprintf(f, "plan for %s%s%s\n", s->path, s->title ? ": " : "", s->title ? s->title : "");
-    fprintf(f, "  cloud      %dD, %zu particles, h = %g s0\n", s->dim, p->particles,
-            s->cloud.h_ratio);
+    if (s->cloud.source != SC_CLOUD_FILE)
+        fprintf(f, "  cloud      %dD, %zu particles, h = %g s0\n", s->dim, p->particles,
+                p->h_ratio);
+    else if (p->particles)
+        fprintf(f, "  cloud      %dD, %zu particles from %s, h = %.3g s0 (mean h / V^(1/%d))\n",
+                s->dim, p->particles, s->cloud.file, p->h_ratio, s->dim);
     if (p->mobility_ncomp)
         fprintf(f, "  mobility   %s per particle\n",
                 p->mobility_ncomp == 1 ? "scalar" : "diagonal tensor");

@@ -26,6 +26,8 @@ typedef struct {
 
 typedef struct {
     size_t particles;         /* exact for a file or a generated cloud                        */
+    double h_ratio;           /* h / s0 of the estimates: the scene's, or a file cloud's mean */
+                              /* h_i / V_i^(1/D) (pst_plan_make_for_cloud); 0 before the file */
     double neighbours;        /* estimated neighbours per particle (j != i)                   */
     int kernel;               /* the kernel the operators use                                 */
     double support;           /* kernel support in units of h                                 */
@@ -66,6 +68,12 @@ typedef struct {
  * divergence task without mobility, ...); PST_ENOMEM with the
  * estimate when the plan does not fit in limits.memory_fraction of the available memory. */
 int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen);
+
+/* pst_plan_make for a cloud already read from the scene's cloud.file: its size, and h / s0
+ * measured on it (the mean of h_i / V_i^(1/D), s0 = V^(1/D) being the spacing of a regular
+ * cloud of volumes V) instead of the scene's cloud.h_ratio. */
+int pst_plan_make_for_cloud(pst_plan *p, const pst_scene *s, const pst_cloud *c, char *err,
+                            size_t errlen);
 
 /* The number of particles the scene's generated cloud will have (0 for a file cloud). */
 size_t pst_plan_particles(const pst_scene *s);

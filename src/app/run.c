@@ -122,9 +122,8 @@ static int build(run_state *r)
     const pst_scene *s = r->s;
     double t0 = omp_get_wtime();
     int st = run_make_cloud(r);
-    size_t n = r->c ? pst_cloud_size(r->c) : 0;
     if (st == PST_OK && s->cloud.source == SC_CLOUD_FILE)
-        st = pst_plan_make(&r->plan, s, n, r->err, r->errlen); /* now with the true count */
+        st = pst_plan_make_for_cloud(&r->plan, s, r->c, r->err, r->errlen); /* the file's */
     if (st == PST_OK)
         st = run_make_mobility(r);
     if (st == PST_OK)
@@ -158,6 +157,13 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
     if (cloud)
         *cloud = NULL;
     int st = pst_plan_make(&r.plan, s, pst_plan_particles(s), err, errlen);
+    if (st == PST_OK && o->plan_only && s->cloud.source == SC_CLOUD_FILE) {
+        st = run_make_cloud(&r); /* a file cloud's plan needs its size and its h */
+        if (st == PST_OK)
+            st = pst_plan_make_for_cloud(&r.plan, s, r.c, err, errlen);
+        pst_cloud_destroy(r.c);
+        r.c = NULL;
+    }
     if (st == PST_OK && o->plan_only) {
         pst_plan_print(stdout, &r.plan, s);
         if (plan)

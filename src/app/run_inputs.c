@@ -45,6 +45,30 @@ int run_eval_at_points(run_state *r, const char *key, const char *text, double *
     return eval_columns(r, key, text, cols, m, NULL, out);
 }
 
+/* cloud.h_ratio on a file cloud: h = h_ratio s0 with s0 the scene's cloud.spacing when it is
+ * given, else each particle's own spacing V_i^(1/D) (uniform h when the volumes are). */
+static int set_file_h(pst_cloud *c, const sc_cloud *sc, char *msg)
+{
+    if (sc->spacing_set)
+        return pst_cloud_set_h_uniform(c, sc->h_ratio * sc->spacing, NULL);
+    size_t n = pst_cloud_size(c);
+    const double *V = pst_cloud_volume_const(c);
+    int same = 1;
+    for (size_t i = 1; i < n && same; ++i)
+        same = V[i] == V[0];
+    double e = 1.0 / pst_cloud_dim(c);
+    if (same)
+        return n ? pst_cloud_set_h_uniform(c, sc->h_ratio * pow(V[0], e), NULL) : PST_OK;
+    double *h = pst_cloud_h_per_particle(c);
+    if (!h) {
+        snprintf(msg, PST_ERRLEN, "out of memory for the h of %zu particles", n);
+        return PST_ENOMEM;
+    }
+    for (size_t i = 0; i < n; ++i)
+        h[i] = sc->h_ratio * pow(V[i], e);
+    return PST_OK;
+}
+
 int run_make_cloud(run_state *r)
 {
     const pst_scene *s = r->s;
@@ -60,7 +84,7 @@ int run_make_cloud(run_state *r)
             return run_fail(r, PST_EINPUT, "%s: cloud.file %s is %dD, the scene is %dD", s->path,
                             sc->file, pst_cloud_dim(r->c), s->dim);
         if (st == PST_OK && sc->h_ratio_set)
-            st = pst_cloud_set_h_uniform(r->c, sc->h_ratio * sc->spacing, NULL);
+            st = set_file_h(r->c, sc, msg);
     } else {
         pst_lattice_opts lo;
         pst_lattice_defaults(&lo);

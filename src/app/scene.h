@@ -30,6 +30,7 @@ typedef struct {
     double angle;            /* lattice rotation, degrees                                       */
     double h_ratio;          /* h / s0 (generated clouds; a file keeps its own h unless set)    */
     int h_ratio_set;         /* 1 when the scene gave h_ratio (a file's h is then replaced)     */
+    int spacing_set;         /* 1 when the scene gave spacing (a file's h_ratio then scales it) */
 } sc_cloud;
 
 typedef enum { SC_MOB_NONE, SC_MOB_CONSTANT, SC_MOB_EXPR, SC_MOB_SPE10 } sc_mobility_type;

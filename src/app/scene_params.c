@@ -32,7 +32,8 @@ const sc_param sc_params[] = {
             "axis."},
     {.key = "cloud.spacing", .type = SC_T_REAL, .def = "0.05", .units = "length",
      .lo_kind = '(', .lo = 0,
-     .doc = "Lattice spacing s0; for a file cloud it only scales h_ratio."},
+     .doc = "Lattice spacing s0; for a file cloud it only scales h_ratio (when both are "
+            "given, h = h_ratio*spacing for every particle)."},
     {.key = "cloud.jitter", .type = SC_T_REAL, .def = "0", .units = "s0", .lo_kind = '[',
      .lo = 0, .hi = 1, .hi_kind = ')', .applies = GENERATED,
      .doc = "K: each coordinate of a jittered particle moves by K*delta*s0, delta uniform in "
@@ -49,7 +50,7 @@ const sc_param sc_params[] = {
     {.key = "cloud.h_ratio", .type = SC_T_REAL, .def = "1.2", .units = "s0", .lo_kind = '(',
      .lo = 0,
      .doc = "Smoothing length h = h_ratio*s0; a file cloud keeps its own h unless this is "
-            "given."},
+            "given, and then s0 is cloud.spacing if given, else each particle's V^(1/dim)."},
 
     {.key = "mobility", .type = SC_T_OBJECT,
      .doc = "The mobility M of div(M grad u) (tasks of type divergence and solve)."},

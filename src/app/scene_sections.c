@@ -37,6 +37,7 @@ int scene_read_cloud(ctx *c, const cJSON *root, pst_scene *s)
     cl->angle = scene_get_real(o, "cloud.angle");
     cl->h_ratio = scene_get_real(o, "cloud.h_ratio");
     cl->h_ratio_set = scene_member(o, "h_ratio") != NULL;
+    cl->spacing_set = scene_member(o, "spacing") != NULL;
     if (rc == PST_OK && cl->source != SC_CLOUD_FILE) {
         rc = check_box(c, cl->lo, cl->hi, "hi");
         /* the generators' rule (generators.c): a whole number of spacings, to 1e-9 */
