@@ -1,5 +1,5 @@
 /* QSFDI against the LP-MPS-style inversions, phase by phase (QSFDI paper §1, Table 1, Figs 2
- * and 14; spec qsfdi.md §1.13, §4.5–§4.7). For each dimension and h/s0 it builds one jittered
+ * and 14; docs/qsfdi-vs-lpmps.md). For each dimension and h/s0 it builds one jittered
  * cloud (K = 0.4, Morton-sorted, quintic support 3h), then for qsfdi, lpmps and lsmps (type B
  * and A) the operator, REPS times, and keeps the median of every phase (geometry, moments,
  * inversion, weights, precompute) and of the matrix-free apply. It prints a table, the ratios

@@ -1,4 +1,4 @@
-/* The full reproduction of Lukyanov–Vuik Tables 2-9 (spec lukyanov_vuik §7.7, §7.8;
+/* The full reproduction of Lukyanov–Vuik Tables 2-9 (LV §5.1, §5.2;
  * docs/lv-tables.md): §5.1 all-Dirichlet and §5.2 mixed problems on the cell-centred layout,
  * DoF 5^2 .. 160^2, uniform and perturbed (30 realisations, mean ± standard deviation), for
  * cb, schwaiger and lv, with a TPFA column (the paper's MPFA = TPFA on uniform grids); error

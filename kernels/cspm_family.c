@@ -1,4 +1,4 @@
-/* The CSPM family of the QSFDI paper's comparison schemes (spec qsfdi.md §2.1-§2.4, equation
+/* The CSPM family of the QSFDI paper's comparison schemes (docs/schemes/cspm.md, equation
  * numbers of Yan, Ma & Wang 2020): CSPM (38)-(41), ICSPM (7) = (47)-(48) with the Schur
  * complement M_2,ICSPM, and CSPH2Gamma (45), with the quintic kernel (9) and the volumes
  * V_j = 1 / sum_k W_jk (self term included) of a separate pre-pass.
@@ -361,7 +361,7 @@ typedef struct {
     uint8_t status;
 } cs_inv;
 
-/* Minimum neighbours of each level (spec choice 6). */
+/* Minimum neighbours of each level (choice 6, docs/choices.md). */
 static int level_min(int level, int D)
 {
     return level == CS_ICSPM ? (D == 2 ? 5 : 9)

@@ -1,4 +1,4 @@
-/* LP-MPS (Tamai, Murotani & Koshizuka 2017) as reconstructed in spec qsfdi.md §2.6 [unsure]:
+/* LP-MPS (Tamai, Murotani & Koshizuka 2017) as reconstructed in docs/schemes/lpmps.md [unsure]:
  * the full quadratic weighted least-squares fit on the scaled offsets x^ = (x_j - x_I) / h_I
  * with one weight omega = the quintic w in both blocks, the gradient block eliminated:
  *     M1 = sum w r r^T (D x D),  C = sum w r r2^T,  M2 = sum w r2 r2^T,

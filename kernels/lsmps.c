@@ -1,4 +1,4 @@
-/* Quadric LSMPS (spec qsfdi.md §2.5; Tamai & Koshizuka 2014), types A and B: the weighted-
+/* Quadric LSMPS (docs/schemes/lsmps.md; Tamai & Koshizuka 2014), types A and B: the weighted-
  * least-squares engine of kernels/wls.c with the LDL^T factorisation of the full moment matrix.
  * The fit, its bases, the fallback chain and the Neumann rows are described in kernels/wls.c. */
 #include "check.h"

@@ -1,4 +1,4 @@
-/* The Lukyanov–Vuik family (spec lukyanov_vuik.md, equation numbers of the published paper):
+/* The Lukyanov–Vuik family (docs/schemes/, equation numbers of the published paper):
  * Brookshaw (27), corrected Brookshaw (51), Schwaiger (52)-(55) and the two-point scheme
  * "M-SPH" (69)-(71) in transmissibility form (90)-(91), for scalar and diagonal-tensor mobility,
  * with the four kernel-gradient variants G1-G4 (15)-(18) and the Neumann rows (100).
@@ -15,7 +15,7 @@
  * and eta = C^T zeta (so eta . g = zeta . C g; for radial variants F - eta.g = F (1 - eta.x),
  * the bracket of (91)). C = (A^T)^-1, A = sum_J V_J x (x) g (23)-(25).
  * The pair mobility (m_I + m_J) is the paper's arithmetic sum (29); with opts.mobility_mean =
- * PST_MEAN_HARMONIC (an extension, spec §3.6) it is 4 m_I m_J / (m_I + m_J) instead, per
+ * PST_MEAN_HARMONIC (an extension, not in the paper) it is 4 m_I m_J / (m_I + m_J) instead, per
  * component for tensors (pair_mobility below; 0 when m_I + m_J <= 0).
  * Fallback chain (docs/schemes/): too few neighbours or a singular C / Gamma -> the Brookshaw
  * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN. */
@@ -62,7 +62,7 @@ static lv_ctx make_ctx(const pst_op *op)
  * instantiation per combination), so the loops carry no per-pair branches on them. Other
  * callers pass runtime values. */
 /* The pair mobility of one component: the paper's arithmetic sum a + b (29), or with H twice
- * the harmonic mean, 4 a b / (a + b) (spec §3.6, an extension). The harmonic form is written
+ * the harmonic mean, 4 a b / (a + b) (an extension, not in the paper). The harmonic form is written
  * 4 a (b / s) so that it cannot overflow for finite a, b > 0 (b / s <= 1), and is 0 when
  * s = a + b is not positive (or NaN): no NaN from it. Equal to a + b when a == b. */
 PST_KHOT double pair_mobility(double a, double b, int H)
@@ -378,7 +378,7 @@ static void lv_free(void *p)
 
 static int min_neighbours(int which, int dim)
 {
-    /* spec choice 6 */
+    /* choice 6, docs/choices.md */
     return which == LV_BROOKSHAW ? 1 : which == LV_CB ? dim : dim + 1;
 }
 

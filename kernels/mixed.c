@@ -1,13 +1,13 @@
-/* The least-squares mixed schemes of seed 003 (spec lsq_mixed.md): the mixed ordinary method
+/* The least-squares mixed schemes of seed 003 (docs/schemes/mixed.md): the mixed ordinary method
  * (Model 3, `mixed0`), the mixed first-order least squares (Model 4, `mixed1`) and the mixed
  * second-order least squares (Model 5, `mixed2`).
  *
  * The paper solves the first-order system for F = (f, f_x, f_y[, f_z]) by collocation; with the
- * gradient rows kept at every node it is the nested operator on u alone (spec §6, "Analysis for
- * the engine"):
+ * gradient rows kept at every node it is the nested operator on u alone (docs/schemes/mixed.md,
+ * "Equations"):
  *     (L u)_I = sum_a D_a (M^a D_a u)_I,   (D_a u)_I = sum_{j in N(I)} phi^a_Ij (u_j - u_I)
  * with M^a the mobility (1, a scalar m, or a diagonal tensor component). D is the derivative row
- * of a weighted least-squares Taylor fit about I that includes I itself (spec §4-5, eqs. 15-24):
+ * of a weighted least-squares Taylor fit about I that includes I itself (eqs. 15-24, rebuilt):
  *     M_I = sum_{j in N(I) + I} w_j p_j p_j^T,   phi^a_Ij = w_j (M_I^-1 p_j)_{1+a}
  *     mixed0: p = (1, x),               w_j = W(d_Ij, h_I) V~_j, V~_j = 1 / sum_k W_jk (eq. 4)
  *     mixed1: p = (1, x),               w_j = W(d_Ij, h_I)
@@ -372,14 +372,15 @@ static void mx_free(void *p)
     free(d);
 }
 
-/* Spec choice 6 by analogy: the fit of m unknowns includes I, so it needs m - 1 neighbours:
- * D for the linear fits (the cspm-like count), 5 / 9 for the quadratic one (as lsmps). */
+/* Choice 6 (docs/choices.md) by analogy: the fit of m unknowns includes I, so it needs m - 1
+ * neighbours: D for the linear fits (the cspm-like count), 5 / 9 for the quadratic one (as
+ * lsmps). */
 static int mx_min_linear(int dim) { return dim; }
 static int mx_min_quadratic(int dim) { return dim == 2 ? 5 : 9; }
 
 static inline uint8_t worse(uint8_t a, uint8_t b) { return a > b ? a : b; }
 
-/* GEOMETRY (mixed0 only): V~_i = 1 / (W(0) + sum_j W_ij), h_i (eq. 4, pinned choice 3). */
+/* GEOMETRY (mixed0 only): V~_i = 1 / (W(0) + sum_j W_ij), h_i (eq. 4, as choice 3). */
 static void volumes(const mx_ctx *k, size_t n, double *Vn)
 {
     int D = k->c.dim;

@@ -1,19 +1,19 @@
-/* QSFDI, quadric smoothed finite-difference interpolation (Yan, Ma & Wang 2020; spec qsfdi.md
- * §1), in the one-pass moment formulation of spec §1.9-§1.12 with the corrected formulas of
- * §1.4-§1.7 (docs/schemes/qsfdi.md lists the paper's typos avoided).
+/* QSFDI, quadric smoothed finite-difference interpolation (Yan, Ma & Wang 2020, §2 and
+ * Appendix 1), in the one-pass moment formulation of docs/schemes/qsfdi.md ("Equations") with
+ * the corrected formulas of eqs. 16-35 (docs/schemes/qsfdi.md lists the paper's typos avoided).
  *
  * Per particle I, in coordinates scaled by h_I (r = x_IJ / h_I, d = |r|), with the quintic w:
  *   omega2 = w / d^2, omega4 = w / d^4, m = (r, r2s, r2c) (5 in 2D, 9 in 3D);
  *   MOMENTS:   21 (2D) / 56 (3D) sums in one pass over the neighbours: the omega2 moments of
  *              degree 2-4 (S2 = <m, m>_2) and the omega4 moments of degree 3-4, as vectorised
  *              loops over the gathered neighbours (the sum loops are the WLS engine's, wls.c);
- *   INVERSION: the three SPD matrices M2c, M2s (Schur complement of M2c), M1q (spec §1.10-1.11)
- *              and the small products that link them (state below);
+ *   INVERSION: the three SPD matrices M2c, M2s (Schur complement of M2c), M1q
+ *              (docs/schemes/qsfdi.md) and the small products that link them (state below);
  *   WEIGHTS:   kappa (8 / 15 numbers): a_IJ = omega4 kappa4 . (r2s, r2c) + omega2 kappa2 . m.
  * Every linear functional of the derivative estimates, l_g . grad + l_s . d2s + l_c . d2c,
- * has weights of this form (qs_functional: the adjoint of spec §1.6); the Laplacian is
+ * has weights of this form (qs_functional: the adjoint of eqs. 28-31); the Laplacian is
  * l_s = 1, a Neumann row l_g = n, the gradient and Hessian hooks unit vectors, interpolation
- * (§1.7) l = tau. The matrix-free apply and emit_row share qs_pair/qs_weight.
+ * (eqs. 32-35) l = tau. The matrix-free apply and emit_row share qs_pair/qs_weight.
  *
  * Fallback chain (status too-few-neighbours or rank-deficient): the linear-exact row
  * c omega2 (1 - xi . r), xi = (sum omega2 r r^T)^-1 sum omega2 r, c fixing lap |x|^2 = 2D; if

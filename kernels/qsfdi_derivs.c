@@ -1,5 +1,5 @@
-/* QSFDI's one-off derivatives (gradient and Hessian at the particles, spec §1.9) and its
- * interpolation at points (§1.7), from the fit of qsfdi_fit.h. */
+/* QSFDI's one-off derivatives (gradient and Hessian at the particles, eqs. 20-27) and its
+ * interpolation at points (eqs. 32-35), from the fit of qsfdi_fit.h. */
 #include "check.h"
 #include "isa.h"
 #include "qsfdi_fit.h"
@@ -25,8 +25,9 @@ PST_KHOT double qs_deriv_dot(int D, const double *kap, const double *du2, const 
 
 /* Gradient or Hessian at row i. With the kappas kept by the precompute (opts.keep): the data
  * moments dotted with them (bit for bit the computed result: the same sums, the same kappa). Otherwise one pass of geometry and data moments, the inversions,
- * then one kappa per component (spec §1.9: no stored weights needed); fallback rows take the
- * linear WLS gradient (or 0) and a zero Hessian, as the kept kappas do (qs_keep_row). */
+ * then one kappa per component (no stored weights needed: docs/schemes/qsfdi.md); fallback
+ * rows take the linear WLS gradient (or 0) and a zero Hessian, as the kept kappas do
+ * (qs_keep_row). */
 PST_KHOT void qs_deriv_row_t(const qs_ctx *k, const double *kept, int D, size_t i,
                              const int64_t *off, const uint32_t *idx, const double *u,
                              double *const out[6], int which)
@@ -97,7 +98,7 @@ void pst_qsfdi_hessian(const pst_op *op, const double *u, double *const hess[6])
     qs_derivs(op, u, hess, 1);
 }
 
-/* ---- interpolation at points (spec §1.7, eqs. 32-35) ---------------------------------------- */
+/* ---- interpolation at points (eqs. 32-35) ---------------------------------------------------- */
 
 /* Value and Laplacian at point p with neighbours idx[e0..e1) and smoothing length h:
  * Phi_k = omega1_k - tau^T Phi^all_k, <p> = sum Phi_k u_k / M0, lap = sum a_k (u_k - <p>).

@@ -289,8 +289,9 @@ PST_KHOT void qs_moment_blocks(int D, const double *nu, const double *mu, double
     }
 }
 
-/* The inversions of spec §1.10-1.11 from the moments: returns the row status (ok,
- * ill-conditioned or rank-deficient; the state is complete only when not rank-deficient).
+/* The inversions of docs/schemes/qsfdi.md ("One-pass moment form") from the moments: returns
+ * the row status (ok, ill-conditioned or rank-deficient; the state is complete only when not
+ * rank-deficient).
  * Roughly 300 (2D) / 1500 (3D) flops, no inter-particle dependencies. */
 PST_KHOT uint8_t qs_invert(const qs_ctx *k, int D, const double *nu, const double *mu,
                          qs_state *st)
@@ -411,8 +412,8 @@ PST_KHOT uint8_t qs_invert(const qs_ctx *k, int D, const double *nu, const doubl
 }
 
 /* kappa of the functional l_g . grad + l_s . d2s + l_c . d2c (scaled coordinates): the
- * adjoint of the weights of spec §1.6 (docs/schemes/qsfdi.md derives it; with l_s = 1 it is
- * the kappa of §1.9). About 150 (2D) / 400 (3D) flops. */
+ * adjoint of the weights of eqs. 28-31 (docs/schemes/qsfdi.md derives it; with l_s = 1 it is
+ * the Laplacian's kappa). About 150 (2D) / 400 (3D) flops. */
 PST_KHOT void qs_functional(int D, const qs_state *st, const double *lg, const double *ls,
                           const double *lc, double *kap)
 {
@@ -563,7 +564,7 @@ PST_KHOT void qs_fallback_gradient(const qs_ctx *k, int D, const double *nu, con
             kap[QS_NQ(D) + a] += n1i[a * D + b] * l[b];
 }
 
-static inline int qs_min(int dim) { return dim == 2 ? 5 : 9; } /* spec choice 6 */
+static inline int qs_min(int dim) { return dim == 2 ? 5 : 9; } /* choice 6, docs/choices.md */
 
 /* The one-off derivatives and the interpolation at points (qsfdi_derivs.c), the hooks of the
  * scheme table. */

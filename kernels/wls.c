@@ -1,10 +1,10 @@
-/* The weighted-least-squares engine of the quadric fits (spec qsfdi.md §2.5-2.6): the moment
- * pass, the moment matrix, the fallback levels, the precompute, the matrix-free apply and
+/* The weighted-least-squares engine of the quadric fits (docs/schemes/lsmps.md, lpmps.md): the
+ * moment pass, the moment matrix, the fallback levels, the precompute, the matrix-free apply and
  * emission, gradient, Hessian and interpolation. A scheme supplies only its factorisation of the
  * moment matrix (kernels/lsmps.c: LDL^T; kernels/lpmps.c: the Schur complement); qsfdi and the
  * mixed schemes use the vectorised moment sums (pst_wls_msums).
  *
- * Row I fits a full quadratic in the scaled offsets x^ = (x_j - x_I) / h_I (r_s = h, pinned
+ * Row I fits a full quadratic in the scaled offsets x^ = (x_j - x_I) / h_I (r_s = h,
  * choice 3) by weighted least squares with the quintic weight w_j = f(|x^_j|) (QSFDI eq. 9; the
  * normalising constant cancels, so f is used without it):
  *     type B (variant 0): basis p^ = (1, x, y, xx, yy, xy)          6 / 10 (3D) unknowns, the
@@ -447,7 +447,7 @@ static inline uint8_t cond_status(const pst_op *op, double cond)
     return cond > op->opts.cond_max ? PST_ROW_ILL_CONDITIONED : PST_ROW_OK;
 }
 
-/* spec choice 6: a quadratic fit needs 5 (2D) / 9 (3D) neighbours j != I */
+/* choice 6 (docs/choices.md): a quadratic fit needs 5 (2D) / 9 (3D) neighbours j != I */
 int pst_wls_min_neighbours(int dim) { return dim == 2 ? 5 : 9; }
 
 /* Rows per call of a dispatched moment function (isa.h), dealt dynamically to the threads. */

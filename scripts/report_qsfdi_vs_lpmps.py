@@ -367,10 +367,10 @@ def write_report(data):
                                              data[k].summary_name, f_bytes(data[k].summary_bytes))
                      for k in DIMS)))
     add("")
-    add("The QSFDI paper (Yan, Ma & Wang 2020; spec `qsfdi.md` §4) claims that QSFDI needs about "
+    add("The QSFDI paper (Yan, Ma & Wang 2020, §2 and §3) claims that QSFDI needs about "
         "20 %% less CPU time than LP-MPS for the direct Laplacian (LP-MPS/QSFDI ≈ 1.25, Fig. 2), "
         "5–10 %% less for the Poisson problem (Fig. 14), and that its matrix inversions cost 45.7 %% "
-        "of LP-MPS's in 2D (§4.7). This report measures both schemes on the same clouds, at "
+        "of LP-MPS's in 2D (its §2). This report measures both schemes on the same clouds, at "
         "several resolutions and K = %s, in 2D and 3D, for a direct Laplacian and a Poisson "
         "solve, and compares them at equal resolution and at equal error. The phase analysis at "
         "10⁶ particles (`bench/bench_compare`, three h/s0, with LSMPS) is "
@@ -520,7 +520,7 @@ def write_report(data):
     v3 = verdict_band(inv3, 40.0, INV_BAND)
     claims.append((
         "Inversion cost: QSFDI's inversions cost 45.7 % of LP-MPS's in 2D (3D: the paper's "
-        "'40 %', the flop model's 33.3 %) (§4.7)",
+        "'40 %', the flop model's 33.3 %) (its §2)",
         "45.7 % (2D), 40 % (3D)",
         [per_k(data[2], lambda K: inv(2, K), f_pct), per_k(data[3], lambda K: inv(3, K), f_pct)],
         "2D %s; 3D %s" % (v2, v3) if v2 != v3 else v2))

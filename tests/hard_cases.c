@@ -1,15 +1,15 @@
-/* The hard-case stability catalogue (docs/stability.md, "The hard-case catalogue"; spec
- * lukyanov_vuik.md §8, qsfdi.md §1.14): twelve degenerate or badly scaled clouds, each run
- * through every scheme it applies to. Per (case, scheme) the program records the row status
- * counts, the relative L2 error of the direct Laplacian over the interior rows and the outcome
- * of a Poisson solve, and asserts what must hold on any cloud: no NaN / Inf in an apply, a
- * gradient or a solution; every degenerate row flagged (a non-Dirichlet row with fewer live
- * neighbours than the scheme's minimum, counted here independently from the neighbour list, is
- * too-few-neighbours or rank-deficient, and every too-few-neighbours row is below it); a row
- * without neighbours is 0; on_degenerate = REFUSE refuses exactly the operators with such rows;
- * a solve either converges or fails with a non-OK code and a message. The cases add their own
- * checks. Diagnostics: HARD_CASES_TIMES=1 prints timings and the worst solve error per run,
- * HARD_CASES_HISTORY=1 the residual histories (stderr only; the table does not change).
+/* The hard-case stability catalogue (docs/stability.md, "The hard-case catalogue"): twelve
+ * degenerate or badly scaled clouds, each run through every scheme it applies to. Per (case,
+ * scheme) the program records the row status counts, the relative L2 error of the direct Laplacian
+ * over the interior rows and the outcome of a Poisson solve, and asserts what must hold on any
+ * cloud: no NaN / Inf in an apply, a gradient or a solution; every degenerate row flagged (a
+ * non-Dirichlet row with fewer live neighbours than the scheme's minimum, counted here
+ * independently from the neighbour list, is too-few-neighbours or rank-deficient, and every
+ * too-few-neighbours row is below it); a row without neighbours is 0; on_degenerate = REFUSE
+ * refuses exactly the operators with such rows; a solve either converges or fails with a non-OK
+ * code and a message. The cases add their own checks. Diagnostics: HARD_CASES_TIMES=1 prints
+ * timings and the worst solve error per run, HARD_CASES_HISTORY=1 the residual histories (stderr
+ * only; the table does not change).
  *
  *   hard_cases              run every case, print the table and the failed checks; exit 1 on
  *                           any failed check
@@ -131,7 +131,7 @@ static const field F2 = {u2, l2}, F3 = {u3, l3};
 
 /* ---- schemes ------------------------------------------------------------------------------ */
 
-/* Minimum neighbours of a scheme's own row (spec choice 6; docs/schemes/). */
+/* Minimum neighbours of a scheme's own row (choice 6, docs/choices.md; docs/schemes/). */
 static int min_neighbours(const char *s, int dim)
 {
     if (!strcmp(s, "brookshaw"))

@@ -1,12 +1,13 @@
-/* The Lukyanov–Vuik boundary-value problems of §5.1 and §5.2 (spec lukyanov_vuik §7.7, §7.8)
- * and the SPE10 comparison of §5.3 (§7.9), shared by tests/test_lv_bvp.c,
+/* The Lukyanov–Vuik boundary-value problems of §5.1 and §5.2 (docs/lv-tables.md)
+ * and the SPE10 comparison of §5.3, shared by tests/test_lv_bvp.c,
  * tests/test_spe10_tpfa.c and bench/lv_tables.c.
  *
  * Geometry: the unit square (L = H = 1; the paper does not give L, H), the cell-centred layout
  * of pst_cloud_cell_centred with n cells per side (DoF = n^2 interior particles, one per cell)
  * and one face particle at the centre of every boundary cell face; V = (1/n)^2 everywhere,
  * h = f / n. A perturbed cloud moves every interior particle by K delta / n per coordinate with
- * K = 0.1 * 1.001 (the spec's reading of "10 % of h_max = 1.001"), face particles stay put.
+ * K = 0.1 * 1.001 (our reading of "10 % of h_max = 1.001", docs/lv-tables.md), face particles
+ * stay put.
  *
  * Boundary data use the paper's side numbering: psi[0] = psi1 on y = 0, psi[1] = psi2 on
  * x = L, psi[2] = psi3 on y = H, psi[3] = psi4 on x = 0. */

@@ -1,5 +1,6 @@
-/* The literal QSFDI: four passes over the neighbours, as the paper derives it (spec §1.12),
- * with the corrected definitions of spec §1.4 and the corrected weights of §1.6:
+/* The literal QSFDI: four passes over the neighbours, as the paper derives it (Appendix 1),
+ * with the corrected definitions (Eqs. 16-19) and the corrected weights (Eqs. 28-31) of
+ * docs/schemes/qsfdi.md:
  *   pass 1: M2c, A, B;   per j: G_j, Pi_j (Eq. 17)
  *   pass 2: M2s, P;      per j: Gamma_j (Eq. 18), q_j (Eq. 19)
  *   pass 3: M1q, Qc, Qs

@@ -1,5 +1,6 @@
-/* The literal multi-pass QSFDI of the paper with the corrected formulas of spec qsfdi.md
- * §1.4-§1.6, kept as a test oracle for the one-pass moment formulation in kernels/qsfdi.c. */
+/* The literal multi-pass QSFDI of the paper with the corrected formulas of
+ * docs/schemes/qsfdi.md (Eqs. 16-31), kept as a test oracle for the one-pass moment
+ * formulation in kernels/qsfdi.c. */
 #ifndef PSTENCIL_QSFDI_ORACLE_H
 #define PSTENCIL_QSFDI_ORACLE_H
 

@@ -309,7 +309,7 @@ static double dist(pst_cloud *c, int dim, size_t i, size_t j)
 static void check_rotation(int dim)
 {
     pst_lattice_opts o = dim == 2 ? opts2(1.0 / 6, 0.2) : opts3(0.25, 0.2);
-    o.lo[0] = 2, o.hi[0] = 3, o.lo[1] = 2, o.hi[1] = 3; /* LV §7.2: [2, 3]^2 */
+    o.lo[0] = 2, o.hi[0] = 3, o.lo[1] = 2, o.hi[1] = 3; /* LV §4.1: [2, 3]^2 */
     o.boundary_layer = 1;
     pst_cloud *c, *r;
     CHECK_INT(pst_cloud_lattice(&c, &o, NULL), PST_OK);

@@ -1,4 +1,4 @@
-/* Convergence of the direct Laplacian (QSFDI paper Test A, spec qsfdi.md §4.1): p = x^6 y^6 on
+/* Convergence of the direct Laplacian (QSFDI paper Test A, its §3.1): p = x^6 y^6 on
  * [2,3]^2, jitter K = 0.4 on every particle, h = 0.9 s0, error eq. 14 (relative L2) over the
  * inner particles 2.25 < x, y < 2.75, mean of three realisations, four resolutions; the slope
  * of log E against log s0 is fitted by least squares. The paper and the prototype: slope 1 for

@@ -1,4 +1,4 @@
-/* The CSPM family (cspm, icspm, csph2g; spec qsfdi.md §2.1-§2.4) on the operator object:
+/* The CSPM family (cspm, icspm, csph2g; docs/schemes/cspm.md) on the operator object:
  * the volume pre-pass, linear exactness of cspm and csph2g and quadratic exactness of icspm
  * (Laplacian, gradient, Hessian) at full-support particles of jittered clouds (K = 0.8), cspm's
  * second order on a lattice and its inexactness on disorder, the lattice symbol's weak

@@ -159,8 +159,8 @@ static void test_exactness(void)
     }
 }
 
-/* §2.6: with one weight LP-MPS (Schur) and LSMPS type A (full solve) have the same weights;
- * type B differs. */
+/* docs/schemes/lpmps.md: with one weight LP-MPS (Schur) and LSMPS type A (full solve) have the same
+ * weights; type B differs. */
 static void test_lpmps_is_lsmps_a(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {

@@ -1,6 +1,6 @@
-/* The Lukyanov–Vuik family on the operator object: patch tests (spec §7.2-7.3), linear
- * exactness on jittered clouds, the corrected gradient, symmetry facts (§4.5), Neumann rows
- * (100), diagonal tensors, the two apply paths, assembly, thread independence, degenerate
+/* The Lukyanov–Vuik family on the operator object: patch tests (LV §4.1-4.2), linear
+ * exactness on jittered clouds, the corrected gradient, symmetry facts (docs/schemes/), Neumann
+ * rows (100), diagonal tensors, the two apply paths, assembly, thread independence, degenerate
  * rows, bad input, and the harmonic pair mobility (PST_MEAN_HARMONIC, an extension). */
 #include "check.h"
 #include "pstencil.h"
@@ -57,7 +57,7 @@ static double patch_error(const pst_cloud *c, const pst_op *op, const double *u,
     return worst;
 }
 
-/* §7.2-7.3: machine precision in the interior for lv (G1-G4), schwaiger and cb. */
+/* LV §4.1-4.2: machine precision in the interior for lv (G1-G4), schwaiger and cb. */
 static void test_patch(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
@@ -98,8 +98,8 @@ static void test_patch(void)
     }
 }
 
-/* Linear fields: L u = 0 at every row with a valid C (spec §3.4 [derived]), and the corrected
- * gradient (54) reproduces the gradient, on jittered clouds (K = 0.4). */
+/* Linear fields: L u = 0 at every row with a valid C (docs/schemes/lv.md [derived]), and the
+ * corrected gradient (54) reproduces the gradient, on jittered clouds (K = 0.4). */
 static void test_linear_exactness(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
@@ -165,7 +165,7 @@ static double asymmetry(const pst_csr *a, const double *d)
     return worst / scale;
 }
 
-/* §4.5: diag(V) K symmetric for brookshaw, diag(V/s) K for cb; lv not symmetric. */
+/* docs/schemes/: diag(V) K symmetric for brookshaw, diag(V/s) K for cb; lv not symmetric. */
 static void test_symmetry(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
@@ -316,7 +316,7 @@ static void test_neumann_and_tensor(void)
     }
 }
 
-/* Monotonicity audit (LV §4.4). */
+/* Monotonicity audit (LV §4.5). */
 static void test_audit(void)
 {
     double fs[3] = {1.2, 0.6006, 1.2012};

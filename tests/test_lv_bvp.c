@@ -1,4 +1,4 @@
-/* The Lukyanov–Vuik boundary-value problems, small (spec lukyanov_vuik §7.7, §7.8; the full
+/* The Lukyanov–Vuik boundary-value problems, small (LV §5.1, §5.2; the full
  * Tables 2-9 are bench/lv_tables, docs/lv-tables.md): §5.1 all-Dirichlet (exact (96)) and §5.2
  * mixed (exact (98)) on the cell-centred layout, uniform and perturbed, for cb, schwaiger and
  * lv, solved with pst_solve (GMRES + Jacobi, rtol 1e-10), error (95).
@@ -28,7 +28,7 @@
 static const int sides[NLEV] = {5, 10, 20, 40};
 static const char *const schemes[3] = {"cb", "schwaiger", "lv"};
 
-/* The paper's values at 25, 100, 400, 1600 DoF (CB, S, M): spec §7.7-7.8. */
+/* The paper's values at 25, 100, 400, 1600 DoF (CB, S, M): its Tables 2-9. */
 typedef struct {
     const char *name;
     lv_problem prob;

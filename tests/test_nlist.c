@@ -63,7 +63,7 @@ typedef struct {
     uint32_t *idx;
 } ref_list;
 
-/* The rule of spec choice 1, written out directly. */
+/* The rule of choice 1 (docs/choices.md), written out directly. */
 static ref_list brute(pst_cloud *c, double support)
 {
     size_t n = pst_cloud_size(c);

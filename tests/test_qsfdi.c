@@ -1,9 +1,10 @@
-/* QSFDI (spec qsfdi.md §1, §4.1, §4.8): quadratic exactness of the Laplacian, gradient,
- * Hessian and interpolation on jittered clouds; the one-pass moment weights against the
- * literal multi-pass oracle and the printed-typo negative control; Neumann rows; both apply
- * paths, assembly and thread independence; degenerate rows and the fallback chain; bad
- * options; phase timers; kept derivative weights (opts.keep) against the computed ones; Test A
- * (direct Laplacian of x^6 y^6) against the spec's prototype. */
+/* QSFDI (docs/schemes/qsfdi.md; Test A of the paper's §3.1): quadratic exactness of the
+ * Laplacian, gradient, Hessian and interpolation on jittered clouds; the one-pass moment
+ * weights against the literal multi-pass oracle and the printed-typo negative control; Neumann
+ * rows; both apply paths, assembly and thread independence; degenerate rows and the fallback
+ * chain; bad options; phase timers; kept derivative weights (opts.keep) against the computed
+ * ones; Test A (direct Laplacian of x^6 y^6) against the design prototype's values
+ * (docs/schemes/qsfdi.md). */
 #include "check.h"
 #include "pstencil.h"
 #include "qsfdi_oracle.h"
@@ -58,9 +59,9 @@ static double *quad_field(const pst_cloud *c, const quad *q)
     return u;
 }
 
-/* Quadratic exactness (spec §7.1) at full-support particles of K = 0.8 clouds, 2D and 3D:
- * Laplacian, gradient, Hessian, and interpolation at random off-particle points. Also with
- * per-particle h (each fit uses h_I). */
+/* Quadratic exactness (docs/schemes/qsfdi.md, "Consistency") at full-support particles of
+ * K = 0.8 clouds, 2D and 3D: Laplacian, gradient, Hessian, and interpolation at random
+ * off-particle points. Also with per-particle h (each fit uses h_I). */
 static void test_exactness(void)
 {
     struct {
@@ -171,8 +172,9 @@ static void test_exactness(void)
     }
 }
 
-/* The moment-form weights equal the literal multi-pass oracle's (spec §7.2) on every row with
- * a nonsingular fit; the oracle's printed Gamma fails exactness (spec §7.6). */
+/* The moment-form weights equal the literal multi-pass oracle's on every row with a
+ * nonsingular fit; the oracle's printed Gamma fails exactness (docs/schemes/qsfdi.md,
+ * "Consistency"). */
 static void test_oracle(void)
 {
     for (int dim = 2; dim <= 3; ++dim) {
@@ -525,9 +527,10 @@ static double lap_x6y6(const double *x)
     return 30.0 * pow(x[0], 4) * pow(x[1], 4) * (x[0] * x[0] + x[1] * x[1]);
 }
 
-/* Test A (spec §4.1): Eq. 11 error of the direct Laplacian of x^6 y^6 on [2,3]^2 over the
- * inner particles 2.25 < x, y < 2.75, V = 1 / sum_k W_ik (quintic, self term included), mean
- * of 3 realisations; against the spec's prototype (§4.8). Returns the raw mean errors. */
+/* Test A (the paper's §3.1; docs/schemes/qsfdi.md): Eq. 11 error of the direct Laplacian of
+ * x^6 y^6 on [2,3]^2 over the inner particles 2.25 < x, y < 2.75, V = 1 / sum_k W_ik (quintic,
+ * self term included), mean of 3 realisations; against the design prototype's values
+ * (docs/schemes/qsfdi.md, "Consistency"). Returns the raw mean errors. */
 static void test_a(double K, double f, const double proto[2])
 {
     double s0s[5] = {0.1, 0.05, 0.025, 0.0125, 0.00625}, E[5], En[5];

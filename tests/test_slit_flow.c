@@ -1,19 +1,19 @@
 /* Laminar slit flow with forward Euler and the `lv` scheme: the explicit-stability test of
- * Lukyanov & Vuik §4.4 (spec lukyanov_vuik.md §4.3, §7.5, Table 1; docs/stability.md).
+ * Lukyanov & Vuik §4.4 (eqs. 84-89, Table 1; docs/stability.md).
  *
- * Set-up (the spec's, with the choices it leaves open marked CHOICE):
+ * Set-up (docs/stability.md, with the choices the paper leaves open marked CHOICE):
  *   - domain x in [0,2], y in [-1,1]; a homogeneous (unjittered) lattice whose outer layer is
  *     Dirichlet, i.e. the boundary-condition particles sit on the boundary of the domain;
  *   - CHOICE: spacing dx = 0.2 (11 x 11 particles, 81 interior) and f = h/dx = 0.5005, the
  *     paper's f for its other uniform tests: the support 2h = 1.001 dx holds only the four axis
  *     neighbours, a 5-point stencil (on this lattice lv is then the 5-point Laplacian);
- *   - Re = 1, Delta w / L = 1 with the spec's sign correction (forcing +1, eq. 87's sign), so
+ *   - Re = 1, Delta w / L = 1 with the sign corrected (forcing +1, eq. 87's sign), so
  *     the steady profile is (1 - y^2)/2; v(0) = 0; only v_x is stepped (v_y stays 0: eq. 86);
  *   - Dirichlet data v^a(t, y) of (87) on all four sides (it is 0 at y = +-1, and the inflow
  *     and outflow profiles v*, v** of (85) are the analytic profile), set at every time level;
  *   - forward Euler (88): v^{n+1} = v^n + dt (1 + L(v^n) / Re) at the interior particles;
- *   - CHOICE: nu = dt / (Re dx^2), dx = Delta-x-tilde_{I,m} (spec §1.1, the smallest neighbour
- *     distance). The spec prints h-tilde_{I,m}, which is f dx = 0.5005 dx here; with it every nu
+ *   - CHOICE: nu = dt / (Re dx^2), dx = Delta-x-tilde_{I,m} (LV eq. 6, the smallest neighbour
+ *     distance). The paper prints h-tilde_{I,m}, which is f dx = 0.5005 dx here; with it every nu
  *     of Table 1 would be 4x inside the stability limit. With dx in its place the run below
  *     reproduces Table 1 to about 0.01 decades (printed), so that is what the paper did;
  *   - error (89): E^n = max_J |v^n_J - v^a(t_n, y_J)| over every particle, sampled at whole

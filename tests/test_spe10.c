@@ -433,7 +433,7 @@ static void test_errors(void)
     CHECK(access(tmpdir, F_OK) != 0);
 }
 
-/* The Lukyanov–Vuik operators on real heterogeneous data (LV §7.9 set-up): layer 85, 60x60,
+/* The Lukyanov–Vuik operators on real heterogeneous data (LV §5.3 set-up): layer 85, 60x60,
  * one particle per cell, diagonal tensor mobility (Kx, Ky), f = 1.2012. Every scheme must
  * build with every row classified, give finite output, and report its status counts. */
 static void test_operators(void)

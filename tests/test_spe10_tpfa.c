@@ -1,5 +1,5 @@
-/* The TPFA finite-volume reference (tpfa_ref.c) on its own, then LV §5.3 (spec lukyanov_vuik
- * §7.9): SPE10 layer 85, 60 x 60, one particle per cell, M = diag(Kx, Ky), u = 1 at y = 0 and
+/* The TPFA finite-volume reference (tpfa_ref.c) on its own, then LV §5.3 (docs/lv-tables.md):
+ * SPE10 layer 85, 60 x 60, one particle per cell, M = diag(Kx, Ky), u = 1 at y = 0 and
  * u = 0 at y = 1, no flow on the x faces, `lv` against TPFA on the same grid; and the 3D
  * 60 x 60 x 2 stack of layers 84 and 85 (not the paper's 60^3 block: docs/spe10.md). Each
  * with the paper's arithmetic pair mobility and with the harmonic one (PST_MEAN_HARMONIC, an

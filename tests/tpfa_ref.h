@@ -1,6 +1,6 @@
 /* A two-point flux approximation (TPFA) finite-volume reference for -div(K grad u) = 0 on a
  * Cartesian grid of nx x ny (x nz) cells with a diagonal K per cell: the mesh scheme LV
- * compare against (spec lukyanov_vuik eqs. 66-67, MRST's TPFA).
+ * compare against (LV eqs. 66-67, MRST's TPFA).
  *
  *   interior face between cells a and b along axis d:  T = A / (d_d/2 / K_a,d + d_d/2 / K_b,d)
  *   (the harmonic face transmissibility), A the face area;

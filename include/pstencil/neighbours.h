@@ -24,7 +24,7 @@ uint64_t pst_morton_key(int dim, uint32_t ix, uint32_t iy, uint32_t iz);
 
 typedef struct pst_nlist pst_nlist;
 
-/* Build the CSR neighbour list of spec choice 1: j is a neighbour of i iff j != i and
+/* Build the CSR neighbour list of choice 1 (docs/choices.md): j is a neighbour of i iff j != i and
  * |x_j - x_i| < support * (h_i + h_j)/2 (strict), with `support` the kernel's support radius
  * in units of h (pst_kernel_support). Rows are sorted by neighbour index. Works on any order
  * of the cloud; a Morton-sorted cloud is faster. */

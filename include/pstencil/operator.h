@@ -84,8 +84,8 @@ typedef struct {
  * w_IJ = s_I V_J (m_I + m_J) T_IJ (LV eqs. 27, 29, 90), per component for a diagonal tensor:
  *   PST_MEAN_ARITHMETIC: m_I + m_J = 2 x the arithmetic mean (LV eq. 29, the paper's choice);
  *   PST_MEAN_HARMONIC:   4 m_I m_J / (m_I + m_J) = 2 x the harmonic mean, the transmissibility
- *                        average of TPFA. An implementer extension, not from the paper (spec
- *                        §3.6); for discontinuous, high-contrast mobility. Defined as 0 when
+ *                        average of TPFA. An implementer extension, not from the paper;
+ *                        for discontinuous, high-contrast mobility. Defined as 0 when
  *                        m_I + m_J <= 0 (never NaN). Equal to the arithmetic sum where m_I = m_J.
  * Only the LV family averages pairwise: harmonic with any other scheme is PST_EINVAL. Neumann
  * rows (LV eq. 100) use M_I alone and are the same for both. docs/operators.md. */
@@ -304,7 +304,7 @@ int pst_op_assemble(const pst_op *op, pst_csr *a);
  * All-or-nothing file write (PST_EIO on failure). */
 int pst_csr_write_mtx(const pst_csr *a, const int64_t *ids, const char *path, char *err);
 
-/* Monotonicity audit of an operator (LV §4.4): the discrete K = -L. */
+/* Monotonicity audit of an operator (LV §4.5): the discrete K = -L. */
 typedef struct {
     size_t rows;                 /* interior rows audited                                     */
     size_t rows_positive_offdiag;/* rows of K with a positive off-diagonal entry (w_IJ < 0)   */

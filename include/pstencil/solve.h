@@ -44,7 +44,7 @@ int pst_op_linop(const pst_op *op, int stored, pst_linop *out, char *err);
 typedef enum {
     PST_SOLVER_AUTO = 0,   /* CG when the operator is symmetrisable (brookshaw, cb with G1
                               and without Neumann rows), else GMRES; GMRES for a user linop   */
-    PST_SOLVER_CG = 1,     /* on diag(V/s) K, the symmetric scaling of spec lukyanov_vuik §4.5;
+    PST_SOLVER_CG = 1,     /* on diag(V/s) K, the symmetric scaling of docs/schemes/cb.md;
                               on a user linop as it is, which must then be SPD               */
     PST_SOLVER_GMRES = 2,  /* restarted GMRES(m), right preconditioning, CGS2 orthogonalisation */
     PST_SOLVER_BICGSTAB = 3

@@ -1,4 +1,4 @@
-/* The discrete maximum principle of an operator (LV §4.4, Definition 7; docs/stability.md):
+/* The discrete maximum principle of an operator (LV §4.5, Definition 7; docs/stability.md):
  * solve L u = 0 on the interior rows, with the Dirichlet particles holding data g and the
  * Neumann rows the flux of g (0 for the step, n_x for g = x), by dense LU, and count the
  * unknowns outside the boundary range of g. */

@@ -1,4 +1,4 @@
-/* Von Neumann growth factors of an operator (LV §4.2, eqs. 81-83; docs/stability.md):
+/* Von Neumann growth factors of an operator (LV §4.3, eqs. 81-83; docs/stability.md):
  *     lambda_j(k) = 1 + tau s0^2 e^{-i k.r_j} (L[e^{i k.r}])_j
  * for every unknown row j (interior and Neumann particles; a Neumann row, an outward flux
  * n.grad u in L, enters with the inward-flux sign -n.grad u, the sign of a Laplacian row) and

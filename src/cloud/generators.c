@@ -1,4 +1,4 @@
-/* Cloud generators: the jittered node lattice (spec choice 4, QSFDI §4.1) and the
+/* Cloud generators: the jittered node lattice (choice 4, the QSFDI paper's §3.1) and the
  * Lukyanov–Vuik cell-centred layout with face particles (LV §5.1). Every particle is computed
  * from its own index alone (position, jitter from the counter-based RNG, kind, normal), so the
  * parallel fill gives the same bits for every thread count. Formulas: docs/clouds.md. */

@@ -1,4 +1,4 @@
-/* CSR neighbour lists (spec choice 1): j is a neighbour of i iff j != i and
+/* CSR neighbour lists (choice 1, docs/choices.md): j is a neighbour of i iff j != i and
  *     d2 < R_ij^2,  d2 = dx*dx + dy*dy (+ dz*dz),  dx = x_j - x_i (double),
  *     R_ij = support*(h_i + h_j)/2  (uniform h: support*h).
  * Both the rule and its evaluation are symmetric in i and j, so the list is symmetric.
@@ -115,8 +115,8 @@ static inline size_t closer(double d2, double r2)
     return (size_t)(bits >> 63);
 }
 
-/* The neighbour test of slot q against the particle at xi with smoothing length hi (spec choice
- * 1), shared by both passes so that they agree bit for bit. */
+/* The neighbour test of slot q against the particle at xi with smoothing length hi (choice 1,
+ * docs/choices.md), shared by both passes so that they agree bit for bit. */
 static inline __attribute__((always_inline)) size_t
 pair_hit(const double *restrict X, const double *restrict Y, const double *restrict Z,
          const double *restrict H, const double xi[3], double hi, double halfs, double r2u,

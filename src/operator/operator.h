@@ -39,7 +39,7 @@ typedef struct pst_scheme {
     /* bytes per particle that opts.keep adds in 2D and 3D, for PST_KEEP_GRADIENT and
      * PST_KEEP_HESSIAN; all 0: the scheme keeps nothing (opts.keep is refused) */
     int keep_bytes[2][2];
-    /* minimum neighbours (j != i) of a row in dimension dim (spec choice 6) */
+    /* minimum neighbours (j != i) of a row in dimension dim (choice 6, docs/choices.md) */
     int (*min_neighbours)(int dim);
     /* Precompute the per-particle data into op->data (op->status is zeroed, fill it); one
      * threaded pass over particles. Returns PST_OK or an error with a message in err. */

@@ -37,7 +37,7 @@ const pst_scheme *pst_scheme_find(const char *name)
     return NULL;
 }
 
-/* CG's symmetric scaling (spec lukyanov_vuik §4.5) exists for these two schemes only. */
+/* CG's symmetric scaling (docs/schemes/cb.md, "Symmetry") exists for these two schemes only. */
 int pst_scheme_symmetrisable(const pst_scheme *s)
 {
     return s == &pst_scheme_brookshaw || s == &pst_scheme_cb;

@@ -106,7 +106,7 @@ static int handle_workspace(pst_krylov *s, char *err)
 
 /* ---- engine operators ----------------------------------------------------------------------- */
 
-/* The symmetric scaling of spec lukyanov_vuik §4.5 exists for Brookshaw and corrected
+/* The symmetric scaling of docs/schemes/cb.md ("Symmetry") exists for Brookshaw and corrected
  * Brookshaw with the radial G1 gradient (F_IJ symmetric) and no Neumann (flux) rows. */
 static int symmetrisable(const pst_op *op, size_t neumann)
 {

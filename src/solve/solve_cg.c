@@ -1,5 +1,5 @@
 /* Preconditioned conjugate gradients. For an engine operator CG runs on the symmetric system
- * S L x = S b' (spec lukyanov_vuik §4.5): S = -diag(V/s) makes Brookshaw and
+ * S L x = S b' (docs/schemes/cb.md, "Symmetry"): S = -diag(V/s) makes Brookshaw and
  * corrected-Brookshaw rows symmetric with a positive diagonal; with x and r zero on Dirichlet
  * rows, CG sees the SPD block of the unknowns. A user operator (S = NULL) is taken as SPD. */
 #include "solve.h"
