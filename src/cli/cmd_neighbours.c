@@ -67,9 +67,9 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv)
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
             printf("usage: pstencil neighbours CLOUD [--kernel NAME]\n\n"
                    "Read a cloud (docs/clouds.md), Morton-sort it, build the neighbour list of\n"
-                   "spec choice 1 (|x_j - x_i| < support * (h_i + h_j)/2) and print min/mean/max\n"
-                   "neighbours, memory and timings. --kernel sets the support radius: cubic,\n"
-                   "wendland_c2, wendland_c4 (2h) or quintic (3h, the default).\n");
+                   "docs/choices.md, choice 1 (|x_j - x_i| < support * (h_i + h_j)/2) and print\n"
+                   "min/mean/max neighbours, memory and timings. --kernel sets the support\n"
+                   "radius: cubic, wendland_c2, wendland_c4 (2h) or quintic (3h, the default).\n");
             return CLI_OK;
         }
         if (cli_option(argc, argv, &i, "--kernel", &v)) {
