@@ -512,6 +512,19 @@ contains out "h = 1.3 s0" "h_ratio scales the file's own spacing, not the defaul
 expect 0 "plan: cloud.h_ratio and cloud.spacing on a file cloud" -- "$exe" run \
   "$work/f26.json" --plan cloud.h_ratio=1.3 cloud.spacing=0.1
 contains out "h = 2.6 s0" "with cloud.spacing given, h = h_ratio * spacing"
+# A Laplacian task's box region measures interior particles only: the Dirichlet layer's rows
+# are the identity, not L u (its error was counted as -2 per boundary particle).
+"$exe" --quiet cloud --s0 0.05 --h-ratio 1.3 --boundary-layer -o "$work/fb.csv"
+cat > "$work/fb.json" <<EOF
+{ "dim": 2, "cloud": { "source": "file", "file": "fb.csv" }, "fields": { "u": "x*x" },
+  "tasks": [ { "name": "box", "type": "laplacian", "field": "u", "exact": "2",
+               "region": { "lo": [0, 0], "hi": [1, 1] } } ] }
+EOF
+expect 0 "run: a Laplacian over a box that holds the Dirichlet layer" -- "$exe" run \
+  "$work/fb.json" "outputs.report=$work/fb_report.json"
+contains out "over 361 particles" "the box counts the 19 x 19 interior particles, not 441"
+check "the Laplacian over the box is exact for x^2, the boundary rows left out" \
+  "python3 -c 'import json,sys; t=json.load(open(sys.argv[1]))[\"tasks\"][0]; assert t[\"region_particles\"]==361 and t[\"norms\"][\"rel_l2\"]<1e-12' '$work/fb_report.json'"
 expect 1 "cloud --jitter 5" -- "$exe" cloud --jitter 5 -o "$work/j.csv"
 contains err "option --jitter: a number in \[0, 1) expected" "the jitter limit of the scenes"
 check "cloud --jitter 5 wrote nothing" '[ ! -e "$work/j.csv" ]'

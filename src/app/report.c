@@ -319,6 +319,9 @@ void report_summary(FILE *f, const cJSON *report)
             fprintf(f, ": %s", cJSON_GetStringValue(cJSON_GetObjectItem(sv, "message")));
         cJSON_ArrayForEach(nv, cJSON_GetObjectItem(t, "norms"))
             fprintf(f, ", %s %.3e", nv->string, nv->valuedouble);
+        const cJSON *rp = cJSON_GetObjectItem(t, "region_particles");
+        if (rp && cJSON_GetObjectItem(t, "norms"))
+            fprintf(f, " over %.0f particles", rp->valuedouble);
         fprintf(f, ", %.3f s", cJSON_GetNumberValue(cJSON_GetObjectItem(t, "seconds")));
         if (sv)
             fprintf(f, " (set-up %.3f s)",

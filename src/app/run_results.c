@@ -5,26 +5,30 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-/* The particles of a task's region: interior particles, all, or those inside a box. */
-static uint8_t *region_mask(run_state *r, const sc_task *t)
+/* The particles of a task's region: interior particles, all, or those inside a box; *count
+ * of them. A Laplacian or divergence task has no L u at its boundary rows (a Dirichlet row is
+ * the identity, a Neumann row the flux n . grad u), so its region keeps interior particles
+ * only. */
+static uint8_t *region_mask(run_state *r, const sc_task *t, size_t *count)
 {
     size_t n = pst_cloud_size(r->c);
     uint8_t *mask = malloc(n ? n : 1);
     if (!mask)
         return NULL;
     const uint8_t *kind = pst_cloud_kinds_const(r->c);
+    int rows_only = t->type == SC_TASK_LAPLACIAN || t->type == SC_TASK_DIVERGENCE;
+    *count = 0;
     for (size_t i = 0; i < n; ++i) {
-        if (t->region == SC_REGION_ALL) {
-            mask[i] = 1;
-        } else if (t->region == SC_REGION_INTERIOR) {
-            mask[i] = kind[i] == PST_INTERIOR;
-        } else {
-            mask[i] = 1;
+        mask[i] = t->region == SC_REGION_ALL ? !rows_only || kind[i] == PST_INTERIOR
+                                             : kind[i] == PST_INTERIOR;
+        if (t->region != SC_REGION_ALL && t->region != SC_REGION_INTERIOR) {
+            mask[i] = !rows_only || kind[i] == PST_INTERIOR;
             for (int d = 0; d < r->s->dim; ++d) {
                 double x = pst_cloud_coord_const(r->c, d)[i];
                 mask[i] &= x >= t->region_lo[d] && x <= t->region_hi[d];
             }
         }
+        *count += mask[i];
     }
     return mask;
 }
@@ -44,7 +48,8 @@ int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *app
                         r->s->path, k, t->nexact, ncomp);
     size_t n = pts ? m : pst_cloud_size(r->c);
     double *exact[6] = {NULL};
-    uint8_t *mask = pts ? NULL : region_mask(r, t);
+    size_t in_region = n;
+    uint8_t *mask = pts ? NULL : region_mask(r, t, &in_region);
     int st = PST_OK;
     for (int a = 0; a < ncomp && st == PST_OK; ++a) {
         char key[64];
@@ -56,6 +61,7 @@ int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *app
             st = pts ? run_eval_at_points(r, key, t->exact[a], pts, m, exact[a])
                      : run_eval_at_particles(r, key, t->exact[a], exact[a]);
     }
+    cJSON_AddNumberToObject(tj, "region_particles", (double)in_region);
     cJSON *norms = cJSON_AddObjectToObject(tj, "norms");
     for (int q = 0; q < t->nnorms && st == PST_OK; ++q) {
         double v;

@@ -133,7 +133,9 @@ const sc_param sc_params[] = {
      .doc = "Error norms against exact (default with exact: rel_l2 and max_abs)."},
     {.key = "tasks[].region", .type = SC_T_ENUM_OR_OBJECT, .values = "interior|all",
      .def = "\"interior\"",
-     .doc = "Where errors are measured: interior particles, all, or an object {lo, hi}."},
+     .doc = "Where errors are measured: interior particles, all, or an object {lo, hi}. A "
+            "laplacian or divergence task measures interior particles only (its boundary rows "
+            "are not L u); the report gives the count (region_particles)."},
     {.key = "tasks[].region.lo", .type = SC_T_VEC, .units = "length", .flags = SC_F_REQUIRED,
      .doc = "Lower corner of the error box."},
     {.key = "tasks[].region.hi", .type = SC_T_VEC, .units = "length", .flags = SC_F_REQUIRED,
