@@ -295,7 +295,9 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
     p->kernel = s->op.kernel >= 0 ? s->op.kernel : pst_scheme_default_kernel(s->op.scheme);
     p->support = pst_kernel_support(p->kernel);
     double reach = p->support * p->h_ratio; /* in spacings */
-    p->neighbours = (dim == 2 ? PLAN_PI * reach * reach : 4.0 / 3.0 * PLAN_PI * pow(reach, 3)) - 1;
+    /* 0 for a file cloud not read yet (h_ratio 0) */
+    p->neighbours =
+        fmax((dim == 2 ? PLAN_PI * reach * reach : 4.0 / 3.0 * PLAN_PI * pow(reach, 3)) - 1, 0);
 
     p->mobility_factor = 1;
     switch (s->mobility.type) {
