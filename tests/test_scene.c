@@ -251,7 +251,7 @@ static void test_tasks(void)
     CHECK_INT(s.mobility.ncomp, 1);
     pst_scene_free(&s);
     CHECK_INT(parse(&s, "{\"mobility\": {\"type\": \"expression\", \"expression\": \"1+x\"}, "
-                        "\"operator\": {\"kernel\": \"wendland4\", \"gradient\": \"G3\"}, "
+                        "\"operator\": {\"kernel\": \"wendland_c4\", \"gradient\": \"G3\"}, "
                         "\"cloud\": {\"source\": \"cell_centred\"}}",
                     NULL, 0),
               PST_OK);
@@ -259,6 +259,10 @@ static void test_tasks(void)
     CHECK_INT(s.op.kernel, PST_KERNEL_WENDLAND_C4);
     CHECK_INT(s.op.gradient, PST_GRAD_G3);
     CHECK_INT(s.cloud.source, SC_CLOUD_CELL_CENTRED);
+    pst_scene_free(&s);
+    /* the older scene name of the same kernel */
+    CHECK_INT(parse(&s, "{\"operator\": {\"kernel\": \"wendland2\"}}", NULL, 0), PST_OK);
+    CHECK_INT(s.op.kernel, PST_KERNEL_WENDLAND_C2);
     pst_scene_free(&s);
 }
 

@@ -78,8 +78,10 @@ const sc_param sc_params[] = {
     {.key = "operator.scheme", .type = SC_T_ENUM, .def = "\"qsfdi\"",
      .doc = "A registered scheme (docs/operators.md)."},
     {.key = "operator.kernel", .type = SC_T_ENUM,
-     .values = "default|cubic|quintic|wendland2|wendland4", .def = "\"default\"",
-     .doc = "The smoothing kernel; default is the scheme's own."},
+     .values = "default|cubic|quintic|wendland_c2|wendland_c4|wendland2|wendland4",
+     .def = "\"default\"",
+     .doc = "The smoothing kernel, named as on the command line; default is the scheme's own. "
+            "wendland2 and wendland4 are older names of wendland_c2 and wendland_c4."},
     {.key = "operator.gradient", .type = SC_T_ENUM, .values = "G1|G2|G3|G4", .def = "\"G1\"",
      .doc = "Kernel-gradient variant of the Lukyanov-Vuik family (LV eqs. 15-18)."},
     {.key = "operator.variant", .type = SC_T_INT, .def = "0", .lo_kind = '[', .lo = 0,

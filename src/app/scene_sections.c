@@ -100,7 +100,9 @@ int scene_read_mobility(ctx *c, const cJSON *root, pst_scene *s)
 int scene_read_operator(ctx *c, const cJSON *root, pst_scene *s)
 {
     const cJSON *o = scene_member(root, "operator");
+    /* the library's names (pst_kernel_name), then the scenes' older wendland2, wendland4 */
     static const int kernels[] = {-1, PST_KERNEL_CUBIC, PST_KERNEL_QUINTIC,
+                                  PST_KERNEL_WENDLAND_C2, PST_KERNEL_WENDLAND_C4,
                                   PST_KERNEL_WENDLAND_C2, PST_KERNEL_WENDLAND_C4};
     const char *scheme = scene_get_string(o, "operator.scheme");
     char buf[64];
