@@ -17,12 +17,11 @@ static uint8_t *region_mask(run_state *r, const sc_task *t, size_t *count)
         return NULL;
     const uint8_t *kind = pst_cloud_kinds_const(r->c);
     int rows_only = t->type == SC_TASK_LAPLACIAN || t->type == SC_TASK_DIVERGENCE;
+    int interior_only = rows_only || t->region == SC_REGION_INTERIOR;
     *count = 0;
     for (size_t i = 0; i < n; ++i) {
-        mask[i] = t->region == SC_REGION_ALL ? !rows_only || kind[i] == PST_INTERIOR
-                                             : kind[i] == PST_INTERIOR;
+        mask[i] = !interior_only || kind[i] == PST_INTERIOR;
         if (t->region != SC_REGION_ALL && t->region != SC_REGION_INTERIOR) {
-            mask[i] = !rows_only || kind[i] == PST_INTERIOR;
             for (int d = 0; d < r->s->dim; ++d) {
                 double x = pst_cloud_coord_const(r->c, d)[i];
                 mask[i] &= x >= t->region_lo[d] && x <= t->region_hi[d];
