@@ -24,6 +24,7 @@
 #include "pstencil/operator.h"
 #include "pstencil/solve.h"
 #include "pstencil/norms.h"
+#include "pstencil/normals.h"
 #include "pstencil/spe10.h"
 
 #endif /* PSTENCIL_H */
