@@ -238,6 +238,7 @@ static rows_0p5 rows_at_0p5005(const pst_perm_grid *g, int mean)
     }
     pst_op_opts oo;
     pst_op_defaults(&oo);
+    oo.scheme = "lv"; /* the two-point scheme whose harmonic mean is TPFA's */
     oo.mobility_mean = mean;
     pst_op *op = NULL;
     pst_csr a;

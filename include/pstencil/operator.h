@@ -112,7 +112,7 @@ enum {
     PST_KEEP_HESSIAN = 2   /* what pst_op_hessian needs  */
 };
 
-/* Defaults: scheme "lv", the scheme's default kernel, G1, variant 0, cond_max 1e10,
+/* Defaults: scheme "qsfdi" (as in scenes), its default kernel, G1, variant 0, cond_max 1e10,
  * rank_tol 1e-13, min_pair_distance 1e-8, on_degenerate PST_DEGENERATE_FALL_BACK,
  * mobility_mean PST_MEAN_ARITHMETIC, laplacian 1, keep 0.
  * Degenerate rows are never regularised: they drop down the scheme's fallback chain. */

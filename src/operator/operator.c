@@ -30,7 +30,7 @@ const char *pst_row_status_name(int status)
 
 void pst_op_defaults(pst_op_opts *o)
 {
-    o->scheme = "lv";
+    o->scheme = "qsfdi"; /* the scenes' default too: one default scheme everywhere */
     o->kernel = -1;
     o->gradient = PST_GRAD_G1;
     o->variant = 0;
