@@ -201,8 +201,10 @@ static const char *const grouped_scene =
     "  \"operator\": { \"scheme\": \"lv\" },\n"
     "  \"tasks\": [ { \"type\": \"solve\", \"name\": \"u\", \"rhs\": \"0\",\n"
     "      \"exact\": \"x + 2*y\", \"norms\": [\"max_abs\"],\n"
-    "      \"boundary\": [ { \"where\": \"xhi\", \"type\": \"neumann\", \"value\": \"1\" },\n"
-    "                      { \"where\": \"ylo\", \"type\": \"neumann\", \"value\": \"-2\" },\n"
+    "      \"boundary\": [ { \"where\": \"xhi\", \"type\": \"neumann\", \"normals\": \"face\",\n"
+    "                        \"value\": \"1\" },\n"
+    "                      { \"where\": \"ylo\", \"type\": \"neumann\", \"normals\": \"face\",\n"
+    "                        \"value\": \"-2\" },\n"
     "                      { \"where\": \"all\", \"type\": \"dirichlet\", \"value\": \"x + 2*y\" }"
     " ] } ] }";
 

@@ -195,7 +195,8 @@ static void test_solve_plan(void)
 
     /* A Neumann group makes cb non-symmetrisable: the plan switches to GMRES. */
     const char *neu[] = {"tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"1 + x\","
-                         "\"boundary\":[{\"where\":\"xhi\",\"type\":\"neumann\",\"value\":\"1\"},"
+                         "\"boundary\":[{\"where\":\"xhi\",\"type\":\"neumann\",\"normals\":\"face\","
+                         "\"value\":\"1\"},"
                          "{\"where\":\"all\",\"type\":\"dirichlet\",\"value\":\"1 + x\"}]}]",
                          "operator.scheme=lv"};
     s = scene(neu, 2);

@@ -52,6 +52,8 @@ static int task_fields(const sc_task *t, int dim)
     case SC_TASK_GRADIENT: return dim;
     case SC_TASK_HESSIAN: return dim == 2 ? 3 : 6;
     case SC_TASK_INTERPOLATE: return 0;
+    case SC_TASK_SOLVE: /* with groups also NAME_kind and NAME_normal_* (docs/boundaries.md) */
+        return t->ngroups ? 2 + dim : 1;
     default: return 1;
     }
 }

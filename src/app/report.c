@@ -283,6 +283,33 @@ int report_write_points(const char *csv, const char *task, int dim, double *cons
     return st;
 }
 
+/* One line for a solve's boundary groups: each group's type and count, and for a Neumann
+ * group where its normals came from (the sources that gave none are left out). */
+static void summary_groups(FILE *f, const cJSON *groups)
+{
+    if (!cJSON_GetArraySize(groups))
+        return;
+    fprintf(f, "    boundary groups:");
+    int g = 0;
+    const cJSON *o, *q;
+    cJSON_ArrayForEach(o, groups) {
+        fprintf(f, "%s %d %s %.0f", g ? "," : "", g,
+                cJSON_GetStringValue(cJSON_GetObjectItem(o, "type")),
+                cJSON_GetNumberValue(cJSON_GetObjectItem(o, "particles")));
+        const char *sep = " (normals:";
+        cJSON_ArrayForEach(q, cJSON_GetObjectItem(o, "normals")) {
+            if (q->valuedouble > 0) {
+                fprintf(f, "%s %s %.0f", sep, q->string, q->valuedouble);
+                sep = ",";
+            }
+        }
+        if (sep[0] == ',')
+            fprintf(f, ")");
+        ++g;
+    }
+    fprintf(f, "\n");
+}
+
 void report_summary(FILE *f, const cJSON *report)
 {
     const cJSON *plan = cJSON_GetObjectItem(report, "plan");
@@ -327,5 +354,6 @@ void report_summary(FILE *f, const cJSON *report)
             fprintf(f, " (set-up %.3f s)",
                     cJSON_GetNumberValue(cJSON_GetObjectItem(sv, "setup_seconds")));
         fprintf(f, "\n");
+        summary_groups(f, cJSON_GetObjectItem(t, "boundary_groups"));
     }
 }

@@ -217,8 +217,11 @@ static int first_solve_boundary(run_state *r)
         double *b = calloc(n ? n : 1, sizeof *b);
         int8_t *claim = malloc(n ? n : 1);
         run_boundary bnd = {NULL, {NULL, NULL, NULL}};
-        int st = b && claim ? run_boundary_make(r, k, b, claim, &bnd)
-                            : run_fail(r, PST_ENOMEM, "out of memory for the boundary groups");
+        cJSON *counts = cJSON_CreateObject(); /* the analysis reports no group counts */
+        int st = b && claim && counts
+                     ? run_boundary_make(r, k, b, claim, &bnd, counts)
+                     : run_fail(r, PST_ENOMEM, "out of memory for the boundary groups");
+        cJSON_Delete(counts);
         if (st == PST_OK) {
             memcpy(pst_cloud_kinds(r->c), bnd.kind, n);
             for (int d = 0; d < r->s->dim; ++d)

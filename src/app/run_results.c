@@ -15,7 +15,7 @@ static uint8_t *region_mask(run_state *r, const sc_task *t, size_t *count)
     uint8_t *mask = malloc(n ? n : 1);
     if (!mask)
         return NULL;
-    const uint8_t *kind = pst_cloud_kinds_const(r->c);
+    const uint8_t *kind = r->task_kinds ? r->task_kinds : pst_cloud_kinds_const(r->c);
     int rows_only = t->type == SC_TASK_LAPLACIAN || t->type == SC_TASK_DIVERGENCE;
     int interior_only = rows_only || t->region == SC_REGION_INTERIOR;
     *count = 0;

@@ -68,6 +68,31 @@ static int unclaimed_values(run_state *r, int k, const int8_t *claim, const doub
     return PST_OK;
 }
 
+/* The kinds and normals the solve used, as output fields NAME_kind and (with a Neumann
+ * particle) NAME_normal_x, _y[, _z]: the cloud's own stay as they were read. */
+static int boundary_outputs(run_state *r, const sc_task *t, const run_boundary *bnd)
+{
+    static const char axis[3] = {'x', 'y', 'z'};
+    size_t n = pst_cloud_size(r->c);
+    int neumann = 0;
+    for (size_t i = 0; i < n && !neumann; ++i)
+        neumann = bnd->kind[i] == PST_NEUMANN;
+    for (int a = -1; a < (neumann ? r->s->dim : 0); ++a) {
+        char name[PST_MAX_NAME], why[PST_ERRLEN];
+        if (a < 0)
+            snprintf(name, sizeof name, "%s_kind", t->name);
+        else
+            snprintf(name, sizeof name, "%s_normal_%c", t->name, axis[a]);
+        double *out;
+        if (pst_cloud_add_field(r->c, name, &out, why) != PST_OK)
+            return run_fail(r, PST_EINPUT, "%s: task '%s': output field %s: %s", r->s->path,
+                            t->name, name, why);
+        for (size_t i = 0; i < n; ++i)
+            out[i] = a < 0 ? (double)bnd->kind[i] : bnd->normal[a][i];
+    }
+    return PST_OK;
+}
+
 /* The solve of task k on op (stored weights when the plan says so), its report in tj. A solve
  * that does not converge is not an error here: its outputs are still written, and the run
  * reports it at the end (r->solve_failed). */
@@ -138,7 +163,9 @@ int run_solve(run_state *r, int k, cJSON *tj)
     if (st == PST_OK)
         st = rhs_and_exact(r, k, b, &ue);
     if (st == PST_OK && grouped)
-        st = run_boundary_make(r, k, b, claim, &bnd);
+        st = run_boundary_make(r, k, b, claim, &bnd, tj);
+    if (st == PST_OK && grouped)
+        st = boundary_outputs(r, t, &bnd);
     if (st == PST_OK)
         st = unclaimed_values(r, k, claim, ue, b);
     pst_op *op = r->base;
@@ -148,9 +175,11 @@ int run_solve(run_state *r, int k, cJSON *tj)
         st = solve_with(r, k, tj, op, b, u[0]);
     if (op != r->base)
         pst_op_destroy(op);
-    run_boundary_free(&bnd);
+    r->task_kinds = bnd.kind;
     if (st == PST_OK)
         st = run_task_norms(r, k, tj, 1, u, NULL, 0);
+    r->task_kinds = NULL;
+    run_boundary_free(&bnd);
     free(b);
     free(ue);
     free(claim);

@@ -18,6 +18,7 @@ typedef struct {
     pst_cloud *c; /* gains fields; its kinds and normals are never written during a run */
     pst_nlist *nl;
     pst_op *base;
+    const uint8_t *task_kinds; /* the kinds a task's error region reads; NULL: the cloud's     */
     cJSON *report, *tasks;
     int solve_failed;
     char *err;
@@ -65,8 +66,10 @@ int run_solve(run_state *r, int k, cJSON *tj);
 
 /* The boundary of solve task k (which has groups) into bnd, and its group values into b
  * (fluxes divided by a constant mobility's factor); claim[i] becomes the kind its group gave
- * particle i, -1 for none. Free with run_boundary_free, also after a failure. */
-int run_boundary_make(run_state *r, int k, double *b, int8_t *claim, run_boundary *bnd);
+ * particle i, -1 for none; tj gains "boundary_groups", each group's count and where its
+ * normals came from. Free with run_boundary_free, also after a failure. */
+int run_boundary_make(run_state *r, int k, double *b, int8_t *claim, run_boundary *bnd,
+                      cJSON *tj);
 void run_boundary_free(run_boundary *bnd);
 
 #endif

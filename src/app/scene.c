@@ -187,8 +187,10 @@ void pst_scene_free(pst_scene *s)
             free(t->exact[k]);
         free(t->points_file);
         free(t->rhs);
-        for (int g = 0; g < t->ngroups; ++g)
+        for (int g = 0; g < t->ngroups; ++g) {
             free(t->groups[g].value);
+            free(t->groups[g].region.expr);
+        }
     }
     free(s->out.csv);
     free(s->out.vtu);

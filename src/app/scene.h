@@ -71,8 +71,29 @@ typedef enum { SC_REGION_INTERIOR, SC_REGION_ALL, SC_REGION_BOX } sc_region_type
 typedef enum { SC_SIDE_ALL, SC_SIDE_XLO, SC_SIDE_XHI, SC_SIDE_YLO, SC_SIDE_YHI, SC_SIDE_ZLO,
                SC_SIDE_ZHI } sc_side;
 
+/* Which of the cloud's own kinds a boundary group may claim. */
+typedef enum { SC_GKIND_BOUNDARY, SC_GKIND_DIRICHLET, SC_GKIND_NEUMANN, SC_GKIND_INTERIOR,
+               SC_GKIND_ANY } sc_group_kind;
+
+/* A boundary group's region: a box, a ball, a half-space or where an expression is > 0. */
+typedef enum { SC_SHAPE_NONE, SC_SHAPE_BOX, SC_SHAPE_SPHERE, SC_SHAPE_HALF_SPACE,
+               SC_SHAPE_EXPR } sc_shape_type;
+
 typedef struct {
-    sc_side where;           /* boundary particles on this side of the box (or all of them)    */
+    sc_shape_type type;
+    double a[3], b[3];       /* box: lo, hi; sphere: centre; half-space: point, normal          */
+    double radius;           /* sphere                                                          */
+    char *expr;              /* expression                                                      */
+} sc_shape;
+
+/* Where a Neumann group's normals come from. */
+typedef enum { SC_NORMALS_FILE, SC_NORMALS_FACE, SC_NORMALS_ESTIMATE } sc_normals;
+
+typedef struct {
+    sc_side where;           /* particles whose nearest box side is this one (or any)          */
+    sc_group_kind kind;      /* of the cloud's kinds, the ones this group may claim            */
+    sc_shape region;         /* and only inside this region (SC_SHAPE_NONE: anywhere)          */
+    sc_normals normals;      /* Neumann: the cloud's normals, the box face's, or estimated      */
     int neumann;             /* 0: Dirichlet u = value; 1: Neumann du/dn = value               */
     char *value;             /* expression                                                     */
 } sc_group;

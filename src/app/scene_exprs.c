@@ -51,6 +51,9 @@ int pst_scene_compile_exprs(const pst_scene *s, char *err, size_t errlen)
         for (int g = 0; g < t->ngroups && st == PST_OK; ++g) {
             snprintf(key, sizeof key, "tasks[%d].boundary[%d].value", k, g);
             st = compile(s, key, t->groups[g].value, err, errlen);
+            snprintf(key, sizeof key, "tasks[%d].boundary[%d].region.expr", k, g);
+            if (st == PST_OK)
+                st = compile(s, key, t->groups[g].region.expr, err, errlen);
         }
     }
     return st;

@@ -157,13 +157,43 @@ const sc_param sc_params[] = {
      .doc = "Right-hand side g of div(M grad u) = g."},
     {.key = "tasks[].boundary", .type = SC_T_LIST, .item = SC_T_OBJECT, .applies = "solve",
      .hi = SC_MAX_GROUPS, .hi_kind = ']',
-     .doc = "Boundary groups; a boundary particle takes the first group that matches it "
-            "(default: Dirichlet u = exact everywhere)."},
+     .doc = "Boundary groups; a particle takes the first group that matches it, a group "
+            "matching what all its selectors (kind, where, region) match (default: every "
+            "boundary particle Dirichlet with u = exact; docs/boundaries.md)."},
     {.key = "tasks[].boundary[].where", .type = SC_T_ENUM,
      .values = "all|xlo|xhi|ylo|yhi|zlo|zhi", .def = "\"all\"",
-     .doc = "The boundary particles on this side of the box, or all of them."},
+     .doc = "Only the particles whose nearest side of the cloud's box is this one, or any."},
+    {.key = "tasks[].boundary[].kind", .type = SC_T_ENUM,
+     .values = "boundary|dirichlet|neumann|interior|any", .def = "\"boundary\"",
+     .doc = "Only the particles of this kind in the cloud (its kind column): boundary is "
+            "dirichlet or neumann; interior or any let a region turn cloud-interior particles "
+            "into boundary ones."},
+    {.key = "tasks[].boundary[].region", .type = SC_T_OBJECT,
+     .doc = "Only the particles inside one region: a box {lo, hi}, a ball {center, radius}, a "
+            "half-space {point, normal} (the side the normal points to, the plane included) "
+            "or {expr} (where the expression is > 0)."},
+    {.key = "tasks[].boundary[].region.lo", .type = SC_T_VEC, .units = "length",
+     .doc = "Lower corner of the box."},
+    {.key = "tasks[].boundary[].region.hi", .type = SC_T_VEC, .units = "length",
+     .doc = "Upper corner of the box."},
+    {.key = "tasks[].boundary[].region.center", .type = SC_T_VEC, .units = "length",
+     .doc = "Centre of the ball."},
+    {.key = "tasks[].boundary[].region.radius", .type = SC_T_REAL, .units = "length",
+     .lo_kind = '(', .lo = 0, .doc = "Radius of the ball (its surface included)."},
+    {.key = "tasks[].boundary[].region.point", .type = SC_T_VEC, .units = "length",
+     .doc = "A point on the half-space's plane."},
+    {.key = "tasks[].boundary[].region.normal", .type = SC_T_VEC,
+     .doc = "The direction into the half-space (any length but zero)."},
+    {.key = "tasks[].boundary[].region.expr", .type = SC_T_EXPR,
+     .doc = "The region where this expression of x, y[, z] is > 0."},
     {.key = "tasks[].boundary[].type", .type = SC_T_ENUM, .values = "dirichlet|neumann",
      .def = "\"dirichlet\"", .doc = "u = value, or du/dn = value (outward normal)."},
+    {.key = "tasks[].boundary[].normals", .type = SC_T_ENUM, .values = "file|face|estimate",
+     .def = "\"file\"",
+     .doc = "A neumann group's normals: the cloud's own (a particle without one takes its "
+            "nearest box face's, counted in the report), the nearest box face's (the group's "
+            "where side when given), or estimated from the Shepard sum "
+            "(pst_normals_estimate, docs/boundaries.md)."},
     {.key = "tasks[].boundary[].value", .type = SC_T_EXPR, .flags = SC_F_REQUIRED,
      .doc = "The boundary value."},
     {.key = "tasks[].solver", .type = SC_T_ENUM, .values = "auto|cg|gmres|bicgstab",

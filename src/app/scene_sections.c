@@ -10,8 +10,7 @@
 
 static const char axis_name[3] = {'x', 'y', 'z'};
 
-/* hi > lo on every axis, reported at `hi_name`. */
-static int check_box(ctx *c, const double lo[3], const double hi[3], const char *hi_name)
+int scene_check_box(ctx *c, const double lo[3], const double hi[3], const char *hi_name)
 {
     for (int d = 0; d < c->dim; ++d)
         if (!(hi[d] > lo[d]))
@@ -39,7 +38,7 @@ int scene_read_cloud(ctx *c, const cJSON *root, pst_scene *s)
     cl->h_ratio_set = scene_member(o, "h_ratio") != NULL;
     cl->spacing_set = scene_member(o, "spacing") != NULL;
     if (rc == PST_OK && cl->source != SC_CLOUD_FILE) {
-        rc = check_box(c, cl->lo, cl->hi, "hi");
+        rc = scene_check_box(c, cl->lo, cl->hi, "hi");
         /* the generators' rule (generators.c): a whole number of spacings, to 1e-9 */
         for (int d = 0; d < c->dim && rc == PST_OK; ++d) {
             double r = (cl->hi[d] - cl->lo[d]) / cl->spacing, rn = round(r);
@@ -176,7 +175,7 @@ static int read_region(ctx *c, const cJSON *task, sc_task *t)
     scene_get_vec(c, r, "tasks[].region.lo", t->region_lo);
     scene_get_vec(c, r, "tasks[].region.hi", t->region_hi);
     scene_enter(c, task, "region");
-    int rc = check_box(c, t->region_lo, t->region_hi, "hi");
+    int rc = scene_check_box(c, t->region_lo, t->region_hi, "hi");
     scene_pop(c);
     return rc;
 }
@@ -202,28 +201,8 @@ static int read_points(ctx *c, const cJSON *task, pst_scene *s, sc_task *t)
             scene_get_vec(c, o, "tasks[].points.lo", t->points_lo);
             scene_get_vec(c, o, "tasks[].points.hi", t->points_hi);
             t->points_spacing = scene_get_real(o, "tasks[].points.spacing");
-            rc = check_box(c, t->points_lo, t->points_hi, "hi");
+            rc = scene_check_box(c, t->points_lo, t->points_hi, "hi");
         }
-    }
-    scene_pop(c);
-    return rc;
-}
-
-static int read_boundary(ctx *c, const cJSON *task, sc_task *t)
-{
-    const cJSON *list = scene_enter(c, task, "boundary");
-    int rc = PST_OK;
-    for (const cJSON *g = list ? list->child : NULL; g && rc == PST_OK; g = g->next) {
-        sc_group *gr = &t->groups[t->ngroups];
-        scene_push(c, g, NULL, t->ngroups);
-        gr->where = (sc_side)scene_get_enum(g, "tasks[].boundary[].where");
-        gr->neumann = scene_get_enum(g, "tasks[].boundary[].type");
-        if (c->dim == 2 && (gr->where == SC_SIDE_ZLO || gr->where == SC_SIDE_ZHI))
-            rc = scene_error(c, "where", "there is no z side in 2D");
-        if (rc == PST_OK &&
-            (rc = scene_set_str(c, &gr->value, scene_get_string(g, "value"))) == PST_OK)
-            ++t->ngroups;
-        scene_pop(c);
     }
     scene_pop(c);
     return rc;
@@ -296,7 +275,7 @@ static int read_task(ctx *c, const cJSON *o, pst_scene *s, sc_task *t)
     if (rc == PST_OK)
         rc = scene_set_str(c, &t->rhs, scene_get_string(o, "tasks[].rhs"));
     if (rc == PST_OK)
-        rc = read_boundary(c, o, t);
+        rc = scene_read_boundary(c, o, t);
     if (rc == PST_OK && t->type == SC_TASK_SOLVE && t->ngroups == 0 && t->nexact == 0)
         rc =
             scene_error(c, NULL, "a solve without 'boundary' needs 'exact' (its Dirichlet values)");

@@ -100,6 +100,9 @@ int scene_set_str(ctx *c, char **dst, const char *src);
 /* An input file named in the scene, relative to the scene file's folder. */
 int scene_set_path(ctx *c, char **dst, const char *dir, const char *file);
 
+/* hi > lo on every axis, reported at `hi_name`. */
+int scene_check_box(ctx *c, const double lo[3], const double hi[3], const char *hi_name);
+
 /* Each section of the scene into s, with the checks across its keys. */
 int scene_read_cloud(ctx *c, const cJSON *root, pst_scene *s);
 int scene_read_mobility(ctx *c, const cJSON *root, pst_scene *s);
@@ -107,5 +110,7 @@ int scene_read_operator(ctx *c, const cJSON *root, pst_scene *s);
 int scene_read_fields(ctx *c, const cJSON *root, pst_scene *s);
 int scene_read_tasks(ctx *c, const cJSON *root, pst_scene *s);
 int scene_read_outputs(ctx *c, const cJSON *root, pst_scene *s);
+/* The boundary groups of a task (scene_boundary.c). */
+int scene_read_boundary(ctx *c, const cJSON *task, sc_task *t);
 
 #endif
