@@ -213,10 +213,10 @@ contains out "particles            441 (2D)" "apply particle count"
 contains out "row status           ok" "apply prints status counts"
 contains out "time apply" "apply prints timings"
 check "apply writes particles + 1 rows" '[ "$(wc -l < "$work/lu.csv")" -eq 442 ]'
-check "apply header" '[ "$(head -n 1 "$work/lu.csv")" = "id,Lu,status" ]'
+check "apply header" '[ "$(head -n 1 "$work/lu.csv")" = "id,Lu,Au,status" ]'
 check "apply rows in input order" \
   '[ "$(awk -F, "NR > 1 && \$1 != NR - 2" "$work/lu.csv" | wc -l)" -eq 0 ]'
-check "apply status names known" '[ "$(awk -F, "NR > 1" "$work/lu.csv" | cut -d, -f3 |
+check "apply status names known" '[ "$(awk -F, "NR > 1" "$work/lu.csv" | cut -d, -f4 |
   grep -cvxE "ok|fallback|ill-conditioned|rank-deficient|too-few-neighbours")" -eq 0 ]'
 centre=$(awk -F, '$1 == 220 { print $2 }' "$work/lu.csv")
 check "lv: Lu = 4 at the centre (got $centre)" \
@@ -525,6 +525,19 @@ expect 0 "run: a Laplacian over a box that holds the Dirichlet layer" -- "$exe" 
 contains out "over 361 particles" "the box counts the 19 x 19 interior particles, not 441"
 check "the Laplacian over the box is exact for x^2, the boundary rows left out" \
   "python3 -c 'import json,sys; t=json.load(open(sys.argv[1]))[\"tasks\"][0]; assert t[\"region_particles\"]==361 and t[\"norms\"][\"rel_l2\"]<1e-12' '$work/fb_report.json'"
+# apply agrees with run on the boundary rows: Lu is 0 there as the laplacian task writes it,
+# Au the operator's product (the identity on a Dirichlet row: u itself).
+awk -F, 'NR == 1 { print $0 ",u"; next } { printf "%s,%.17g\n", $0, $1 * $1 }' "$work/fb.csv" \
+  > "$work/fbu.csv"
+expect 0 "apply on a cloud with a Dirichlet layer" -- "$exe" --quiet apply --scheme qsfdi \
+  --in "$work/fbu.csv" --field u --out "$work/fblu.csv"
+check "apply: Lu = 0 and Au = u on the Dirichlet rows, Lu = Au = 2 inside" \
+  "python3 -c 'import csv,sys
+c=list(csv.DictReader(open(sys.argv[1]))); l=list(csv.DictReader(open(sys.argv[2])))
+assert len(c)==len(l)==441
+for p,r in zip(c,l):
+    if p[\"kind\"]==\"interior\": assert abs(float(r[\"Lu\"])-2)<1e-9 and r[\"Lu\"]==r[\"Au\"]
+    else: assert float(r[\"Lu\"])==0 and abs(float(r[\"Au\"])-float(p[\"u\"]))<1e-15' '$work/fbu.csv' '$work/fblu.csv'"
 expect 1 "cloud --jitter 5" -- "$exe" cloud --jitter 5 -o "$work/j.csv"
 contains err "option --jitter: a number in \[0, 1) expected" "the jitter limit of the scenes"
 check "cloud --jitter 5 wrote nothing" '[ ! -e "$work/j.csv" ]'

@@ -90,7 +90,7 @@ static void print_help(const char *cmd)
                "                      [--gradient G1..G4] [--mean arithmetic|harmonic]\n"
                "                      [--stored]\n\n"
                "Apply the operator L u = div(M grad u) of a scheme to the field COLUMN of a cloud\n"
-               "(docs/clouds.md) and write 'id,Lu,status', one row per particle in input order.\n\n");
+               "(docs/clouds.md) and write 'id,Lu,Au,status', one row per particle in input order.\n\n");
     else
         printf("usage: pstencil stencil --scheme NAME --in CLOUD --out A.mtx\n"
                "                        [--mobility COLUMN] [--kernel NAME] [--h VALUE]\n"
@@ -400,21 +400,24 @@ static int report_timers(const apply_args *a, const apply_setup *s, double t_app
     return st == PST_OK ? CLI_OK : cli_fail(st, "cannot write the timers", err);
 }
 
-/* The writer of `apply`: rows in input order, row r from particle inv[r]. */
+/* The writer of `apply`: rows in input order, row r from particle inv[r]. Lu is A u on the
+ * interior rows and 0 on the boundary ones, as a scene's laplacian task writes it (a boundary
+ * row is not L u); Au is the operator's product on every row (docs/cli.md). */
 typedef struct {
     size_t n;
     const size_t *inv;
     const double *y;
-    const uint8_t *status;
+    const uint8_t *status, *kind;
 } lu_job;
 
 static void write_lu(FILE *f, const void *job)
 {
     const lu_job *w = job;
-    fputs("id,Lu,status\n", f);
+    fputs("id,Lu,Au,status\n", f);
     for (size_t r = 0; r < w->n; ++r) {
         size_t i = w->inv[r];
-        fprintf(f, "%zu,%.17g,%s\n", r, w->y[i], pst_row_status_name(w->status[i]));
+        fprintf(f, "%zu,%.17g,%.17g,%s\n", r, w->kind[i] == PST_INTERIOR ? w->y[i] : 0.0,
+                w->y[i], pst_row_status_name(w->status[i]));
     }
 }
 
@@ -463,7 +466,7 @@ int cli_apply(const cli_ctx *ctx, int argc, char **argv)
     char err[PST_ERRLEN] = "";
     int st = pst_cloud_input_inverse(s.c, &inv, err);
     if (st == PST_OK) {
-        lu_job job = {n, inv, y, pst_op_status(s.op)};
+        lu_job job = {n, inv, y, pst_op_status(s.op), pst_cloud_kinds_const(s.c)};
         st = pst_write_atomic(a.out, write_lu, &job, err);
     }
     if (st != PST_OK) {
