@@ -7,6 +7,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+/* Both members a and b of a region object, else an error naming the shape. */
+static int both(ctx *c, const cJSON *o, const char *a, const char *b, const char *shape)
+{
+    if (scene_member(o, a) && scene_member(o, b))
+        return PST_OK;
+    return scene_error(c, NULL, "%s needs both %s and %s", shape, a, b);
+}
+
 /* The group's region: exactly one of a box {lo, hi}, a ball {center, radius}, a half-space
  * {point, normal} or an expression {expr}. */
 static int read_shape(ctx *c, const cJSON *g, sc_shape *sh)
@@ -25,25 +33,19 @@ static int read_shape(ctx *c, const cJSON *g, sc_shape *sh)
                                   "ball), {point, normal} (a half-space) or {expr}");
     else if (box) {
         sh->type = SC_SHAPE_BOX;
-        rc = !scene_member(o, "lo") || !scene_member(o, "hi")
-                 ? scene_error(c, NULL, "a box needs both lo and hi")
-                 : PST_OK;
+        rc = both(c, o, "lo", "hi", "a box");
         scene_get_vec(c, o, "tasks[].boundary[].region.lo", sh->a);
         scene_get_vec(c, o, "tasks[].boundary[].region.hi", sh->b);
         if (rc == PST_OK)
             rc = scene_check_box(c, sh->a, sh->b, "hi");
     } else if (ball) {
         sh->type = SC_SHAPE_SPHERE;
-        rc = !scene_member(o, "center") || !scene_member(o, "radius")
-                 ? scene_error(c, NULL, "a ball needs both center and radius")
-                 : PST_OK;
+        rc = both(c, o, "center", "radius", "a ball");
         scene_get_vec(c, o, "tasks[].boundary[].region.center", sh->a);
         sh->radius = scene_get_real(o, "tasks[].boundary[].region.radius");
     } else if (half) {
         sh->type = SC_SHAPE_HALF_SPACE;
-        rc = !scene_member(o, "point") || !scene_member(o, "normal")
-                 ? scene_error(c, NULL, "a half-space needs both point and normal")
-                 : PST_OK;
+        rc = both(c, o, "point", "normal", "a half-space");
         scene_get_vec(c, o, "tasks[].boundary[].region.point", sh->a);
         scene_get_vec(c, o, "tasks[].boundary[].region.normal", sh->b);
         double len = 0;
