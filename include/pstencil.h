@@ -12,6 +12,10 @@
  *     reason there on failure; a solve's outcome (converged or not, and why) is in its result;
  *   - the library never prints, never calls exit(), keeps no global mutable state;
  *   - threads are OpenMP threads: results are identical for every thread count.
+ *   - the library leaves the OpenMP wait policy to its host: on shared cores a host should
+ *     start with OMP_WAIT_POLICY=PASSIVE in its environment (libgomp reads it when it is
+ *     loaded, so setenv in main is too late; the pstencil program re-executes itself with it
+ *     set, docs/cli.md, "Threads on shared cores").
  */
 #ifndef PSTENCIL_H
 #define PSTENCIL_H

@@ -51,6 +51,20 @@ expect 0 "sysinfo" -- "$exe" --threads 2 sysinfo
 contains out "cores" "sysinfo prints cores"
 contains out "OpenMP threads       2" "--threads reaches OpenMP"
 contains out "L1 data cache\|L2 cache" "sysinfo prints caches"
+# The program waits passively unless the user chose a policy (libgomp reads the variable
+# before main, so the program executes itself again with it set; docs/cli.md).
+expect 0 "sysinfo, no wait policy set" -- env -u OMP_WAIT_POLICY "$exe" sysinfo
+contains out "wait policy          passive (default)" "passive waiting by default"
+expect 0 "sysinfo, the user's wait policy" -- env OMP_WAIT_POLICY=active "$exe" sysinfo
+contains out "wait policy          active (OMP_WAIT_POLICY)" "the user's wait policy wins"
+expect 0 "libgomp sees the default policy" -- \
+  env -u OMP_WAIT_POLICY OMP_DISPLAY_ENV=verbose "$exe" --version
+contains err "GOMP_SPINCOUNT = '0'" "libgomp runs with no spinning"
+expect 0 "libgomp sees the user's policy" -- \
+  env OMP_WAIT_POLICY=active OMP_DISPLAY_ENV=verbose "$exe" --version
+contains err "OMP_WAIT_POLICY = 'ACTIVE'" "libgomp runs the user's policy"
+expect 1 "exit code through the re-exec" -- env -u OMP_WAIT_POLICY "$exe" frobnicate
+contains err "unknown command 'frobnicate'" "arguments through the re-exec"
 
 # cloud generation and its errors
 expect 1 "cloud without -o" -- "$exe" cloud

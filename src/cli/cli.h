@@ -21,6 +21,15 @@ int cli_fail(int status, const char *what, const char *detail);
  * cannot be started. */
 int cli_start_mpi(void);
 
+/* Passive OpenMP waiting unless the user set OMP_WAIT_POLICY: re-executes the program with
+ * OMP_WAIT_POLICY=PASSIVE, so it must run first in main, before any OpenMP call (libgomp reads
+ * the variable when it is loaded). Returns only in the re-executed program, when the user set
+ * a policy, or when the re-exec is impossible (the policy stays libgomp's default). */
+void cli_default_wait_policy(char **argv);
+/* The policy the program runs under, for sysinfo: "passive (default)",
+ * "active (OMP_WAIT_POLICY)" (the user's value, lower case), or libgomp's default. */
+const char *cli_wait_policy(void);
+
 /* Strict number parsing: the whole string must be a finite number. 0 on success. */
 int cli_parse_double(const char *s, double *out);
 int cli_parse_long(const char *s, long *out);

@@ -25,7 +25,7 @@ int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv)
     if (argc > 0 && (strcmp(argv[0], "--help") == 0 || strcmp(argv[0], "-h") == 0)) {
         printf("usage: pstencil sysinfo\n\nPrint the CPU model, packages, cores, hardware threads,\n"
                "caches and NUMA nodes (from hwloc), memory, the OpenMP thread count, the BLAS\n"
-               "and the compiler flags of this build.\n");
+               "the OpenMP wait policy and the compiler flags of this build.\n");
         return CLI_OK;
     }
     if (argc > 0) {
@@ -65,6 +65,7 @@ int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv)
     print_cache(&m.l2, "L2 cache");
     print_cache(&m.l3, "L3 cache");
     printf("OpenMP threads       %d (procs %d)\n", m.omp_threads, m.omp_procs);
+    printf("wait policy          %s\n", cli_wait_policy());
     printf("BLAS                 OpenBLAS %s, core %s\n", openblas_get_config(),
            openblas_get_corename());
     return CLI_OK;

@@ -165,6 +165,7 @@ static void install_signal_cleanup(void)
 
 int main(int argc, char **argv)
 {
+    cli_default_wait_policy(argv); /* first: it may execute the program again */
     cli_ctx ctx = {.quiet = 0};
     install_signal_cleanup();
     /* Global options may appear anywhere; strip them so that commands see only their own. */
