@@ -70,9 +70,12 @@ int run_make_operator(run_state *r, int laplacian, const run_boundary *bnd, pst_
     }
     char msg[PST_ERRLEN];
     cli_progress pg;
-    progress_begin(&pg, !r->o->quiet, "precompute");
+    progress_begin(&pg, !r->o->quiet, "precompute", "rows");
+    oo.progress = progress_hook(&pg);
     int st = pst_op_create(op, r->c, r->nl, &oo, msg);
     progress_end(&pg);
+    if (st == PST_OK)
+        pst_op_set_progress(*op, NULL); /* pg ends here; each task attaches its own */
     if (st != PST_OK)
         return run_fail(r, st, "%s: operator %s: %s", r->s->path, oo.scheme, msg);
     if (laplacian)
@@ -117,6 +120,13 @@ static int run_tasks(run_state *r)
     return PST_OK;
 }
 
+/* The list's hook counts two passes over the particles (the count and the fill): the line
+ * shows particles, so that its rate is in rows. */
+static void list_progress(void *pg, uint64_t done, uint64_t total)
+{
+    progress_count(pg, done / 2, total / 2);
+}
+
 static int build(run_state *r)
 {
     const pst_scene *s = r->s;
@@ -134,11 +144,12 @@ static int build(run_state *r)
         return st;
     char msg[PST_ERRLEN];
     cli_progress pg;
-    progress_begin(&pg, !r->o->quiet, "neighbours");
+    progress_begin(&pg, !r->o->quiet, "neighbours", "rows");
+    pst_progress hook = {list_progress, &pg};
     double cell = r->plan.support * pst_cloud_h_max(r->c);
     st = pst_cloud_morton_sort(r->c, cell, msg);
     if (st == PST_OK)
-        st = pst_nlist_build(&r->nl, r->c, r->plan.support, msg);
+        st = pst_nlist_build_with(&r->nl, r->c, r->plan.support, &hook, msg);
     progress_end(&pg);
     if (st != PST_OK)
         return run_fail(r, st, "%s: neighbours: %s", s->path, msg);
