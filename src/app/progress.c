@@ -83,6 +83,13 @@ static void hook(void *user, uint64_t done, uint64_t total) { progress_count(use
 
 pst_progress progress_hook(cli_progress *p) { return (pst_progress){hook, p}; }
 
+static void list_hook(void *user, uint64_t done, uint64_t total)
+{
+    progress_count(user, done / 2, total / 2);
+}
+
+pst_progress progress_list_hook(cli_progress *p) { return (pst_progress){list_hook, p}; }
+
 void progress_end(cli_progress *p)
 {
     if (p->mode == PROGRESS_TERMINAL) {

@@ -38,6 +38,9 @@ void progress_count(cli_progress *p, uint64_t done, uint64_t total);
 /* A library progress hook (pst_progress) that reports to p through progress_count; it may be
  * called from any of the library's threads. */
 pst_progress progress_hook(cli_progress *p);
+/* The hook for pst_nlist_build_with, whose work is two passes over the particles (count and
+ * fill): shown as particles, so that the rate is in rows. */
+pst_progress progress_list_hook(cli_progress *p);
 /* Finish the phase: clear the terminal line, or write the phase's last line to the log. */
 void progress_end(cli_progress *p);
 

@@ -120,13 +120,6 @@ static int run_tasks(run_state *r)
     return PST_OK;
 }
 
-/* The list's hook counts two passes over the particles (the count and the fill): the line
- * shows particles, so that its rate is in rows. */
-static void list_progress(void *pg, uint64_t done, uint64_t total)
-{
-    progress_count(pg, done / 2, total / 2);
-}
-
 static int build(run_state *r)
 {
     const pst_scene *s = r->s;
@@ -145,7 +138,7 @@ static int build(run_state *r)
     char msg[PST_ERRLEN];
     cli_progress pg;
     progress_begin(&pg, !r->o->quiet, "neighbours", "rows");
-    pst_progress hook = {list_progress, &pg};
+    pst_progress hook = progress_list_hook(&pg);
     double cell = r->plan.support * pst_cloud_h_max(r->c);
     st = pst_cloud_morton_sort(r->c, cell, msg);
     if (st == PST_OK)
