@@ -12,7 +12,7 @@
 
 enum { PROGRESS_OFF, PROGRESS_TERMINAL, PROGRESS_LOG };
 
-/* Set once by --progress, before any phase starts. */
+/* Set once by --progress, before any phase starts: a log gets the lines a terminal would. */
 static int forced;
 
 void progress_force(void) { forced = 1; }
@@ -20,9 +20,10 @@ void progress_force(void) { forced = 1; }
 void progress_begin(cli_progress *p, int enabled, const char *label, const char *unit)
 {
     int tty = isatty(fileno(stderr));
-    p->mode = tty && (enabled || forced) ? PROGRESS_TERMINAL
-              : forced                   ? PROGRESS_LOG
-                                         : PROGRESS_OFF;
+    p->mode = !enabled ? PROGRESS_OFF
+              : tty    ? PROGRESS_TERMINAL
+              : forced ? PROGRESS_LOG
+                       : PROGRESS_OFF;
     p->label = label;
     p->unit = unit;
     p->t0 = omp_get_wtime();

@@ -1,7 +1,8 @@
 /* Progress lines for the long phases of a run (neighbours, precompute, every task, solve
  * iterations, sweeps) on stderr: on a terminal one line redrawn in place, fitted to its width
  * and cleared at the end, unless --quiet; with --progress also when stderr is not a terminal
- * (a log), as whole lines at most once a second and one at the end of each phase.
+ * (a log), as whole lines at most once a second and one at the end of each phase. A phase of
+ * a quiet run (--quiet, a sweep's runs) shows nothing either way.
  * docs/cli.md, "Progress". */
 #ifndef PSTENCIL_PROGRESS_H
 #define PSTENCIL_PROGRESS_H
@@ -24,7 +25,7 @@ typedef struct {
     char detail[128];
 } cli_progress;
 
-/* --progress: show progress lines even when stderr is not a terminal, and under --quiet. */
+/* --progress: show progress lines also when stderr is not a terminal. */
 void progress_force(void);
 
 /* Start a phase: `enabled` is the caller's wish (not --quiet), the terminal test is made here;

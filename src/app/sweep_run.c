@@ -251,6 +251,7 @@ static int run_all(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j,
         else
             st = write_rows(sw, j, err, errlen);
     }
+    progress_update(&pg, 1, ""); /* the last line of a log says all are done */
     progress_end(&pg);
     return st;
 }

@@ -73,7 +73,7 @@ static void print_help(void)
            "  --threads N         OpenMP threads (default: OMP_NUM_THREADS or all cores)\n"
            "  --quiet             print results only\n"
            "  --progress          progress lines on stderr also when it is not a terminal\n"
-           "                      (a log: a line a second) and under --quiet\n"
+           "                      (a log: a line a second and one per phase)\n"
            "  --help, --version\n\n"
            "'pstencil COMMAND --help' describes a command's options.\n"
            "exit codes: 0 ok, 1 usage, 2 bad input, 3 numerical failure, 4 out of memory\n",
