@@ -66,7 +66,7 @@ void pst_write_atomic_cleanup(void);
  * work (rows, points) are finished. The calls that take one (pst_nlist_build_with,
  * pst_op_create through pst_op_opts.progress, and pst_op_gradient, pst_op_hessian and
  * pst_op_interpolate through the operator's hook) call it at a coarse grain: once per chunk of
- * rows (a few thousand), from whichever thread finished the chunk, an OpenMP worker thread
+ * rows (512 to 8192), from whichever thread finished the chunk, an OpenMP worker thread
  * included. The library guarantees that fn is never entered by two threads at once (a thread
  * that finds it busy skips its report: nobody waits on it), that `done` never decreases
  * within one call, and that a call that succeeds ends with a call where done == total, made
