@@ -756,6 +756,7 @@ static int precompute(pst_op *op, int which, char *err)
             op->status[i] = inv_blk[i - b0].status;
         }
         op->phase[PST_PHASE_WEIGHTS] += omp_get_wtime() - t;
+        pst_tally_add(op->tally, b1 - b0); /* the block's rows are done */
     }
     pst_free(mom_blk);
     pst_free(inv_blk);
@@ -839,13 +840,14 @@ static void refit(const pst_op *op, const cs_ctx *k, size_t i, const double *u, 
 static void cs_gradient(const pst_op *op, const double *u, double *const grad[3])
 {
     cs_ctx k = make_ctx(op);
-#pragma omp parallel for schedule(dynamic, 256)
-    for (size_t i = 0; i < op->n; ++i) {
-        double g[3];
-        refit(op, &k, i, u, g, NULL);
-        for (int a = 0; a < k.c.dim; ++a)
-            grad[a][i] = g[a];
-    }
+#pragma omp parallel for schedule(dynamic, 1)
+    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
+            double g[3];
+            refit(op, &k, i, u, g, NULL);
+            for (int a = 0; a < k.c.dim; ++a)
+                grad[a][i] = g[a];
+        }
 }
 
 /* pst_op_hessian's layout: 2D xx, yy, xy; 3D xx, yy, zz, xy, xz, yz (from the packed order). */
@@ -854,13 +856,14 @@ static void cs_hessian(const pst_op *op, const double *u, double *const hess[6])
     static const int out2[3] = {0, 2, 1}, out3[6] = {0, 3, 4, 1, 5, 2};
     cs_ctx k = make_ctx(op);
     int n2 = cs_n2(k.c.dim);
-#pragma omp parallel for schedule(dynamic, 256)
-    for (size_t i = 0; i < op->n; ++i) {
-        double g[3], hs[6];
-        refit(op, &k, i, u, g, hs);
-        for (int p = 0; p < n2; ++p)
-            hess[k.c.dim == 2 ? out2[p] : out3[p]][i] = hs[p];
-    }
+#pragma omp parallel for schedule(dynamic, 1)
+    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
+            double g[3], hs[6];
+            refit(op, &k, i, u, g, hs);
+            for (int p = 0; p < n2; ++p)
+                hess[k.c.dim == 2 ? out2[p] : out3[p]][i] = hs[p];
+        }
 }
 
 /* A flat neighbourhood (pst_op_check_flat_rows): every level of the chain but the last is

@@ -641,12 +641,13 @@ static int precompute(pst_op *op, int which, char *err)
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
     /* One pass: every quantity of row i needs only row i (nu_I sums over I's neighbours). */
-#pragma omp parallel for schedule(dynamic, 512)
-    for (size_t i = 0; i < n; ++i) {
-        if (d->nu)
-            shepard(&k, i, off, idx, &d->nu[i], d->gnu ? d->gnu + (size_t)dim * i : NULL);
-        op->status[i] = particle(op, &k, i, off, idx);
-    }
+#pragma omp parallel for schedule(dynamic, 1)
+    for (size_t b = 0; b < pst_chunks(n, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, n, PST_CHUNK, i) {
+            if (d->nu)
+                shepard(&k, i, off, idx, &d->nu[i], d->gnu ? d->gnu + (size_t)dim * i : NULL);
+            op->status[i] = particle(op, &k, i, off, idx);
+        }
     return PST_OK;
 }
 
@@ -704,24 +705,25 @@ static void lv_gradient(const pst_op *op, const double *u, double *const grad[3]
     const uint32_t *idx = pst_nlist_indices(op->nl);
     int dim = k.c.dim;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i) {
-        const double *C = k.d->C + (size_t)dim * dim * i;
-        double acc[3] = {0, 0, 0};
-        for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-            size_t j = idx[e];
-            double x[3], g[3], d2;
-            pair_gradient(&k, dim, k.variant, i, j, x, g, &d2);
-            double du = k.c.V[j] * (u[j] - u[i]);
-            for (int c = 0; c < dim; ++c)
-                acc[c] += du * g[c];
+    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
+            const double *C = k.d->C + (size_t)dim * dim * i;
+            double acc[3] = {0, 0, 0};
+            for (int64_t e = off[i]; e < off[i + 1]; ++e) {
+                size_t j = idx[e];
+                double x[3], g[3], d2;
+                pair_gradient(&k, dim, k.variant, i, j, x, g, &d2);
+                double du = k.c.V[j] * (u[j] - u[i]);
+                for (int c = 0; c < dim; ++c)
+                    acc[c] += du * g[c];
+            }
+            for (int a = 0; a < dim; ++a) {
+                double v = 0;
+                for (int c = 0; c < dim; ++c)
+                    v += C[a * dim + c] * acc[c];
+                grad[a][i] = v;
+            }
         }
-        for (int a = 0; a < dim; ++a) {
-            double v = 0;
-            for (int b = 0; b < dim; ++b)
-                v += C[a * dim + b] * acc[b];
-            grad[a][i] = v;
-        }
-    }
 }
 
 /* Lemma 3 diagnostics of row i: do the brackets F - eta . g (F (1 - xi . x) for radial

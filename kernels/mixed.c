@@ -657,6 +657,7 @@ static int precompute(pst_op *op, int which, char *err)
         for (size_t i = b; i < e; ++i)
             op->status[i] = inversion(op, &k, i, tri + (i - b) * (size_t)ntri);
         op->phase[PST_PHASE_INVERSION] += omp_get_wtime() - t1;
+        pst_tally_add(op->tally, e - b); /* the block's rows are done */
     }
     pst_free(tri);
     return PST_OK; /* no WEIGHTS phase: the weights are formed by the applies or on emission */
@@ -707,12 +708,13 @@ static void mx_gradient(const pst_op *op, const double *u, double *const grad[3]
     mx_ctx k = make_ctx(op);
     const mx_fns *f = fns_for(&k);
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i) {
-        double g[3];
-        f->grad(&k, i, u, g);
-        for (int a = 0; a < k.c.dim; ++a)
-            grad[a][i] = g[a];
-    }
+    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
+            double g[3];
+            f->grad(&k, i, u, g);
+            for (int a = 0; a < k.c.dim; ++a)
+                grad[a][i] = g[a];
+        }
 }
 
 /* mixed2: the second-derivative coefficients of the quadratic fit, refitted here in
@@ -723,33 +725,34 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
     mx_ctx k = make_ctx(op);
     int D = k.c.dim, m = basis_size(D, MX_QUADRATIC), nh = m - 1 - D;
     const mx_data *d = op->data;
-#pragma omp parallel for schedule(dynamic, 64)
-    for (size_t i = 0; i < op->n; ++i) {
-        double tri[55], a[100], r[10] = {0};
-        for (int c = 0; c < nh; ++c)
-            hess[c][i] = 0.0;
-        if (d->mode[i] != MX_FIT)
-            continue;
-        moments(&k, MX_QUADRATIC, i, tri);
-        double ih = 1.0 / pst_h(&k.c, i);
-        for (int64_t e = k.c.off[i]; e < k.c.off[i + 1]; ++e) {
-            size_t j = k.c.idx[e];
-            double x[3] = {0, 0, 0}, p[10], w = fit_weight(&k, D, MX_QUADRATIC, i, j, x);
-            for (int c = 0; c < D; ++c)
-                x[c] *= ih;
-            basis(D, MX_QUADRATIC, x, p);
-            for (int c = 0; c < m; ++c)
-                r[c] += w * p[c] * (u[j] - u[i]);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
+            double tri[55], a[100], r[10] = {0};
+            for (int c = 0; c < nh; ++c)
+                hess[c][i] = 0.0;
+            if (d->mode[i] != MX_FIT)
+                continue;
+            moments(&k, MX_QUADRATIC, i, tri);
+            double ih = 1.0 / pst_h(&k.c, i);
+            for (int64_t e = k.c.off[i]; e < k.c.off[i + 1]; ++e) {
+                size_t j = k.c.idx[e];
+                double x[3] = {0, 0, 0}, p[10], w = fit_weight(&k, D, MX_QUADRATIC, i, j, x);
+                for (int c = 0; c < D; ++c)
+                    x[c] *= ih;
+                basis(D, MX_QUADRATIC, x, p);
+                for (int c = 0; c < m; ++c)
+                    r[c] += w * p[c] * (u[j] - u[i]);
+            }
+            for (int q = 0, t = 0; q < m; ++q)
+                for (int c = 0; c <= q; ++c, ++t)
+                    a[q * m + c] = a[c * m + q] = tri[t];
+            if (!(pst_ldlt_factor(m, a) > 0))
+                continue;
+            pst_ldlt_solve(m, a, r);
+            for (int c = 0; c < nh; ++c)
+                hess[c][i] = isfinite(r[1 + D + c]) ? r[1 + D + c] * ih * ih : 0.0;
         }
-        for (int q = 0, t = 0; q < m; ++q)
-            for (int c = 0; c <= q; ++c, ++t)
-                a[q * m + c] = a[c * m + q] = tri[t];
-        if (!(pst_ldlt_factor(m, a) > 0))
-            continue;
-        pst_ldlt_solve(m, a, r);
-        for (int c = 0; c < nh; ++c)
-            hess[c][i] = isfinite(r[1 + D + c]) ? r[1 + D + c] * ih * ih : 0.0;
-    }
 }
 
 #define MX_FALLBACK_LINEAR                                                                     \

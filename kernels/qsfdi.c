@@ -190,6 +190,7 @@ PST_KHOT int qs_precompute_t(pst_op *op, int D)
         op->phase[PST_PHASE_MOMENTS] += t1 - t0;
         op->phase[PST_PHASE_INVERSION] += t2 - t1;
         op->phase[PST_PHASE_WEIGHTS] += t3 - t2;
+        pst_tally_add(op->tally, (uint64_t)nb); /* the block's rows are done */
     }
     pst_free(mom);
     pst_free(state);

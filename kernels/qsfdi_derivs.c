@@ -82,9 +82,10 @@ static void qs_derivs(const pst_op *op, const double *u, double *const out[6], i
     const double *kept = !d ? NULL : which ? d->hkap : d->gkap;
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
-#pragma omp parallel for schedule(dynamic, 64)
-    for (size_t i = 0; i < op->n; ++i)
-        qs_deriv_row(&k, kept, op->dim, i, off, idx, u, out, which);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i)
+            qs_deriv_row(&k, kept, op->dim, i, off, idx, u, out, which);
 }
 
 void pst_qsfdi_gradient(const pst_op *op, const double *u, double *const grad[3])
@@ -172,39 +173,40 @@ int pst_qsfdi_interpolate(const pst_op *op, const double *const pts[3], size_t m
     if (st != PST_OK)
         return st;
     size_t nfb = 0;
-#pragma omp parallel for schedule(dynamic, 64) reduction(+ : nfb)
-    for (size_t q = 0; q < m; ++q) {
-        double p[3] = {0, 0, 0}, v = 0, l = 0;
-        for (int a = 0; a < D; ++a)
-            p[a] = pts[a][q];
-        /* the nearest particle: among the neighbours, else over the whole cloud (rare) */
-        size_t near = 0;
-        double best = INFINITY;
-        int64_t e0 = off[q], e1 = off[q + 1];
-        size_t cand = e0 < e1 ? (size_t)(e1 - e0) : op->n;
-        for (size_t t = 0; t < cand; ++t) {
-            size_t j = e0 < e1 ? idx[e0 + (int64_t)t] : t;
-            double d2 = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : nfb)
+    for (size_t b = 0; b < pst_chunks(m, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, m, PST_CHUNK, q) {
+            double p[3] = {0, 0, 0}, v = 0, l = 0;
             for (int a = 0; a < D; ++a)
-                d2 += (k.c.x[a][j] - p[a]) * (k.c.x[a][j] - p[a]);
-            if (d2 < best) {
-                best = d2;
-                near = j;
+                p[a] = pts[a][q];
+            /* the nearest particle: among the neighbours, else over the whole cloud (rare) */
+            size_t near = 0;
+            double best = INFINITY;
+            int64_t e0 = off[q], e1 = off[q + 1];
+            size_t cand = e0 < e1 ? (size_t)(e1 - e0) : op->n;
+            for (size_t t = 0; t < cand; ++t) {
+                size_t j = e0 < e1 ? idx[e0 + (int64_t)t] : t;
+                double d2 = 0;
+                for (int a = 0; a < D; ++a)
+                    d2 += (k.c.x[a][j] - p[a]) * (k.c.x[a][j] - p[a]);
+                if (d2 < best) {
+                    best = d2;
+                    near = j;
+                }
             }
+            double uref = op->n ? u[near] : 0.0;
+            int ok = D == 2 ? qs_point_t(&k, 2, p, h, idx, e0, e1, u, uref, &v, &l)
+                            : qs_point_t(&k, 3, p, h, idx, e0, e1, u, uref, &v, &l);
+            if (!ok) {
+                v = uref;
+                l = 0;
+                ++nfb;
+            }
+            if (value)
+                value[q] = v;
+            if (lap)
+                lap[q] = l;
         }
-        double uref = op->n ? u[near] : 0.0;
-        int ok = D == 2 ? qs_point_t(&k, 2, p, h, idx, e0, e1, u, uref, &v, &l)
-                        : qs_point_t(&k, 3, p, h, idx, e0, e1, u, uref, &v, &l);
-        if (!ok) {
-            v = uref;
-            l = 0;
-            ++nfb;
-        }
-        if (value)
-            value[q] = v;
-        if (lap)
-            lap[q] = l;
-    }
     pst_free(off);
     pst_free(idx);
     *fallbacks = nfb;

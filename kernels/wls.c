@@ -584,6 +584,7 @@ int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn
             d->level[i] = lvl;
         }
         op->phase[PST_PHASE_WEIGHTS] += omp_get_wtime() - t;
+        pst_tally_add(op->tally, b1 - b0); /* the block's rows are done */
     }
     pst_free(mom);
     pst_free(Mb);
@@ -683,12 +684,13 @@ void pst_wls_gradient(const pst_op *op, const double *u, double *const grad[3])
     wls_ctx k = make_ctx(op);
     int D = k.c.dim, B = k.d->typeB;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i) {
-        double c[WLS_NBMAX], ih = 1.0 / pst_h(&k.c, i);
-        fit_row(op, &k, i, u, c);
-        for (int a = 0; a < D; ++a)
-            grad[a][i] = c[B + a] * ih;
-    }
+    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
+            double c[WLS_NBMAX], ih = 1.0 / pst_h(&k.c, i);
+            fit_row(op, &k, i, u, c);
+            for (int a = 0; a < D; ++a)
+                grad[a][i] = c[B + a] * ih;
+        }
 }
 
 void pst_wls_hessian(const pst_op *op, const double *u, double *const hess[6])
@@ -696,13 +698,14 @@ void pst_wls_hessian(const pst_op *op, const double *u, double *const hess[6])
     wls_ctx k = make_ctx(op);
     int D = k.c.dim, B = k.d->typeB, nh = D * (D + 1) / 2;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i) {
-        double c[WLS_NBMAX], ih = 1.0 / pst_h(&k.c, i);
-        fit_row(op, &k, i, u, c);
-        /* the squares' coefficients are u_aa / 2, the crosses' u_ab (the layout of hess) */
-        for (int e = 0; e < nh; ++e)
-            hess[e][i] = (e < D ? 2.0 : 1.0) * c[B + D + e] * ih * ih;
-    }
+    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
+            double c[WLS_NBMAX], ih = 1.0 / pst_h(&k.c, i);
+            fit_row(op, &k, i, u, c);
+            /* the squares' coefficients are u_aa / 2, the crosses' u_ab (the layout of hess) */
+            for (int e = 0; e < nh; ++e)
+                hess[e][i] = (e < D ? 2.0 : 1.0) * c[B + D + e] * ih * ih;
+        }
 }
 
 /* ---- interpolation at points -------------------------------------------------------------- */
@@ -854,24 +857,25 @@ int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,
     if (st != PST_OK)
         return st;
     size_t fb = 0;
-#pragma omp parallel for schedule(dynamic, 64) reduction(+ : fb)
-    for (size_t p = 0; p < m; ++p) {
-        double X[3] = {0, 0, 0}, v, l;
-        for (int a = 0; a < k.c.dim; ++a)
-            X[a] = pts[a][p];
-        size_t K = nearest(&k, &g, X);
-        int ok = k.d->typeB ? fit_point_B(op, &k, &g, X, h, u, K, &v, &l)
-                            : fit_point_A(op, &k, X, u, K, &v, &l);
-        if (!ok) {
-            v = u[K];
-            l = 0.0;
-            ++fb;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : fb)
+    for (size_t b = 0; b < pst_chunks(m, PST_CHUNK); ++b)
+        PST_CHUNK_ROWS(op->tally, b, m, PST_CHUNK, p) {
+            double X[3] = {0, 0, 0}, v, l;
+            for (int a = 0; a < k.c.dim; ++a)
+                X[a] = pts[a][p];
+            size_t K = nearest(&k, &g, X);
+            int ok = k.d->typeB ? fit_point_B(op, &k, &g, X, h, u, K, &v, &l)
+                                : fit_point_A(op, &k, X, u, K, &v, &l);
+            if (!ok) {
+                v = u[K];
+                l = 0.0;
+                ++fb;
+            }
+            if (value)
+                value[p] = v;
+            if (lap)
+                lap[p] = l;
         }
-        if (value)
-            value[p] = v;
-        if (lap)
-            lap[p] = l;
-    }
     pst_cells_free(&g);
     *fallbacks = fb;
     return PST_OK;

@@ -105,6 +105,19 @@ expect 0 "run (built-in scene, small)" -- "$exe" run cloud.spacing=0.05
 contains out "9261 particles" "run particle count (21^3)"
 contains out "task laplacian (laplacian), rel_l2" "run reports the Laplacian's error"
 contains out "task gradient (gradient), rel_l2" "run reports the gradient's error"
+# Progress lines (docs/cli.md, "Progress"): none when stderr is not a terminal, unless
+# --progress asks; then whole lines, one at the end of each phase and task, fitted to $COLUMNS.
+check "no progress lines on a pipe without --progress" \
+  '! grep -q "neighbours\|precompute\|rows/s" "$work/err"'
+expect 0 "run --progress on a pipe" -- env COLUMNS=60 "$exe" --progress run cloud.spacing=0.05
+contains err "^neighbours \[#*\] 100% [0-9.]* s [0-9.e]* rows/s$" "the neighbours' progress line"
+contains err "^precompute \[#*\] 100% [0-9.]* s [0-9.e]* rows/s$" "the precompute's progress line"
+contains err "^task gradient \[#*\] 100% [0-9.]* s [0-9.e]* rows/s$" "a task's progress line"
+contains err "^task laplacian [0-9.]* s$" "an apply task's line has the clock only"
+check "progress lines fit in COLUMNS - 1" '! awk "length > 59" "$work/err" | grep -q .'
+check "a log gets no carriage returns or escapes" '! grep -q "$(printf "\r\|\033")" "$work/err"'
+expect 0 "--progress under --quiet" -- "$exe" --quiet --progress run cloud.spacing=0.05
+check "--quiet wins over --progress" '[ ! -s "$work/out" ] && [ ! -s "$work/err" ]'
 expect 0 "run --help" -- "$exe" run --help
 expect 0 "run --plan" -- "$exe" run --plan
 contains out "1030301 particles" "plan of the built-in scene"

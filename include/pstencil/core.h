@@ -59,6 +59,28 @@ int pst_write_atomic(const char *path, void (*write)(FILE *f, const void *job), 
 void pst_write_atomic_cleanup(void);
 
 /* ------------------------------------------------------------------------------------------ */
+/* Progress of long calls                                                                     */
+/* ------------------------------------------------------------------------------------------ */
+
+/* A progress hook: fn(user, done, total) reports that `done` of the call's `total` units of
+ * work (rows, points) are finished. The calls that take one (pst_nlist_build_with,
+ * pst_op_create through pst_op_opts.progress, and pst_op_gradient, pst_op_hessian and
+ * pst_op_interpolate through the operator's hook) call it at a coarse grain: once per chunk of
+ * rows (512 to 8192), from whichever thread finished the chunk, an OpenMP worker thread
+ * included. The library guarantees that fn is never entered by two threads at once (a thread
+ * that finds it busy skips its report: nobody waits on it), that `done` never decreases
+ * within one call, and that a call that succeeds ends with a call where done == total, made
+ * from the calling thread. fn must return quickly, must not call the library on the objects
+ * of the call in progress and must not jump out. fn == NULL: no hook, which costs one branch
+ * per chunk. Results are the same, bit for bit, with and without a hook. docs/cli.md,
+ * "Progress". */
+typedef void (*pst_progress_fn)(void *user, uint64_t done, uint64_t total);
+typedef struct {
+    pst_progress_fn fn; /* NULL: none */
+    void *user;         /* passed to fn as it is */
+} pst_progress;
+
+/* ------------------------------------------------------------------------------------------ */
 /* Threads                                                                                    */
 /* ------------------------------------------------------------------------------------------ */
 

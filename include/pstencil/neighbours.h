@@ -30,6 +30,12 @@ typedef struct pst_nlist pst_nlist;
  * of the cloud; a Morton-sorted cloud is faster. */
 int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *err);
 
+/* pst_nlist_build with a progress hook (pstencil/core.h; NULL or a NULL fn: none). The work
+ * is two passes over the particles, the count and the fill, so total = 2 n; the list is the
+ * same, bit for bit, with or without the hook. */
+int pst_nlist_build_with(pst_nlist **out, const pst_cloud *c, double support,
+                         const pst_progress *progress, char *err);
+
 void pst_nlist_destroy(pst_nlist *nl);
 
 /* Rows: the neighbours of particle i are index[offset[i] .. offset[i+1]). */

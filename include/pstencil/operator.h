@@ -78,6 +78,13 @@ typedef struct {
      * must not change. Checked: every kind known, every Neumann particle's normal finite. */
     const uint8_t *kinds;
     const double *normals[3];
+    /* A progress hook (pstencil/core.h; fn NULL, the default: none). pst_op_create reports
+     * the rows of its precompute through it (total = n, counted as blocks of rows finish),
+     * and the operator keeps it for pst_op_gradient, pst_op_hessian (total = n) and
+     * pst_op_interpolate (total = the points), until pst_op_set_progress changes it. The
+     * applies never report: one apply is short, and a solve reports its iterations through
+     * pst_solve_opts.monitor. user must outlive every call that reports to it. */
+    pst_progress progress;
 } pst_op_opts;
 
 /* Pair mobility of the LV family (brookshaw, cb, schwaiger, lv), the factor (m_I + m_J) of
@@ -114,7 +121,7 @@ enum {
 
 /* Defaults: scheme "qsfdi" (as in scenes), its default kernel, G1, variant 0, cond_max 1e10,
  * rank_tol 1e-13, min_pair_distance 1e-8, on_degenerate PST_DEGENERATE_FALL_BACK,
- * mobility_mean PST_MEAN_ARITHMETIC, laplacian 1, keep 0.
+ * mobility_mean PST_MEAN_ARITHMETIC, laplacian 1, keep 0, no progress hook.
  * Degenerate rows are never regularised: they drop down the scheme's fallback chain. */
 void pst_op_defaults(pst_op_opts *o);
 
@@ -178,6 +185,10 @@ int pst_scheme_keep_bytes(const char *name, int dim, int keep);
 int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o,
                   char *err);
 void pst_op_destroy(pst_op *op);
+
+/* Replace op's progress hook (pst_op_opts.progress) by *progress, or remove it (NULL). Not
+ * while another thread calls op. */
+void pst_op_set_progress(pst_op *op, const pst_progress *progress);
 
 /* Matrix-free apply: y = L u, pair geometry recomputed from the positions and the per-particle
  * data. u and y have one value per particle (cloud order) and must not alias. PST_EINVAL for

@@ -70,9 +70,12 @@ int run_make_operator(run_state *r, int laplacian, const run_boundary *bnd, pst_
     }
     char msg[PST_ERRLEN];
     cli_progress pg;
-    progress_begin(&pg, !r->o->quiet, "precompute");
+    progress_begin(&pg, !r->o->quiet, "precompute", "rows");
+    oo.progress = progress_hook(&pg);
     int st = pst_op_create(op, r->c, r->nl, &oo, msg);
     progress_end(&pg);
+    if (st == PST_OK)
+        pst_op_set_progress(*op, NULL); /* pg ends here; each task attaches its own */
     if (st != PST_OK)
         return run_fail(r, st, "%s: operator %s: %s", r->s->path, oo.scheme, msg);
     if (laplacian)
@@ -134,11 +137,12 @@ static int build(run_state *r)
         return st;
     char msg[PST_ERRLEN];
     cli_progress pg;
-    progress_begin(&pg, !r->o->quiet, "neighbours");
+    progress_begin(&pg, !r->o->quiet, "neighbours", "rows");
+    pst_progress hook = progress_list_hook(&pg);
     double cell = r->plan.support * pst_cloud_h_max(r->c);
     st = pst_cloud_morton_sort(r->c, cell, msg);
     if (st == PST_OK)
-        st = pst_nlist_build(&r->nl, r->c, r->plan.support, msg);
+        st = pst_nlist_build_with(&r->nl, r->c, r->plan.support, &hook, msg);
     progress_end(&pg);
     if (st != PST_OK)
         return run_fail(r, st, "%s: neighbours: %s", s->path, msg);

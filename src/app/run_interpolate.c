@@ -2,6 +2,7 @@
  * CSV file or laid on a lattice box. */
 #include "run_state.h"
 
+#include "progress.h"
 #include "report.h"
 
 #include <math.h>
@@ -112,11 +113,18 @@ int run_interpolate(run_state *r, int k, cJSON *tj)
             st = run_fail(r, PST_ENOMEM, "out of memory for %zu points", m);
     }
     if (st == PST_OK) {
-        char msg[PST_ERRLEN];
+        char msg[PST_ERRLEN], label[PST_MAX_NAME + 8];
+        snprintf(label, sizeof label, "task %s", t->name);
+        cli_progress pg;
+        progress_begin(&pg, !r->o->quiet, label, "points");
+        pst_progress hook = progress_hook(&pg);
+        pst_op_set_progress(r->base, &hook);
         double t0 = omp_get_wtime();
         st = pst_op_interpolate(r->base, (const double *const *)pts, m,
                                 pst_cloud_field_by_name(r->c, t->field), value, lap, &fallbacks,
                                 msg);
+        pst_op_set_progress(r->base, NULL);
+        progress_end(&pg);
         cJSON_AddNumberToObject(tj, "seconds", omp_get_wtime() - t0);
         r->cnt.interpolations++;
         if (st != PST_OK)

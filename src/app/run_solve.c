@@ -131,7 +131,9 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
                         "needs, could not be started", r->s->path, t->name);
     pst_solve_result res;
     char msg[PST_ERRLEN];
-    progress_begin(&pg, !r->o->quiet, "solve");
+    char label[PST_MAX_NAME + 8];
+    snprintf(label, sizeof label, "task %s", t->name);
+    progress_begin(&pg, !r->o->quiet, label, NULL);
     int ss = pst_solve(op, b, u, &so, &res, msg);
     progress_end(&pg);
     r->cnt.solves++;

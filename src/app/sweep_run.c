@@ -230,7 +230,7 @@ static int run_all(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j,
                    const char *done, pst_sweep_stats *stats, char *err, size_t errlen)
 {
     cli_progress pg;
-    progress_begin(&pg, !o->quiet, "sweep");
+    progress_begin(&pg, !o->quiet, "sweep", NULL);
     size_t todo = 0, made = 0;
     for (size_t k = 0; k < sw->ncombos; ++k)
         todo += !done[k];
@@ -251,6 +251,7 @@ static int run_all(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j,
         else
             st = write_rows(sw, j, err, errlen);
     }
+    progress_update(&pg, 1, ""); /* the last line of a log says all are done */
     progress_end(&pg);
     return st;
 }

@@ -2,6 +2,7 @@
  * assembled matrix of L as MatrixMarket). Both read a cloud (pst_cloud_read), Morton-sort it
  * for locality, build an operator and write their result in input order, all or nothing. */
 #include "cli.h"
+#include "progress.h"
 #include "pstencil.h"
 
 #include <omp.h>
@@ -248,7 +249,7 @@ static double *find_field(pst_cloud *c, const char *path, const char *name)
 }
 
 /* Read, override mobility and h, sort, build the list and the operator. An exit code. */
-static int setup(const apply_args *a, apply_setup *s)
+static int setup(const cli_ctx *ctx, const apply_args *a, apply_setup *s)
 {
     char err[PST_ERRLEN] = "", why[PST_ERRLEN] = "";
     double t0 = omp_get_wtime();
@@ -298,12 +299,22 @@ static int setup(const apply_args *a, apply_setup *s)
         return cli_fail(st, "Morton sort failed", why);
     s->t_sort = omp_get_wtime() - t0;
     t0 = omp_get_wtime();
-    st = pst_nlist_build(&s->nl, c, s->support, err);
+    cli_progress pg;
+    progress_begin(&pg, !ctx->quiet, "neighbours", "rows");
+    pst_progress hook = progress_list_hook(&pg);
+    st = pst_nlist_build_with(&s->nl, c, s->support, &hook, err);
+    progress_end(&pg);
     if (st != PST_OK)
         return cli_fail(st, "neighbour list failed", err);
     s->t_nlist = omp_get_wtime() - t0;
     t0 = omp_get_wtime();
-    st = pst_op_create(&s->op, c, s->nl, &a->opts, err);
+    pst_op_opts oo = a->opts;
+    progress_begin(&pg, !ctx->quiet, "precompute", "rows");
+    oo.progress = progress_hook(&pg);
+    st = pst_op_create(&s->op, c, s->nl, &oo, err);
+    progress_end(&pg);
+    if (st == PST_OK)
+        pst_op_set_progress(s->op, NULL); /* pg ends here */
     if (st != PST_OK)
         return cli_fail(st, "cannot build the operator", err);
     s->t_pre = omp_get_wtime() - t0;
@@ -432,7 +443,7 @@ int cli_apply(const cli_ctx *ctx, int argc, char **argv)
     apply_setup s = {0};
     double *y = NULL;
     size_t *inv = NULL;
-    rc = setup(&a, &s);
+    rc = setup(ctx, &a, &s);
     if (rc != CLI_OK)
         goto done;
     size_t n = pst_cloud_size(s.c);
@@ -501,7 +512,7 @@ int cli_stencil(const cli_ctx *ctx, int argc, char **argv)
         return rc;
     apply_setup s = {0};
     pst_csr m = {0};
-    rc = setup(&a, &s);
+    rc = setup(ctx, &a, &s);
     if (rc != CLI_OK)
         goto done;
     double t0 = omp_get_wtime();

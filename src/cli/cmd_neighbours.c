@@ -1,6 +1,7 @@
 /* `pstencil neighbours FILE`: read a cloud, Morton-sort it, build its neighbour list and print
  * statistics and timings. The same report ends `pstencil run`. */
 #include "cli.h"
+#include "progress.h"
 
 #include <omp.h>
 #include <stdio.h>
@@ -19,7 +20,11 @@ int cli_neighbour_report(const cli_ctx *ctx, pst_cloud *c, pst_kernel kernel, do
     double t1 = omp_get_wtime();
     char err[PST_ERRLEN] = "";
     pst_nlist *nl = NULL;
-    st = pst_nlist_build(&nl, c, support, err);
+    cli_progress pg;
+    progress_begin(&pg, !ctx->quiet, "neighbours", "rows");
+    pst_progress hook = progress_list_hook(&pg);
+    st = pst_nlist_build_with(&nl, c, support, &hook, err);
+    progress_end(&pg);
     if (st != PST_OK)
         return cli_fail(st, "neighbour list failed", err);
     double t2 = omp_get_wtime();

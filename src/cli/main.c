@@ -4,6 +4,7 @@
 #define _POSIX_C_SOURCE 200809L /* sigaction */
 
 #include "cli.h"
+#include "progress.h"
 
 #include <errno.h>
 #include <math.h>
@@ -48,7 +49,7 @@ static int usage_error(const char *fmt, const char *arg)
 static void print_help(void)
 {
     printf("pstencil %s — meshless Laplacian and div(M grad u) operators on particle clouds\n\n"
-           "usage: pstencil [--threads N] [--quiet] COMMAND [ARGS]\n\n"
+           "usage: pstencil [--threads N] [--quiet] [--progress] COMMAND [ARGS]\n\n"
            "commands:\n"
            "  run [SCENE] [K=V]   run a scene file (default: the built-in scene, the QSFDI\n"
            "                      Laplacian and gradient on a 3D cloud of 10^6 particles);\n"
@@ -71,6 +72,8 @@ static void print_help(void)
            "global options:\n"
            "  --threads N         OpenMP threads (default: OMP_NUM_THREADS or all cores)\n"
            "  --quiet             print results only\n"
+           "  --progress          progress lines on stderr also when it is not a terminal\n"
+           "                      (a log: a line a second and one per phase)\n"
            "  --help, --version\n\n"
            "'pstencil COMMAND --help' describes a command's options.\n"
            "exit codes: 0 ok, 1 usage, 2 bad input, 3 numerical failure, 4 out of memory\n",
@@ -185,6 +188,8 @@ int main(int argc, char **argv)
             omp_set_num_threads((int)t);
         } else if (strcmp(argv[i], "--quiet") == 0) {
             ctx.quiet = 1;
+        } else if (strcmp(argv[i], "--progress") == 0) {
+            progress_force();
         } else {
             args[nargs++] = argv[i];
         }

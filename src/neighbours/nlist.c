@@ -21,6 +21,7 @@
 #include "cells.h"
 #include "check.h"
 #include "isa.h"
+#include "tally.h"
 
 #include <float.h>
 #include <math.h>
@@ -34,6 +35,8 @@
 
 #define SCAN_BLOCKS 64
 #define FILL_BLOCK 64
+/* Slots a pass handles between two counts of a progress hook (pst_nlist_build_with). */
+#define PROGRESS_SLOTS 4096
 
 /* A candidate cell: its slots in the cell-ordered copy and its box widened by the rounding
  * margin. */
@@ -54,6 +57,7 @@ typedef struct {
     double margin;      /* bound on the rounding of positions vs cell bounds  */
     const int64_t *offset; /* fill pass: the row offsets (by cloud index)     */
     uint32_t *index;       /* fill pass: the list                             */
+    pst_tally *tally;      /* the progress hook's counter, or NULL            */
 } ctx;
 
 /* Largest distance at which particle p (a cell-order slot) can have a neighbour, inflated so
@@ -268,7 +272,12 @@ PST_ISA_DISPATCH static void pass(const ctx *k, size_t c0, size_t c1, cand *cl, 
 {
     const pst_cells *g = k->g;
     int fill = k->index != NULL, varh = k->h != NULL;
+    size_t counted = g->start[c0]; /* the slots before it are counted: one test per cell */
     for (size_t r = c0; r < c1; ++r) {
+        if (k->tally && g->start[r] - counted >= PROGRESS_SLOTS) {
+            pst_tally_add(k->tally, g->start[r] - counted);
+            counted = g->start[r];
+        }
         if (g->start[r] == g->start[r + 1])
             continue;
         size_t m = cell_candidates(k, r, cl);
@@ -287,6 +296,7 @@ PST_ISA_DISPATCH static void pass(const ctx *k, size_t c0, size_t c1, cand *cl, 
             cur[p] += (uint32_t)len;
         }
     }
+    pst_tally_add(k->tally, g->start[c1] - counted);
 }
 
 /* First cell (rank) whose particles start at or after slot `pos`. */
@@ -510,12 +520,20 @@ static int fill_list(pst_nlist *nl, const pst_cloud *c, ctx *k, build_buffers *b
 
 int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *err)
 {
+    return pst_nlist_build_with(out, c, support, NULL, err);
+}
+
+int pst_nlist_build_with(pst_nlist **out, const pst_cloud *c, double support,
+                         const pst_progress *progress, char *err)
+{
     *out = NULL;
     PST_TRY(check_input(c, support, err));
     size_t n = c->n;
     pst_nlist *nl = NULL;
     PST_TRY(new_list(&nl, n, support, err));
     if (n < 2) {
+        pst_tally tally;
+        pst_tally_finish(pst_tally_start(&tally, progress, 2 * (uint64_t)n));
         *out = nl;
         return PST_OK;
     }
@@ -536,6 +554,8 @@ int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *e
                          "particles", n);
     } else {
         ctx k = search_ctx(c, &g, bb.copy, support, hmax);
+        pst_tally tally; /* two passes over every slot: the count and the fill */
+        k.tally = pst_tally_start(&tally, progress, 2 * (uint64_t)n);
         size_t maxcand = max_candidates(&k, support);
         bb.cl = pst_alloc((size_t)nth * maxcand * sizeof *bb.cl);
         if (!bb.cl) {
@@ -544,6 +564,8 @@ int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *e
                         maxcand);
         } else {
             status = fill_list(nl, c, &k, &bb, maxcand, err);
+            if (status == PST_OK)
+                pst_tally_finish(k.tally);
         }
     }
     pst_free(bb.cl);

@@ -43,6 +43,8 @@ void pst_op_defaults(pst_op_opts *o)
     o->mobility_mean = PST_MEAN_ARITHMETIC;
     o->kinds = NULL;
     o->normals[0] = o->normals[1] = o->normals[2] = NULL;
+    o->progress.fn = NULL;
+    o->progress.user = NULL;
 }
 
 /* The boundary override of opts (kinds, normals): known kinds, finite Neumann normals. */
@@ -195,9 +197,14 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
      * read them (the planner's "model only what a scene needs"). */
     op->rows = o->laplacian || !scheme->derivatives_standalone;
     double t0 = omp_get_wtime();
+    pst_tally tally;
+    op->tally = op->rows ? pst_tally_start(&tally, &o->progress, c->n) : NULL;
     int st = op->rows ? scheme->precompute(op, err) : PST_OK;
     if (st == PST_OK && op->rows)
         pst_op_check_flat_rows(op);
+    if (st == PST_OK)
+        pst_tally_finish(op->tally);
+    op->tally = NULL;
     op->phase[PST_PHASE_PRECOMPUTE] = omp_get_wtime() - t0;
     if (st != PST_OK) {
         pst_op_destroy(op);
@@ -583,11 +590,33 @@ int pst_op_audit_rows(const pst_op *op, pst_op_audit *a)
 
 int pst_op_audit_flags(const pst_op *op, uint8_t *flags) { return audit(op, flags, NULL); }
 
+void pst_op_set_progress(pst_op *op, const pst_progress *progress)
+{
+    op->opts.progress = progress ? *progress : (pst_progress){NULL, NULL};
+}
+
+/* A read-only call's operator with a progress counter of `total` units: op itself without a
+ * hook, else a copy that points at the caller's tally (writing the counter into op would
+ * write through a const operator that concurrent read-only calls may share). */
+static const pst_op *progress_view(const pst_op *op, uint64_t total, pst_op *copy,
+                                   pst_tally *tally)
+{
+    if (!op->opts.progress.fn)
+        return op;
+    *copy = *op;
+    copy->tally = pst_tally_start(tally, &op->opts.progress, total);
+    return copy;
+}
+
 int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
 {
     if (!op->scheme->gradient || op->half)
         return PST_EINVAL;
-    op->scheme->gradient(op, u, grad);
+    pst_op copy;
+    pst_tally tally;
+    const pst_op *v = progress_view(op, op->n, &copy, &tally);
+    op->scheme->gradient(v, u, grad);
+    pst_tally_finish(v->tally);
     return PST_OK;
 }
 
@@ -595,7 +624,11 @@ int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6])
 {
     if (!op->scheme->hessian || op->half)
         return PST_EINVAL;
-    op->scheme->hessian(op, u, hess);
+    pst_op copy;
+    pst_tally tally;
+    const pst_op *v = progress_view(op, op->n, &copy, &tally);
+    op->scheme->hessian(v, u, hess);
+    pst_tally_finish(v->tally);
     return PST_OK;
 }
 
@@ -607,6 +640,12 @@ int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, c
     PST_CHECK(op->half, PST_EINVAL, err,
               "the operator uses a half list: interpolation needs the whole one");
     size_t none = 0;
-    return op->scheme->interpolate(op, pts, m, u, value, lap, fallbacks ? fallbacks : &none,
-                                   err);
+    pst_op copy;
+    pst_tally tally;
+    const pst_op *v = progress_view(op, m, &copy, &tally);
+    int st = op->scheme->interpolate(v, pts, m, u, value, lap, fallbacks ? fallbacks : &none,
+                                     err);
+    if (st == PST_OK)
+        pst_tally_finish(v->tally);
+    return st;
 }

@@ -5,6 +5,7 @@
 #include "cloud_layout.h"
 #include "internal.h"
 #include "nlist_layout.h"
+#include "tally.h"
 
 /* One scheme: a kernel file in kernels/ fills this table and operator.c registers it.
  *
@@ -115,6 +116,10 @@ struct pst_op {
      * from the whole rows before the switch (NULL before). */
     struct pst_half_schedule *half;
     double *half_diag;
+    /* The progress counter of the call in progress (pst_op_create's precompute, a
+     * derivative or an interpolation), NULL without a hook: a scheme's row loops count their
+     * rows into it once per chunk or block (pst_tally_add, PST_CHUNK_ROWS). */
+    pst_tally *tally;
 };
 
 /* Set the apply timer (PST_PHASE_APPLY) to the time since t0 (omp_get_wtime). */

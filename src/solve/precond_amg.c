@@ -373,6 +373,7 @@ static int low_order_matrix(const pst_op *op, const pst_solve_opts *so, int own,
     o.scheme = "brookshaw";
     o.kernel = (int)op->kernel;
     o.variant = 0;
+    o.progress.fn = NULL; /* the proxy is part of the solve's set-up, not a call of the user's */
     pst_op *brookshaw = NULL;
     int st = pst_op_create(&brookshaw, op->cloud, list ? list : op->nl, &o, err);
     if (st == PST_OK) {
