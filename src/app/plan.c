@@ -10,6 +10,7 @@
 
 #include "memory_avail.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -182,8 +183,10 @@ static double solver_vectors(const pst_plan *p, const pst_scene *s)
  * AMG solves (they converge in tens of iterations) down to PLAN_MIN_RESTART. */
 static void fit_restarts(pst_plan *p, const pst_scene *s, double room)
 {
-    double n = (double)p->particles;
-    int fits = (int)floor(room / (8.0 * n)) - 8;
+    double n = (double)p->particles, room_vectors = floor(room / (8.0 * n)) - 8;
+    if (!(room_vectors < INT_MAX)) /* no particles known yet, or room for any restart */
+        return;
+    int fits = (int)room_vectors;
     for (int k = 0; k < s->ntasks; ++k)
         if (s->tasks[k].type == SC_TASK_SOLVE && p->task_solver[k] == PST_SOLVER_GMRES &&
             p->task_precond[k] == PST_PREC_AMG && p->task_restart[k] > fits)
