@@ -3,7 +3,9 @@
  * arrays tile the appended block exactly, and every value bit for bit against the cloud in
  * input order. Also: the file does not depend on the cloud's storage order, and failed writes
  * (no such directory, a write cut short, bad ids, a field named like a file array) leave no
- * file behind. tests/vtu_roundtrip.py reads files with VTK's own reader. */
+ * file behind. The reader: every format, zlib-compressed files made here with compress2
+ * (several blocks, a short last one, vector and tensor arrays), and damaged files, each error
+ * text asserted. tests/vtu_roundtrip.py reads files with VTK's own reader. */
 #define _POSIX_C_SOURCE 200809L /* mkdtemp, setrlimit, opendir */
 
 #include "check.h"
@@ -17,6 +19,7 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
 static char dir[64];
 
@@ -682,6 +685,18 @@ static const char *ascii_variant(const char *name, const char *from, const char 
     return path_of(name);
 }
 
+/* Replace the first `from` of the NUL-terminated buf (cap bytes) by `to`. */
+static void replace_once(char *buf, size_t cap, const char *from, const char *to)
+{
+    char *at = strstr(buf, from);
+    size_t lf = strlen(from), lt = strlen(to);
+    CHECK(at && strlen(buf) - lf + lt < cap);
+    if (!at || strlen(buf) - lf + lt >= cap)
+        return;
+    memmove(at + lt, at + lf, strlen(at + lf) + 1);
+    memcpy(at, to, lt);
+}
+
 static void b64_encode(const unsigned char *in, size_t len, char *out)
 {
     static const char tab[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -853,19 +868,22 @@ static void test_read_errors(void)
     char err[PST_ERRLEN] = "";
     expect_fail(path_of("no_such.vtu"), PST_EIO, "cannot open", NULL);
     /* structure */
-    expect_fail(ascii_variant("e.vtu", "byte_order", "compressor=\"vtkZLibDataCompressor\" bo"),
-                PST_EINPUT, ":3:1: compressed VTU is not supported: write it uncompressed (e.g. "
-                            "ParaView: Save Data, uncheck compression)", NULL);
+    expect_fail(ascii_variant("e.vtu", "byte_order", "compressor=\"vtkLZ4DataCompressor\" bo"),
+                PST_EINPUT, ":3:1: compressor \"vtkLZ4DataCompressor\" is not supported: only "
+                            "vtkZLibDataCompressor (zlib) or none", NULL);
+    expect_fail(ascii_variant("e.vtu", "byte_order", "compressor=\"vtkLZMADataCompressor\" bo"),
+                PST_EINPUT, ":3:1: compressor \"vtkLZMADataCompressor\" is not supported", NULL);
     expect_fail(ascii_variant("e.vtu", "\"UnstructuredGrid\"", "\"ImageData\""), PST_EINPUT,
                 ":3:1: unsupported dataset type \"ImageData\"", NULL);
     expect_fail(ascii_variant("e.vtu", "</Piece>", "</Piece><Piece NumberOfPoints=\"1\"/>"),
                 PST_EINPUT, "more than one Piece", NULL);
     expect_fail(ascii_variant("e.vtu", "</PointData>", "</Pointdata>"), PST_EINPUT,
-                ":18:7: malformed XML: unexpected end tag </Pointdata>", NULL);
+                ":18:9: malformed XML: mismatched tag: this end tag does not close <PointData> "
+                "of 6:7", NULL);
     expect_fail(ascii_variant("e.vtu", "</VTKFile>\n", ""), PST_EINPUT,
                 ":3:1: truncated file: <VTKFile> is not closed", NULL);
     expect_fail(ascii_variant("e.vtu", "format=\"ascii\">0.5", "format=\"ascii>0.5"),
-                PST_EINPUT, ":7:", "attribute");
+                PST_EINPUT, ":7:71: malformed XML: not well-formed (invalid token) at '<'", NULL);
     expect_fail(ascii_variant("e.vtu", "type=\"Int32\"", "type=\"String\""), PST_EINPUT,
                 ":9:9: array 'kind': unsupported type \"String\"", NULL);
     expect_fail(ascii_variant("e.vtu", "Name=\"h\"", "Name=\"hh\""), PST_EINPUT,
@@ -878,8 +896,21 @@ static void test_read_errors(void)
                 "array 'nx' cannot be a field", NULL);
     expect_fail(ascii_variant("e.vtu", "Name=\"T\"", "Name=\"V\""), PST_EINPUT,
                 "two PointData arrays are named 'V'", NULL);
-    expect_fail(ascii_variant("e.vtu", "Name=\"T\"", "Name=\"T\" NumberOfComponents=\"3\""),
-                PST_EINPUT, "array 'T' has 3 components: only 'normal' and 'M'", NULL);
+    expect_fail(ascii_variant("e.vtu", "Name=\"T\"", "Name=\"T\" NumberOfComponents=\"2\""),
+                PST_EINPUT, ":14:9: PointData array 'T' has 2 components: a field has 1, 3 (a "
+                "vector) or 6 (a symmetric tensor)", NULL);
+    /* a 3-component field is a vector: its fields must not clash, its z must be 0 in 2D */
+    expect_fail(ascii_variant("e.vtu", "Name=\"normal\"", "Name=\"vel\""), PST_EINPUT,
+                "array 'vel', point 2: component z = 7 must be 0 in a 2D cloud", NULL);
+    {
+        char t[sizeof ascii_vtu + 64];
+        snprintf(t, sizeof t, "%s", ascii_vtu);
+        replace_once(t, sizeof t, "Name=\"normal\"", "Name=\"q\"");
+        replace_once(t, sizeof t, "Name=\"T\"", "Name=\"q_y\"");
+        spit(path_of("e.vtu"), t, strlen(t));
+        expect_fail(path_of("e.vtu"), PST_EINPUT,
+                    ":14:9: two PointData arrays give the field 'q_y'", NULL);
+    }
     expect_fail(ascii_variant("e.vtu", "Name=\"status\"", "Name=\"m\""), PST_EINPUT,
                 "both 'm' and 'M'", NULL);
     expect_fail(ascii_variant("e.vtu", "0.5 0.25 1e-3", "0.5 0.25"), PST_EINPUT,
@@ -1043,6 +1074,312 @@ static void test_read_fuzz(void)
     fuzz_file("fz_ascii.vtu", 1500, 2);
     fuzz_file("b64.vtu", 1000, 3);
     fuzz_file("poly.vtp", 1000, 4);
+    fuzz_file("fz_zraw.vtu", 1000, 5); /* compressed (test_read_zlib) */
+    fuzz_file("fz_zb64.vtu", 1000, 6);
+    fuzz_file("fz_zinline.vtu", 1000, 7);
+}
+
+/* ---- compressed input (vtkZLibDataCompressor): files made here with compress2 ------------- */
+
+enum { ZM_RAW, ZM_B64, ZM_INLINE };
+
+/* One array of a compressed test file: name NULL for the Points; values in host order. */
+typedef struct {
+    const char *name, *type;
+    int ncomp, size;
+    const void *vals;
+} z_array;
+
+/* A compressed test file, and where each array's compressed bytes start in the appended block
+ * (ZM_RAW) and how long its header is. */
+typedef struct {
+    unsigned char buf[1 << 17];
+    size_t len, data, off[8], hlen[8], zlen[8];
+} z_file;
+
+static void put_word(unsigned char *out, int hs, int big, uint64_t v)
+{
+    for (int b = 0; b < hs; ++b)
+        out[big ? hs - 1 - b : b] = (unsigned char)(v >> (8 * b));
+}
+
+/* VTK's compressed form of count values of `size` bytes: the header [number of blocks, bs,
+ * size of the last block (0: full), compressed size of each block] in hs-byte words, then one
+ * zlib stream per block of bs uncompressed bytes. *hlen: the header's length; returns the
+ * total length. */
+static size_t zlib_blocks(unsigned char *out, int hs, int big, const void *vals, size_t count,
+                          int size, size_t bs, size_t *hlen)
+{
+    size_t bytes = count * (size_t)size, nb = (bytes + bs - 1) / bs;
+    unsigned char *plain = malloc((size_t)hs + bytes);
+    block(plain, hs, big, vals, count, size); /* the values in the file's byte order */
+    *hlen = (size_t)hs * (3 + nb);
+    put_word(out, hs, big, nb);
+    put_word(out + hs, hs, big, bs);
+    put_word(out + 2 * hs, hs, big, bytes % bs);
+    size_t at = *hlen;
+    for (size_t b = 0; b < nb; ++b) {
+        size_t u = bytes - b * bs < bs ? bytes - b * bs : bs;
+        uLongf c = compressBound((uLong)u);
+        CHECK_INT(compress2(out + at, &c, plain + hs + b * bs, (uLong)u, 9), Z_OK);
+        put_word(out + (3 + b) * (size_t)hs, hs, big, c);
+        at += c;
+    }
+    free(plain);
+    return at;
+}
+
+/* A compressed .vtu of n points with arrays arr (the Points last) in `mode`, hs-byte headers,
+ * blocks of bs bytes; into f (not written). */
+static void zlib_vtu(z_file *f, int mode, int hs, int big, size_t n, const z_array *arr,
+                     size_t na, size_t bs)
+{
+    static unsigned char z[1 << 15], app[1 << 16];
+    static char text[1 << 16];
+    char *xml = (char *)f->buf;
+    size_t cap = sizeof f->buf, x = 0, a_len = 0;
+    x += (size_t)snprintf(xml + x, cap - x,
+                          "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" "
+                          "version=\"1.0\" byte_order=\"%s\" header_type=\"%s\" "
+                          "compressor=\"vtkZLibDataCompressor\">\n<UnstructuredGrid>\n"
+                          "<Piece NumberOfPoints=\"%zu\" NumberOfCells=\"0\">\n<PointData>\n",
+                          big ? "BigEndian" : "LittleEndian", hs == 8 ? "UInt64" : "UInt32", n);
+    for (size_t k = 0; k < na; ++k) {
+        const z_array *a = &arr[k];
+        size_t zl = zlib_blocks(z, hs, big, a->vals, n * (size_t)a->ncomp, a->size, bs,
+                                &f->hlen[k]);
+        f->zlen[k] = zl;
+        f->off[k] = a_len;
+        if (mode == ZM_RAW) {
+            memcpy(app + a_len, z, zl);
+            a_len += zl;
+        } else { /* the header and the blocks: two base64 runs */
+            b64_encode(z, f->hlen[k], text);
+            b64_encode(z + f->hlen[k], zl - f->hlen[k], text + strlen(text));
+        }
+        if (mode == ZM_B64) {
+            memcpy(app + a_len, text, strlen(text));
+            a_len += strlen(text);
+        }
+        if (!a->name)
+            x += (size_t)snprintf(xml + x, cap - x, "</PointData>\n<Points>\n");
+        char nm[64] = "";
+        if (a->name)
+            snprintf(nm, sizeof nm, " Name=\"%s\"", a->name);
+        if (mode == ZM_INLINE)
+            x += (size_t)snprintf(xml + x, cap - x,
+                                  "<DataArray type=\"%s\"%s NumberOfComponents=\"%d\" "
+                                  "format=\"binary\">\n%s\n</DataArray>\n",
+                                  a->type, nm, a->ncomp, text);
+        else
+            x += (size_t)snprintf(xml + x, cap - x,
+                                  "<DataArray type=\"%s\"%s NumberOfComponents=\"%d\" "
+                                  "format=\"appended\" offset=\"%zu\"/>\n",
+                                  a->type, nm, a->ncomp, f->off[k]);
+    }
+    x += (size_t)snprintf(xml + x, cap - x, "</Points>\n</Piece>\n</UnstructuredGrid>\n");
+    if (mode != ZM_INLINE) {
+        x += (size_t)snprintf(xml + x, cap - x, "<AppendedData encoding=\"%s\">\n  _",
+                              mode == ZM_RAW ? "raw" : "base64");
+        f->data = x;
+        memcpy(f->buf + x, app, a_len);
+        x += a_len;
+        x += (size_t)snprintf(xml + x, cap - x, "\n</AppendedData>\n");
+    }
+    x += (size_t)snprintf(xml + x, cap - x, "</VTKFile>\n");
+    f->len = x;
+}
+
+enum { ZN = 40 }; /* points: the Points (960 bytes) span 4 blocks of 256, the last short */
+
+/* The arrays of the compressed files: 3D (or 2D: z = 0 and the out-of-plane components 0,
+ * except where `bad_z`) positions, V, h, a Float32 vector vel and a symmetric tensor S. */
+typedef struct {
+    double pts[3 * ZN], V[ZN], h[ZN], S[6 * ZN];
+    float vel[3 * ZN];
+} z_values;
+
+static void z_fill(z_values *v, int dim)
+{
+    for (size_t k = 0; k < ZN; ++k) {
+        v->pts[3 * k] = (double)(k % 4) + 0.125 * sin((double)k);
+        v->pts[3 * k + 1] = (double)(k / 4 % 5) - 1e-3 * (double)k;
+        v->pts[3 * k + 2] = dim == 3 ? (double)(k / 20) + 1.0 / 3 : 0.0;
+        v->V[k] = 1.0 / (double)(k + 2);
+        v->h[k] = 0.5 + (double)k / 1024;
+        for (int d = 0; d < 3; ++d)
+            v->vel[3 * k + (size_t)d] = d < dim ? (float)k * 0.25f - (float)d : 0.0f;
+        for (int j = 0; j < 6; ++j) {
+            int in_plane = j == 0 || j == 1 || j == 3;
+            v->S[6 * k + (size_t)j] = dim == 3 || in_plane ? exp(-(double)k / 9) * (j + 1) : 0;
+        }
+    }
+}
+
+static size_t z_arrays(z_array *arr, const z_values *v)
+{
+    const z_array list[5] = {{"V", "Float64", 1, 8, v->V},     {"h", "Float64", 1, 8, v->h},
+                             {"vel", "Float32", 3, 4, v->vel}, {"S", "Float64", 6, 8, v->S},
+                             {NULL, "Float64", 3, 8, v->pts}};
+    memcpy(arr, list, sizeof list);
+    return 5;
+}
+
+/* The cloud read from a compressed file against the values, exactly. */
+static void z_check(pst_cloud *r, const z_values *v, int dim)
+{
+    static const char *const vn[3] = {"vel_x", "vel_y", "vel_z"},
+                             *const sn[6] = {"S_xx", "S_yy", "S_zz", "S_xy", "S_yz", "S_xz"};
+    CHECK(r != NULL);
+    if (!r)
+        return;
+    CHECK_INT(pst_cloud_size(r), ZN);
+    CHECK_INT(pst_cloud_dim(r), dim);
+    CHECK_INT(pst_cloud_nfields(r), dim == 3 ? 9 : 5);
+    size_t bad = 0;
+    for (size_t k = 0; k < ZN; ++k) {
+        for (int d = 0; d < dim; ++d)
+            bad += pst_cloud_coord(r, d)[k] != v->pts[3 * k + (size_t)d];
+        bad += pst_cloud_volume(r)[k] != v->V[k] || pst_cloud_h_array(r)[k] != v->h[k];
+        for (int d = 0; d < 3; ++d) {
+            const double *f = pst_cloud_field_by_name(r, vn[d]);
+            bad += d < dim ? !f || f[k] != (double)v->vel[3 * k + (size_t)d] : f != NULL;
+        }
+        for (int j = 0; j < 6; ++j) {
+            const double *f = pst_cloud_field_by_name(r, sn[j]);
+            int kept = dim == 3 || j == 0 || j == 1 || j == 3;
+            bad += kept ? !f || f[k] != v->S[6 * k + (size_t)j] : f != NULL;
+        }
+    }
+    CHECK_INT(bad, 0);
+    /* the fields in file order, each split in component order */
+    CHECK(!strcmp(pst_cloud_field_name(r, 0), "vel_x"));
+    CHECK(!strcmp(pst_cloud_field_name(r, dim), "S_xx"));
+    CHECK(!strcmp(pst_cloud_field_name(r, dim + 2), dim == 3 ? "S_zz" : "S_xy"));
+}
+
+static void test_read_zlib(void)
+{
+    char err[PST_ERRLEN] = "";
+    static z_file f;
+    z_values v;
+    z_array arr[5];
+    size_t na = z_arrays(arr, &v);
+    static const char *const mode_name[3] = {"appended raw", "appended base64", "binary"};
+    for (int dim = 2; dim <= 3; ++dim) {
+        z_fill(&v, dim);
+        for (int mode = ZM_RAW; mode <= ZM_INLINE; ++mode)
+            for (int hs = 4; hs <= 8; hs += 4) {
+                int big = (mode + hs / 4 + dim) % 2; /* both byte orders in every mode */
+                zlib_vtu(&f, mode, hs, big, ZN, arr, na, 256);
+                spit(path_of("z.vtu"), f.buf, f.len);
+                pst_cloud *r = NULL;
+                int st = pst_cloud_read_vtu(&r, path_of("z.vtu"), err);
+                CHECK_INT(st, PST_OK);
+                if (st != PST_OK)
+                    fprintf(stderr, "  %dD %s, UInt%d: %s\n", dim, mode_name[mode], 8 * hs, err);
+                z_check(r, &v, dim);
+                pst_cloud_destroy(r);
+            }
+    }
+    /* one block per array, and blocks of exactly the array's size (last-block size 0) */
+    z_fill(&v, 3);
+    for (size_t bs = 1 << 14; bs >= 320; bs = 320) {
+        zlib_vtu(&f, ZM_RAW, 8, 0, ZN, arr, na, bs);
+        spit(path_of("z.vtu"), f.buf, f.len);
+        pst_cloud *r = NULL;
+        CHECK_INT(pst_cloud_read_vtu(&r, path_of("z.vtu"), err), PST_OK);
+        z_check(r, &v, 3);
+        pst_cloud_destroy(r);
+        if (bs == 320)
+            break;
+    }
+
+    /* 2D: a vector or tensor component out of the plane must be 0 */
+    z_fill(&v, 2);
+    v.vel[3 * 7 + 2] = 0.5f;
+    zlib_vtu(&f, ZM_INLINE, 4, 0, ZN, arr, na, 256);
+    spit(path_of("z.vtu"), f.buf, f.len);
+    expect_fail(path_of("z.vtu"), PST_EINPUT,
+                "array 'vel', point 7: component z = 0.5 must be 0 in a 2D cloud", NULL);
+    v.vel[3 * 7 + 2] = 0;
+    v.S[6 * 3 + 4] = -2;
+    zlib_vtu(&f, ZM_RAW, 4, 0, ZN, arr, na, 256);
+    spit(path_of("z.vtu"), f.buf, f.len);
+    expect_fail(path_of("z.vtu"), PST_EINPUT,
+                "array 'S', point 3: component yz = -2 must be 0 in a 2D cloud", NULL);
+
+    /* damaged files: each error names the array and where its data is */
+    z_fill(&v, 3);
+    zlib_vtu(&f, ZM_RAW, 8, 0, ZN, arr, na, 256);
+    const size_t P = 4; /* the Points: 4 blocks, the last 192 bytes */
+    char want[160];
+    static unsigned char copy[sizeof f.buf];
+    /* a truncated block: the file cut inside the Points' last block, the end tags kept */
+    {
+        static const char tail[] = "\n</AppendedData>\n</VTKFile>\n";
+        size_t cut = f.data + f.off[P] + f.zlen[P] - 10;
+        memcpy(copy, f.buf, cut);
+        memcpy(copy + cut, tail, sizeof tail - 1);
+        spit(path_of("z.vtu"), copy, cut + sizeof tail - 1);
+        snprintf(want, sizeof want, "appended data offset %zu (array 'Points'): compressed "
+                 "data: block 4 of 4: truncated", f.off[P]);
+        expect_fail(path_of("z.vtu"), PST_EINPUT, want, "compressed bytes, at most");
+    }
+    /* a wrong uncompressed size: the last block said to be 200 bytes instead of 192 */
+    memcpy(copy, f.buf, f.len);
+    put_word(copy + f.data + f.off[P] + 16, 8, 0, 200);
+    spit(path_of("z.vtu"), copy, f.len);
+    expect_fail(path_of("z.vtu"), PST_EINPUT,
+                "(array 'Points'): compressed data: uncompressed size 968 (4 blocks of 256 "
+                "bytes, the last 200), expected 960 (40 points x 3 components x 8 bytes)", NULL);
+    /* an absurd block count is refused before anything is allocated */
+    memcpy(copy, f.buf, f.len);
+    put_word(copy + f.data + f.off[0], 8, 0, (uint64_t)1 << 60);
+    spit(path_of("z.vtu"), copy, f.len);
+    expect_fail(path_of("z.vtu"), PST_EINPUT, "(array 'V'): compressed data: the header "
+                "declares 1152921504606846976 blocks, more than", NULL);
+    /* a corrupt zlib stream: the first byte of V's second block */
+    memcpy(copy, f.buf, f.len);
+    uint64_t c0 = f.buf[f.data + f.off[0] + 24];
+    copy[f.data + f.off[0] + f.hlen[0] + c0] ^= 0x55;
+    spit(path_of("z.vtu"), copy, f.len);
+    snprintf(want, sizeof want, "appended data offset %zu (array 'V'): compressed data: block 2 "
+             "of 2: corrupt zlib stream (data error)", f.off[0]);
+    expect_fail(path_of("z.vtu"), PST_EINPUT, want, NULL);
+    /* a block that inflates to fewer bytes than the header says: V's blocks swapped in size */
+    memcpy(copy, f.buf, f.len);
+    put_word(copy + f.data + f.off[0] + 8, 8, 0, 64);  /* block size */
+    put_word(copy + f.data + f.off[0] + 16, 8, 0, 0);  /* the last: full */
+    put_word(copy + f.data + f.off[0], 8, 0, 5);       /* 5 x 64 = 320 */
+    spit(path_of("z.vtu"), copy, f.len);
+    expect_fail(path_of("z.vtu"), PST_EINPUT, "(array 'V'): compressed data: block 1 of 5",
+                NULL);
+    /* inline: the same errors at the array's LINE:COLUMN */
+    zlib_vtu(&f, ZM_INLINE, 4, 1, ZN, arr, na, 256);
+    char *p = strstr((char *)f.buf, "Name=\"h\"");
+    CHECK(p != NULL);
+    if (p) {
+        char *data = strchr(p, '\n') + 1;
+        data[0] = data[0] == 'A' ? 'B' : 'A'; /* the block count */
+        spit(path_of("z.vtu"), f.buf, f.len);
+        expect_fail(path_of("z.vtu"), PST_EINPUT, ":9:1: array 'h': compressed data: the header "
+                    "declares 67108866 blocks, more than the 128 bytes left can describe", NULL);
+    }
+    /* an unknown compressor is named */
+    zlib_vtu(&f, ZM_RAW, 8, 0, ZN, arr, na, 256);
+    p = strstr((char *)f.buf, "vtkZLibDataCompressor");
+    memcpy(p, "vtkLZ4DataCompressor\" ", 22);
+    spit(path_of("z.vtu"), f.buf, f.len);
+    expect_fail(path_of("z.vtu"), PST_EINPUT, ":2:1: compressor \"vtkLZ4DataCompressor\" is not "
+                "supported: only vtkZLibDataCompressor", NULL);
+
+    /* inputs of the mutation fuzz (test_read_fuzz) */
+    static const char *const fz[3] = {"fz_zraw.vtu", "fz_zb64.vtu", "fz_zinline.vtu"};
+    for (int mode = ZM_RAW; mode <= ZM_INLINE; ++mode) {
+        zlib_vtu(&f, mode, 4 + 4 * (mode == ZM_B64), mode == ZM_INLINE, ZN, arr, na, 256);
+        spit(path_of(fz[mode]), f.buf, f.len);
+    }
 }
 
 /* The ascii file with nf more field arrays f0, f1, ... (the last named `last` when given)
@@ -1101,6 +1438,7 @@ int main(void)
     test_read_roundtrip();
     test_read_formats();
     test_read_errors();
+    test_read_zlib();
     test_many_arrays();
     test_read_fuzz();
     test_remove_dir(dir);

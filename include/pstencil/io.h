@@ -132,18 +132,22 @@ int pst_cloud_write_vtu(const pst_cloud *c, const char *path, const uint8_t *row
                         char *err);
 
 /* Read a cloud from a VTK XML UnstructuredGrid (.vtu) or PolyData (.vtp) file with one Piece
- * (docs/io.md, "Reading VTU"): DataArrays in format "appended" (encoding raw, UInt32 or UInt64
- * headers, either byte order), "binary" (inline base64, uncompressed) or "ascii", of any
- * Int8..Int64, UInt8..UInt64, Float32 or Float64 type (converted to double). Points give the
- * positions: the cloud is 2D when every z is exactly 0, else 3D. PointData: V and h (required),
- * kind (0, 1, 2; default interior), normal (3 components), m (scalar mobility) or M (3-component
- * diagonal; x, y only in 2D), id (a permutation of 0..n-1: row k of the file becomes particle
- * id[k]; without it particle k is row k), status (ignored); every other array is a named field
- * and must have 1 component and a valid field name. Cells are ignored. Compressed files are
- * refused. Errors: PST_EIO (cannot open or read), PST_EINPUT (malformed or truncated file,
- * non-finite value, V, h or mobility <= 0, unknown kind, bad ids, duplicate particles; `err`
- * names the file and "LINE:COLUMN" of the XML, or the array and the 0-based point, or the offset
- * into the appended data), PST_ENOMEM. On failure *out is NULL. */
+ * (docs/io.md, "Reading VTU"): DataArrays in format "appended" (encoding raw or base64),
+ * "binary" (inline base64) or "ascii", UInt32 or UInt64 headers, either byte order,
+ * uncompressed or zlib-compressed (compressor vtkZLibDataCompressor; other compressors are
+ * refused), of any Int8..Int64, UInt8..UInt64, Float32 or Float64 type (converted to double).
+ * Points give the positions: the cloud is 2D when every z is exactly 0, else 3D. PointData: V
+ * and h (required), kind (0, 1, 2; default interior), normal (3 components), m (scalar
+ * mobility) or M (3-component diagonal; x, y only in 2D), id (a permutation of 0..n-1: row k of
+ * the file becomes particle id[k]; without it particle k is row k), status (ignored); every
+ * other array NAME is a field with a valid field name: 1 component gives the field NAME, 3 (a
+ * vector) NAME_x, NAME_y, NAME_z, 6 (ParaView's symmetric tensor XX, YY, ZZ, XY, YZ, XZ)
+ * NAME_xx, NAME_yy, NAME_zz, NAME_xy, NAME_yz, NAME_xz; in 2D only the in-plane components
+ * (NAME_x, NAME_y; NAME_xx, NAME_yy, NAME_xy) and the others must be 0. Cells are ignored.
+ * Errors: PST_EIO (cannot open or read), PST_EINPUT (malformed or truncated file or compressed
+ * data, non-finite value, V, h or mobility <= 0, unknown kind, bad ids, duplicate particles;
+ * `err` names the file and "LINE:COLUMN" of the XML, or the array and the 0-based point, or the
+ * offset into the appended data), PST_ENOMEM. On failure *out is NULL. */
 int pst_cloud_read_vtu(pst_cloud **out, const char *path, char *err);
 
 /* Read a cloud with the reader its file name's extension names (case-insensitive): .vtu and

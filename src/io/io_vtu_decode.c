@@ -1,5 +1,6 @@
 /* The values of a DataArray: appended raw or base64 bytes, inline base64 ("binary") or
- * ascii, each size checked against the bytes that are there, converted to double. */
+ * ascii, each size checked against the bytes that are there, converted to double; compressed
+ * arrays go to io_vtu_zlib.c. Base64 is decoded here because neither expat nor zlib does it. */
 #include "vtu_read.h"
 
 #include <errno.h>
@@ -11,7 +12,7 @@ const vtk_type vtk_types[NTYPES] = {{"Int8", 1, 0, 1},  {"UInt8", 1, 0, 0},  {"I
                  {"Int64", 8, 0, 1},  {"UInt64", 8, 0, 0}, {"Float32", 4, 1, 1},
                  {"Float64", 8, 1, 1}};
 
-static uint64_t load_uint(const unsigned char *p, int size, int big)
+uint64_t vtu_load_uint(const unsigned char *p, int size, int big)
 {
     uint64_t v = 0;
     for (int b = 0; b < size; ++b)
@@ -23,7 +24,7 @@ static uint64_t load_uint(const unsigned char *p, int size, int big)
 static double load_value(const unsigned char *p, int type, int big)
 {
     int size = vtk_types[type].size;
-    uint64_t u = load_uint(p, size, big);
+    uint64_t u = vtu_load_uint(p, size, big);
     if (vtk_types[type].is_float) {
         if (size == 8) {
             double d;
@@ -54,9 +55,8 @@ static int b64_value(int ch)
 }
 
 /* Decode base64 in place (the output is never longer than the input). Padding may end any
- * quantum, so separately encoded blocks that follow one another decode too. -1 on a bad
- * character (its index in *bad). */
-static long long b64_decode(char *s, size_t len, size_t *bad)
+ * quantum, so separately encoded blocks that follow one another decode too. */
+long long vtu_b64_decode(char *s, size_t len, size_t *bad)
 {
     size_t o = 0;
     int q[4] = {0, 0, 0, 0}, nq = 0, pad = 0;
@@ -99,18 +99,7 @@ static long long b64_decode(char *s, size_t len, size_t *bad)
     return (long long)o;
 }
 
-/* A base64 stream in the appended block, decoded on demand (bytes of a quantum that the
- * caller did not take yet wait in pend). */
-typedef struct {
-    const unsigned char *s;
-    size_t len, pos;
-    unsigned char pend[3];
-    int npend;
-} b64_stream;
-
-/* Take up to `want` bytes; returns how many were produced (fewer at the end of the block or at
- * a character that is not base64, padding or white space). */
-static size_t b64_take(b64_stream *b, unsigned char *out, size_t want)
+size_t vtu_b64_take(vtu_b64_stream *b, unsigned char *out, size_t want)
 {
     size_t o = 0;
     while (o < want) {
@@ -152,14 +141,12 @@ static size_t b64_take(b64_stream *b, unsigned char *out, size_t want)
     return o;
 }
 
-/* The declared byte count of a block: n * ncomp * size. */
-static uint64_t expect_bytes(const reader *r, const vtu_in_array *a)
+uint64_t vtu_expect_bytes(const reader *r, const vtu_in_array *a)
 {
     return r->npoints * (uint64_t)a->ncomp * (uint64_t)vtk_types[a->type].size;
 }
 
-/* Convert count values of a binary block to doubles. */
-static void convert(const reader *r, const vtu_in_array *a, const unsigned char *p, double *out,
+void vtu_convert(const reader *r, const vtu_in_array *a, const unsigned char *p, double *out,
                     size_t count)
 {
     int size = vtk_types[a->type].size;
@@ -183,15 +170,15 @@ static int decode_appended_b64(reader *r, const vtu_in_array *a, const unsigned 
                                size_t avail, double *out)
 {
     int hs = r->header_size;
-    uint64_t want = expect_bytes(r, a);
-    b64_stream b = {.s = p, .len = avail};
+    uint64_t want = vtu_expect_bytes(r, a);
+    vtu_b64_stream b = {.s = p, .len = avail};
     unsigned char hdr[8];
-    if (b64_take(&b, hdr, (size_t)hs) != (size_t)hs)
+    if (vtu_b64_take(&b, hdr, (size_t)hs) != (size_t)hs)
         return vtu_fail(r,
                         "appended data offset %llu (array '%.64s'): truncated or invalid "
                         "base64 header",
                         (unsigned long long)a->offset, a->name);
-    uint64_t bytes = load_uint(hdr, hs, r->big_endian);
+    uint64_t bytes = vtu_load_uint(hdr, hs, r->big_endian);
     if (bytes != want)
         return appended_count_error(r, a, bytes, want);
     if (bytes / 3 > (b.len - b.pos) / 4 + 1)
@@ -202,7 +189,7 @@ static int decode_appended_b64(reader *r, const vtu_in_array *a, const unsigned 
     unsigned char *raw = malloc(bytes ? (size_t)bytes : 1);
     if (!raw)
         return vtu_oom(r);
-    size_t got = b64_take(&b, raw, (size_t)bytes);
+    size_t got = vtu_b64_take(&b, raw, (size_t)bytes);
     if (got != bytes) {
         free(raw);
         return vtu_fail(r,
@@ -210,7 +197,7 @@ static int decode_appended_b64(reader *r, const vtu_in_array *a, const unsigned 
                         "base64 data: %zu of %llu bytes",
                         (unsigned long long)a->offset, a->name, got, (unsigned long long)bytes);
     }
-    convert(r, a, raw, out, (size_t)r->npoints * (size_t)a->ncomp);
+    vtu_convert(r, a, raw, out, (size_t)r->npoints * (size_t)a->ncomp);
     free(raw);
     return PST_OK;
 }
@@ -231,9 +218,14 @@ static int decode_appended(reader *r, const vtu_in_array *a, double *out)
                         "appended block (%zu bytes)",
                         (unsigned long long)a->offset, a->name, avail);
     const unsigned char *p = r->buf + r->data + a->offset;
+    if (r->compressed) {
+        vtu_b64_stream b = {.s = p, .len = avail - a->offset};
+        vtu_source src = {.p = p, .len = avail - a->offset, .b64 = r->appended_b64 ? &b : NULL};
+        return vtu_decode_zlib(r, a, &src, out);
+    }
     if (r->appended_b64)
         return decode_appended_b64(r, a, p, avail - a->offset, out);
-    uint64_t want = expect_bytes(r, a), bytes = load_uint(p, hs, r->big_endian);
+    uint64_t want = vtu_expect_bytes(r, a), bytes = vtu_load_uint(p, hs, r->big_endian);
     if (bytes != want)
         return appended_count_error(r, a, bytes, want);
     if (bytes > avail - a->offset - (uint64_t)hs)
@@ -242,7 +234,7 @@ static int decode_appended(reader *r, const vtu_in_array *a, double *out)
                         "data, only %llu left in the appended block",
                         (unsigned long long)a->offset, a->name, (unsigned long long)bytes,
                         (unsigned long long)(avail - a->offset - (uint64_t)hs));
-    convert(r, a, p + hs, out, (size_t)r->npoints * (size_t)a->ncomp);
+    vtu_convert(r, a, p + hs, out, (size_t)r->npoints * (size_t)a->ncomp);
     return PST_OK;
 }
 
@@ -250,21 +242,25 @@ static int decode_appended(reader *r, const vtu_in_array *a, double *out)
 static int decode_binary(reader *r, vtu_in_array *a, double *out)
 {
     int hs = r->header_size;
-    uint64_t want = expect_bytes(r, a);
+    uint64_t want = vtu_expect_bytes(r, a);
     size_t bad = 0;
-    long long got = b64_decode(a->text, a->text_len, &bad);
+    long long got = vtu_b64_decode(a->text, a->text_len, &bad);
     if (got < 0)
         return vtu_fail_at(r, a->at,
                            "array '%.64s': invalid base64 at character %zu of its "
                            "data",
                            a->name, bad + 1);
     const unsigned char *p = (const unsigned char *)a->text;
+    if (r->compressed) {
+        vtu_source src = {.p = p, .len = (size_t)got};
+        return vtu_decode_zlib(r, a, &src, out);
+    }
     if ((uint64_t)got < (uint64_t)hs)
         return vtu_fail_at(r, a->at,
                            "array '%.64s': truncated binary data: %lld bytes, no "
                            "room for the %d-byte header",
                            a->name, got, hs);
-    uint64_t bytes = load_uint(p, hs, r->big_endian);
+    uint64_t bytes = vtu_load_uint(p, hs, r->big_endian);
     if (bytes != want)
         return vtu_fail_at(r, a->at,
                            "array '%.64s': binary byte count %llu, expected %llu "
@@ -277,7 +273,7 @@ static int decode_binary(reader *r, vtu_in_array *a, double *out)
                            "header, the header says %llu",
                            a->name, (unsigned long long)((uint64_t)got - (uint64_t)hs),
                            (unsigned long long)bytes);
-    convert(r, a, p + hs, out, (size_t)r->npoints * (size_t)a->ncomp);
+    vtu_convert(r, a, p + hs, out, (size_t)r->npoints * (size_t)a->ncomp);
     return PST_OK;
 }
 

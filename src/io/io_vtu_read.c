@@ -1,12 +1,12 @@
 /* Reading clouds from VTK XML files (.vtu UnstructuredGrid, .vtp PolyData): the subset is in
- * docs/io.md ("Reading VTU"). The whole file is read into memory and a small scanner walks the
- * XML up to the appended block (which is raw bytes, not XML); it keeps only what a cloud
+ * docs/io.md ("Reading VTU"). The whole file is read into memory and expat parses the XML up
+ * to the appended block (which is raw bytes, not XML); the walk keeps only what a cloud
  * needs: the Piece's NumberOfPoints, the Points array and the PointData arrays. Every array is
- * decoded from its source (appended raw, inline base64 "binary" or ascii) after its size has
- * been checked against the bytes that are really there, so a damaged file gives PST_EINPUT
- * naming the file and the place, never a read out of bounds or a huge allocation. Values are
- * checked where they stand, like the CSV reader, with messages that name the array and the
- * point (the 0-based row of the file). */
+ * decoded from its source (appended raw, inline base64 "binary" or ascii, zlib-compressed or
+ * not) after its size has been checked against the bytes that are really there, so a damaged
+ * file gives PST_EINPUT naming the file and the place, never a read out of bounds or a huge
+ * allocation. Values are checked where they stand, like the CSV reader, with messages that
+ * name the array and the point (the 0-based row of the file). */
 #include "vtu_read.h"
 
 #include "check.h"
@@ -18,23 +18,14 @@
 #include <string.h>
 
 /* "FILE:LINE:COLUMN: message" for a place in the XML. */
-int vtu_fail_at(reader *r, size_t off, const char *fmt, ...)
+int vtu_fail_at(reader *r, vtu_pos at, const char *fmt, ...)
 {
     char msg[PST_ERRLEN];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    size_t line = 1, col = 1;
-    for (size_t k = 0; k < off && k < r->len; ++k) {
-        if (r->buf[k] == '\n') {
-            ++line;
-            col = 1;
-        } else {
-            ++col;
-        }
-    }
-    pst_set_err(r->err, "%s:%zu:%zu: %s", r->path, line, col, msg);
+    pst_set_err(r->err, "%s:%lu:%lu: %s", r->path, at.line, at.col, msg);
     return PST_EINPUT;
 }
 
@@ -56,7 +47,6 @@ int vtu_oom(reader *r)
     return PST_ENOMEM;
 }
 
-/* ---- the XML scanner ---------------------------------------------------------------------- */
 /* The roles of PointData arrays. */
 enum { R_FIELD, R_ID, R_KIND, R_V, R_H, R_NORMAL, R_MSCALAR, R_MDIAG, R_STATUS };
 
@@ -75,11 +65,7 @@ static int check_arrays(reader *r, size_t *idx_h)
     size_t idx_V = SIZE_MAX;
     *idx_h = SIZE_MAX;
     int have_m = 0;
-    size_t nfields = 0, first = 0, again = SIZE_MAX;
-    for (size_t k = 0; k < r->na; ++k)
-        if (role_of(r->a[k].name) == R_FIELD && ++nfields > PST_MAX_FIELDS)
-            return vtu_fail_at(r, r->a[k].at, "PointData array '%.64s': more than the %d fields "
-                               "a cloud file may have", r->a[k].name, PST_MAX_FIELDS);
+    size_t first = 0, again = SIZE_MAX;
     const char **names = malloc((r->na ? r->na : 1) * sizeof *names);
     if (!names)
         return vtu_oom(r);
@@ -96,20 +82,13 @@ static int check_arrays(reader *r, size_t *idx_h)
         int role = role_of(a->name);
         if (role == R_STATUS)
             continue;
-        if (role == R_FIELD && (!pst_is_identifier(a->name) ||
-                                pst_is_reserved_column(a->name)))
-            return vtu_fail_at(r, a->at,
-                               "PointData array '%.64s' cannot be a field: field names "
-                               "are C identifiers shorter than %d characters and not one "
-                               "of x, y, z, nx, ny, nz, mx, my, mz",
-                               a->name, PST_MAX_NAME);
         int want = role == R_NORMAL || role == R_MDIAG ? 3 : 1;
-        if (a->ncomp != want) {
-            if (role == R_FIELD)
-                return vtu_fail_at(r, a->at,
-                                   "PointData array '%.64s' has %d components: only "
-                                   "'normal' and 'M' may have more than one (3)",
-                                   a->name, a->ncomp);
+        if (role == R_FIELD && a->ncomp != 1 && a->ncomp != 3 && a->ncomp != 6)
+            return vtu_fail_at(r, a->at,
+                               "PointData array '%.64s' has %d components: a field has 1, "
+                               "3 (a vector) or 6 (a symmetric tensor)",
+                               a->name, a->ncomp);
+        if (role != R_FIELD && a->ncomp != want) {
             return vtu_fail_at(r, a->at, "PointData array '%s' has %d components, expected %d",
                                a->name, a->ncomp, want);
         }
@@ -157,6 +136,8 @@ static int store_array(reader *r, pst_cloud *c, const vtu_in_array *a, const dou
     size_t n = c->n;
     int dim = c->dim, role = role_of(a->name);
     PST_TRY(check_finite(r, a, v));
+    if (role == R_FIELD)
+        return vtu_store_field(r, c, a, v, part, field);
     for (size_t k = 0; k < n; ++k) {
         size_t i = part[k];
         switch (role) {
@@ -194,10 +175,7 @@ static int store_array(reader *r, pst_cloud *c, const vtu_in_array *a, const dou
                 c->mob[m][i] = x;
             }
             break;
-        case R_FIELD:
-            c->field[field][i] = v[k];
-            break;
-        default: /* id (already used), status (ignored) */
+        default: /* id (already used), status (ignored); fields: below */
             break;
         }
     }
@@ -255,18 +233,28 @@ static int store_h(reader *r, pst_cloud *c, vtu_in_array *a, double *tmp,
     return PST_OK;
 }
 
-/* The fields (arrays of no other role), added to the cloud at once. */
+/* The fields (arrays of no other role, vectors and tensors split), added to the cloud at once
+ * (after the positions: in 2D a vector gives two fields). */
 static int add_fields(reader *r, pst_cloud *c)
 {
-    const char **names = malloc((r->na ? r->na : 1) * sizeof *names);
-    if (!names)
+    vtu_in_array **arrays = malloc((r->na ? r->na : 1) * sizeof *arrays);
+    if (!arrays)
         return vtu_oom(r);
-    size_t n = 0;
+    size_t na = 0, n = 0;
     for (size_t k = 0; k < r->na; ++k)
         if (role_of(r->a[k].name) == R_FIELD)
-            names[n++] = r->a[k].name;
+            arrays[na++] = &r->a[k];
+    char(*names)[PST_MAX_NAME] = NULL;
+    int st = vtu_field_names(r, c->dim, arrays, na, &names, &n);
+    free(arrays);
+    if (st != PST_OK)
+        return st;
+    const char **list = malloc((n ? n : 1) * sizeof *list);
+    for (size_t k = 0; list && k < n; ++k)
+        list[k] = names[k];
     char why[PST_ERRLEN] = "";
-    int st = pst_cloud_add_fields(c, names, n, NULL, why); /* names checked: memory only */
+    st = list ? pst_cloud_add_fields(c, list, n, NULL, why) : PST_ENOMEM; /* names checked */
+    free(list);
     free(names);
     return st == PST_OK ? PST_OK : vtu_oom(r);
 }
@@ -278,10 +266,12 @@ static int store_others(reader *r, pst_cloud *c, size_t ih, double *tmp, const s
     PST_TRY(add_fields(r, c));
     for (size_t k = 0; k < r->na; ++k) {
         vtu_in_array *a = &r->a[k];
-        int role = role_of(a->name), st = PST_OK;
+        int role = role_of(a->name), st = PST_OK, comp[6];
         if (k == ih || role == R_ID || role == R_STATUS)
             continue;
-        size_t field = role == R_FIELD ? nfield++ : 0;
+        size_t field = nfield;
+        if (role == R_FIELD)
+            nfield += (size_t)vtu_field_parts(a->ncomp, c->dim, comp);
         char why[PST_ERRLEN] = "";
         if (role == R_MSCALAR || role == R_MDIAG)
             st = pst_cloud_set_mobility(c, role == R_MSCALAR ? 1 : c->dim, why);
@@ -353,14 +343,16 @@ static int build(reader *r, pst_cloud **out)
     /* the sizes were bounded by the file before anything this large is allocated: every
      * decode checks its byte count against the data that is there, but the buffers come
      * first, so bound n by the file size (each value takes at least one byte of appended data,
-     * or 2 characters of ascii / 4/3 of base64) */
-    if (n > r->len)
+     * or 2 characters of ascii / 4/3 of base64, or 1/VTU_ZLIB_MAX_RATIO compressed) */
+    size_t most = r->compressed ? r->len * VTU_ZLIB_MAX_RATIO + 64 : r->len;
+    if (n > most)
         return vtu_fail(r,
                         "the Piece declares %zu points, more than the file's %zu bytes can "
                         "hold",
                         n, r->len);
     size_t m = n ? n : 1;
-    build_buffers b = {malloc(m * 3 * sizeof(double)), malloc(m * 3 * sizeof(double)),
+    /* tmp: one array at a time, at most a 6-component tensor */
+    build_buffers b = {malloc(m * 3 * sizeof(double)), malloc(m * 6 * sizeof(double)),
                        malloc(m * sizeof(size_t)), malloc(m * sizeof(size_t))};
     pst_cloud *c = NULL;
     int st = b.pts && b.tmp && b.part && b.row ? fill_cloud(r, &b, ih, &c) : vtu_oom(r);
