@@ -44,42 +44,6 @@ typedef enum {
     PST_GRAD_G4 = 4  /* grad_I W_IJ / nu_I (1 - W_IJ V_J / nu_I)       (18) */
 } pst_gradient;
 
-typedef struct {
-    const char *scheme;   /* "brookshaw", "cb", "schwaiger", "lv", ... (pst_scheme_name)      */
-    int kernel;           /* a pst_kernel, or -1 for the scheme's default                     */
-    int gradient;         /* pst_gradient for the LV family (default G1)                      */
-    int variant;          /* scheme-specific variant: lsmps 0 = type B (default), 1 = type A;
-                             0 for every other scheme                                         */
-    double cond_max;      /* a moment matrix with condition estimate above this is flagged
-                             ill-conditioned (default 1e10)                                   */
-    double rank_tol;      /* ... and below 1/cond of rank_tol it is rank-deficient and the
-                             row falls back (default 1e-13)                                    */
-    double min_pair_distance; /* pairs closer than this fraction of the smoothing length (h~_IJ
-                             for the LV family, h_I otherwise) are degenerate and contribute
-                             nothing (default 1e-8; in (0, 0.5))                              */
-    int on_degenerate;    /* pst_on_degenerate: what a rank-deficient or too-few-neighbours
-                             row does (default PST_DEGENERATE_FALL_BACK)                      */
-    int mobility_mean;    /* pst_mobility_mean: how a pair (I, J) averages the mobility
-                             (default PST_MEAN_ARITHMETIC, the paper's)                        */
-    int laplacian;        /* 1 (default): precompute the rows of L. 0: the operator serves
-                             pst_op_gradient, _hessian and _interpolate only; schemes whose
-                             derivative estimates do not read the rows (PST_SUPPORTS_
-                             DERIVATIVES_ONLY) then skip the precompute, and every call that
-                             needs the rows (apply, store, diagonal, scale, assemble, audit)
-                             returns PST_EINVAL                                               */
-    int keep;             /* PST_KEEP_* bits: what the precompute keeps beyond the rows, so
-                             that later derivative calls reuse it (docs/operators.md, "Kept
-                             derivatives"); 0 (default): nothing. Needs the rows (laplacian
-                             = 1) and a scheme with PST_SUPPORTS_KEEP, else PST_EINVAL     */
-    /* The boundary description of the rows, instead of the cloud's own (a solve's boundary
-     * groups): kinds[i] is particle i's pst_kind and normals[d][i] its outward normal, in
-     * cloud order. NULL (the default) takes the cloud's kinds, and normals[0] == NULL the
-     * cloud's normals. The cloud is never modified; the arrays must outlive the operator and
-     * must not change. Checked: every kind known, every Neumann particle's normal finite. */
-    const uint8_t *kinds;
-    const double *normals[3];
-} pst_op_opts;
-
 /* Pair mobility of the LV family (brookshaw, cb, schwaiger, lv), the factor (m_I + m_J) of
  * w_IJ = s_I V_J (m_I + m_J) T_IJ (LV eqs. 27, 29, 90), per component for a diagonal tensor:
  *   PST_MEAN_ARITHMETIC: m_I + m_J = 2 x the arithmetic mean (LV eq. 29, the paper's choice);
@@ -102,6 +66,42 @@ typedef enum {
                                      first such particle in the message                     */
 } pst_on_degenerate;
 
+typedef struct {
+    const char *scheme;   /* "brookshaw", "cb", "schwaiger", "lv", ... (pst_scheme_name)      */
+    pst_kernel kernel;    /* or PST_KERNEL_DEFAULT (-1) for the scheme's default               */
+    pst_gradient gradient; /* for the LV family (default G1)                                  */
+    int variant;          /* scheme-specific variant: lsmps 0 = type B (default), 1 = type A;
+                             0 for every other scheme                                         */
+    double cond_max;      /* a moment matrix with condition estimate above this is flagged
+                             ill-conditioned (default 1e10)                                   */
+    double rank_tol;      /* ... and below 1/cond of rank_tol it is rank-deficient and the
+                             row falls back (default 1e-13)                                    */
+    double min_pair_distance; /* pairs closer than this fraction of the smoothing length (h~_IJ
+                             for the LV family, h_I otherwise) are degenerate and contribute
+                             nothing (default 1e-8; in (0, 0.5))                              */
+    pst_on_degenerate on_degenerate; /* what a rank-deficient or too-few-neighbours
+                             row does (default PST_DEGENERATE_FALL_BACK)                      */
+    pst_mobility_mean mobility_mean; /* how a pair (I, J) averages the mobility
+                             (default PST_MEAN_ARITHMETIC, the paper's)                        */
+    int laplacian;        /* 1 (default): precompute the rows of L. 0: the operator serves
+                             pst_op_gradient, _hessian and _interpolate only; schemes whose
+                             derivative estimates do not read the rows (PST_SUPPORTS_
+                             DERIVATIVES_ONLY) then skip the precompute, and every call that
+                             needs the rows (apply, store, diagonal, scale, assemble, audit)
+                             returns PST_EINVAL                                               */
+    int keep;             /* PST_KEEP_* bits: what the precompute keeps beyond the rows, so
+                             that later derivative calls reuse it (docs/operators.md, "Kept
+                             derivatives"); 0 (default): nothing. Needs the rows (laplacian
+                             = 1) and a scheme with PST_SUPPORTS_KEEP, else PST_EINVAL     */
+    /* The boundary description of the rows, instead of the cloud's own (a solve's boundary
+     * groups): kinds[i] is particle i's pst_kind and normals[d][i] its outward normal, in
+     * cloud order. NULL (the default) takes the cloud's kinds, and normals[0] == NULL the
+     * cloud's normals. The cloud is never modified; the arrays must outlive the operator and
+     * must not change. Checked: every kind known, every Neumann particle's normal finite. */
+    const uint8_t *kinds;
+    const double *normals[3];
+} pst_op_opts;
+
 /* What pst_op_opts.keep asks the precompute to keep: the weights of the derivative estimates
  * at every particle, which the precompute's inversions already give, so that pst_op_gradient
  * (pst_op_hessian) is one pass over the neighbours that forms the data moments and dots them
@@ -122,8 +122,8 @@ void pst_op_defaults(pst_op_opts *o);
 int pst_scheme_count(void);
 const char *pst_scheme_name(int index);
 const char *pst_scheme_description(int index);
-/* The kernel a scheme uses by default (a pst_kernel), or -1 for an unknown scheme name. */
-int pst_scheme_default_kernel(const char *name);
+/* The kernel a scheme uses by default, or PST_KERNEL_UNKNOWN for an unknown scheme name. */
+pst_kernel pst_scheme_default_kernel(const char *name);
 /* The fallback chain of a scheme's degenerate rows, in the order it is tried, as one line
  * ("quadric fit: too few neighbours or singular -> linear-exact row -> ..."); NULL for an
  * unknown name. docs/operators.md, "Row status and fallbacks". */
@@ -202,11 +202,10 @@ int pst_op_use_half_list(pst_op *op, const pst_nlist *half, char *err);
  * pst_op_use_half_list. */
 int pst_op_half_colours(const pst_op *op);
 
-/* 1 when the operator has its rows (see pst_op_opts.laplacian); its scheme's name; its kernel
- * (a pst_kernel). */
+/* 1 when the operator has its rows (see pst_op_opts.laplacian); its scheme's name; its kernel. */
 int pst_op_has_rows(const pst_op *op);
 const char *pst_op_scheme(const pst_op *op);
-int pst_op_kernel(const pst_op *op);
+pst_kernel pst_op_kernel(const pst_op *op);
 /* The options an operator was built with, as resolved (the kernel is the one in use, never
  * -1; scheme points at the registry's name): what to report beside its results. */
 void pst_op_options(const pst_op *op, pst_op_opts *o);
@@ -223,8 +222,9 @@ int64_t pst_op_pattern_pairs(const pst_op *op);
  * weights are already stored in float. */
 int pst_op_store(pst_op *op);
 
-/* The precision of stored weights. */
+/* The precision of stored weights; PST_STORE_NONE (-1) when none are stored. */
 typedef enum {
+    PST_STORE_NONE = -1,
     PST_STORE_DOUBLE = 0, /* 8 bytes per entry: the stored apply agrees with pst_op_apply to
                              rounding (the default)                                         */
     PST_STORE_FLOAT = 1   /* 4 bytes per entry: each weight rounded to float (2^-24 relative),
@@ -234,7 +234,7 @@ typedef enum {
 } pst_store_precision;
 
 typedef struct {
-    int precision; /* a pst_store_precision (default PST_STORE_DOUBLE) */
+    pst_store_precision precision; /* default PST_STORE_DOUBLE */
 } pst_op_store_opts;
 
 /* Defaults: PST_STORE_DOUBLE. */
@@ -252,8 +252,8 @@ void pst_op_store_defaults(pst_op_store_opts *o);
  * preconditioners are those of the double rows. */
 int pst_op_store_with(pst_op *op, const pst_op_store_opts *o, char *err);
 
-/* The precision of op's stored weights (a pst_store_precision), or -1 when none are stored. */
-int pst_op_store_precision(const pst_op *op);
+/* The precision of op's stored weights, or PST_STORE_NONE when none are stored. */
+pst_store_precision pst_op_store_precision(const pst_op *op);
 
 /* Apply from the stored weights of either precision (same rows as pst_op_apply, to rounding
  * of the stored weights), deterministic for every thread count. PST_EINVAL when nothing is
