@@ -20,6 +20,15 @@ if ldd "$work/b/use_static" | grep -q libpstencil; then
   exit 1
 fi
 
+# docs/embedding.md quotes the C++ consumer in full: its one cpp block must be the file.
+python3 - "$src/../../docs/embedding.md" "$src/cxx/main.cpp" <<'PY'
+import re, sys
+page, code = (open(p).read() for p in sys.argv[1:])
+blocks = re.findall(r"```cpp\n(.*?)```", page, re.S)
+if blocks != [code]:
+    sys.exit("downstream: the example in docs/embedding.md differs from tests/downstream/cxx/main.cpp")
+PY
+
 # The C++-only project (no C language enabled), shared and static, run without LD_LIBRARY_PATH.
 cmake -S "$src/cxx" -B "$work/bxx" -DCMAKE_PREFIX_PATH="$work/prefix" > "$work/configure-cxx.log"
 cmake --build "$work/bxx" > "$work/build-cxx.log"
