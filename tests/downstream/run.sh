@@ -26,7 +26,8 @@ import re, sys
 page, code = (open(p).read() for p in sys.argv[1:])
 blocks = re.findall(r"```cpp\n(.*?)```", page, re.S)
 if blocks != [code]:
-    sys.exit("downstream: the example in docs/embedding.md differs from tests/downstream/cxx/main.cpp")
+    sys.exit("downstream: the example in docs/embedding.md differs from "
+             "tests/downstream/cxx/main.cpp")
 PY
 
 # The C++-only project (no C language enabled), shared and static, run without LD_LIBRARY_PATH.
@@ -36,7 +37,8 @@ env -u LD_LIBRARY_PATH "$work/bxx/use_shared_cxx"
 env -u LD_LIBRARY_PATH "$work/bxx/use_static_cxx"
 
 # Installed binaries find their libraries by an $ORIGIN-relative run path.
-for f in "$work/prefix/bin/pstencil" "$(find "$work/prefix" -name 'libpstencil.so.*.*' | head -n 1)"; do
+so=$(find "$work/prefix" -name 'libpstencil.so.*.*' | head -n 1)
+for f in "$work/prefix/bin/pstencil" "$so"; do
   if ! readelf -d "$f" | grep -E 'R(UN)?PATH' | grep -q '\$ORIGIN'; then
     echo "downstream: $f has no \$ORIGIN run path" >&2
     exit 1
