@@ -17,14 +17,14 @@ const char *pst_kernel_name(pst_kernel k)
     return kernel_names[k];
 }
 
-int pst_kernel_from_name(const char *name)
+pst_kernel pst_kernel_from_name(const char *name)
 {
     if (!name)
-        return -1;
+        return PST_KERNEL_UNKNOWN;
     for (int k = 0; k < 4; ++k)
         if (strcmp(name, kernel_names[k]) == 0)
-            return k;
-    return -1;
+            return (pst_kernel)k;
+    return PST_KERNEL_UNKNOWN;
 }
 
 /* NaN for an unknown kernel, like the evaluation functions, so a bad value cannot silently

@@ -111,6 +111,8 @@ static inline double pst_sph_shape(pst_kernel k, int dim, double q, int deriv)
             return -(7.0 / 3.0) * q * t2 * t2 * t * (5.0 * q + 2.0);
         return (7.0 / 6.0) * t2 * t2 * ((35.0 * q - 8.0) * q - 4.0);
     }
+    default: /* PST_KERNEL_DEFAULT and _UNKNOWN name no kernel: excluded by the preconditions */
+        break;
     }
     return NAN; /* unreachable under the preconditions */
 }

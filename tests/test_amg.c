@@ -213,8 +213,12 @@ static void test_bad_settings(void)
                {3, -1, "amg_pmax must be in [0, 100]"}, {3, 101, "amg_pmax must be in [0, 100]"}};
     for (size_t k = 0; k < sizeof bad / sizeof *bad; ++k) {
         pst_solve_opts o = *amg_of(PST_AMG_AUTO, -1, 0);
-        int *field[] = {&o.amg_source, &o.amg_coarsen, &o.amg_interp, &o.amg_pmax};
-        *field[bad[k].field] = bad[k].value;
+        switch (bad[k].field) { /* the fields are enums but for amg_pmax: set each by name */
+        case 0: o.amg_source = (pst_amg_source)bad[k].value; break;
+        case 1: o.amg_coarsen = (pst_amg_coarsen)bad[k].value; break;
+        case 2: o.amg_interp = (pst_amg_interp)bad[k].value; break;
+        default: o.amg_pmax = bad[k].value; break;
+        }
         pst_prec m;
         pst_krylov *ks = NULL;
         char err[PST_ERRLEN] = "", err2[PST_ERRLEN] = "";

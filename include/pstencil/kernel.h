@@ -12,16 +12,21 @@ extern "C" {
 /* Smoothing kernels                                                                          */
 /* ------------------------------------------------------------------------------------------ */
 
+/* PST_KERNEL_DEFAULT asks for a scheme's default kernel (pst_op_opts.kernel); PST_KERNEL_UNKNOWN
+ * is what the lookups return for an unknown name. Both are -1, never a kernel. */
 typedef enum {
+    PST_KERNEL_DEFAULT = -1,
+    PST_KERNEL_UNKNOWN = -1,
     PST_KERNEL_CUBIC = 0,       /* cubic B-spline, LV eq. 12, support 2h                     */
     PST_KERNEL_QUINTIC = 1,     /* quintic spline, QSFDI eq. 9, support 3h                   */
     PST_KERNEL_WENDLAND_C2 = 2, /* Wendland C2, support 2h                                   */
     PST_KERNEL_WENDLAND_C4 = 3  /* Wendland C4, support 2h                                   */
 } pst_kernel;
 
-/* Name ("cubic", "quintic", "wendland_c2", "wendland_c4") and lookup by name (-1 if unknown). */
+/* Name ("cubic", "quintic", "wendland_c2", "wendland_c4") and lookup by name
+ * (PST_KERNEL_UNKNOWN if unknown). */
 const char *pst_kernel_name(pst_kernel k);
-int pst_kernel_from_name(const char *name);
+pst_kernel pst_kernel_from_name(const char *name);
 
 /* Support radius in units of h (2 or 3). */
 double pst_kernel_support(pst_kernel k);

@@ -22,6 +22,7 @@ extern "C" {
  * For vector values (ncomp > 1: gradients, Hessians) e and exact are Euclidean lengths per
  * particle. */
 typedef enum {
+    PST_NORM_UNKNOWN = -1, /* what pst_norm_from_name returns for an unknown name */
     PST_NORM_REL_L2 = 0,
     PST_NORM_QSFDI11,
     PST_NORM_QSFDI11_NORMALISED,
@@ -32,10 +33,10 @@ typedef enum {
     PST_NNORMS
 } pst_norm;
 
-/* The norm's name ("rel_l2", "qsfdi11", ...; NULL when out of range) and its inverse (-1 for
- * an unknown name). */
+/* The norm's name ("rel_l2", "qsfdi11", ...; NULL when out of range) and its inverse
+ * (PST_NORM_UNKNOWN for an unknown name). */
 const char *pst_norm_name(int norm);
-int pst_norm_from_name(const char *name);
+pst_norm pst_norm_from_name(const char *name);
 
 /* One norm of approx[a][i] - exact[a][i] (a < ncomp <= 6) over the particles with mask[i] != 0
  * (every particle when mask is NULL), in the cloud's order. Errors, with the reason in err:

@@ -44,10 +44,32 @@ typedef enum {
     PST_GRAD_G4 = 4  /* grad_I W_IJ / nu_I (1 - W_IJ V_J / nu_I)       (18) */
 } pst_gradient;
 
+/* Pair mobility of the LV family (brookshaw, cb, schwaiger, lv), the factor (m_I + m_J) of
+ * w_IJ = s_I V_J (m_I + m_J) T_IJ (LV eqs. 27, 29, 90), per component for a diagonal tensor:
+ *   PST_MEAN_ARITHMETIC: m_I + m_J = 2 x the arithmetic mean (LV eq. 29, the paper's choice);
+ *   PST_MEAN_HARMONIC:   4 m_I m_J / (m_I + m_J) = 2 x the harmonic mean, the transmissibility
+ *                        average of TPFA. An implementer extension, not from the paper;
+ *                        for discontinuous, high-contrast mobility. Defined as 0 when
+ *                        m_I + m_J <= 0 (never NaN). Equal to the arithmetic sum where m_I = m_J.
+ * Only the LV family averages pairwise: harmonic with any other scheme is PST_EINVAL. Neumann
+ * rows (LV eq. 100) use M_I alone and are the same for both. docs/operators.md. */
+typedef enum {
+    PST_MEAN_ARITHMETIC = 0,
+    PST_MEAN_HARMONIC = 1
+} pst_mobility_mean;
+
+/* What pst_op_create does with rows that are rank-deficient or have too few neighbours. */
+typedef enum {
+    PST_DEGENERATE_FALL_BACK = 0, /* take the next level of the scheme's fallback chain
+                                     (pst_scheme_fallback), flag and count the row          */
+    PST_DEGENERATE_REFUSE = 1     /* refuse the operator: PST_ENUMERIC, the counts and the
+                                     first such particle in the message                     */
+} pst_on_degenerate;
+
 typedef struct {
     const char *scheme;   /* "brookshaw", "cb", "schwaiger", "lv", ... (pst_scheme_name)      */
-    int kernel;           /* a pst_kernel, or -1 for the scheme's default                     */
-    int gradient;         /* pst_gradient for the LV family (default G1)                      */
+    pst_kernel kernel;    /* or PST_KERNEL_DEFAULT (-1) for the scheme's default               */
+    pst_gradient gradient; /* for the LV family (default G1)                                  */
     int variant;          /* scheme-specific variant: lsmps 0 = type B (default), 1 = type A;
                              0 for every other scheme                                         */
     double cond_max;      /* a moment matrix with condition estimate above this is flagged
@@ -57,9 +79,9 @@ typedef struct {
     double min_pair_distance; /* pairs closer than this fraction of the smoothing length (h~_IJ
                              for the LV family, h_I otherwise) are degenerate and contribute
                              nothing (default 1e-8; in (0, 0.5))                              */
-    int on_degenerate;    /* pst_on_degenerate: what a rank-deficient or too-few-neighbours
+    pst_on_degenerate on_degenerate; /* what a rank-deficient or too-few-neighbours
                              row does (default PST_DEGENERATE_FALL_BACK)                      */
-    int mobility_mean;    /* pst_mobility_mean: how a pair (I, J) averages the mobility
+    pst_mobility_mean mobility_mean; /* how a pair (I, J) averages the mobility
                              (default PST_MEAN_ARITHMETIC, the paper's)                        */
     int laplacian;        /* 1 (default): precompute the rows of L. 0: the operator serves
                              pst_op_gradient, _hessian and _interpolate only; schemes whose
@@ -87,28 +109,6 @@ typedef struct {
     pst_progress progress;
 } pst_op_opts;
 
-/* Pair mobility of the LV family (brookshaw, cb, schwaiger, lv), the factor (m_I + m_J) of
- * w_IJ = s_I V_J (m_I + m_J) T_IJ (LV eqs. 27, 29, 90), per component for a diagonal tensor:
- *   PST_MEAN_ARITHMETIC: m_I + m_J = 2 x the arithmetic mean (LV eq. 29, the paper's choice);
- *   PST_MEAN_HARMONIC:   4 m_I m_J / (m_I + m_J) = 2 x the harmonic mean, the transmissibility
- *                        average of TPFA. An implementer extension, not from the paper;
- *                        for discontinuous, high-contrast mobility. Defined as 0 when
- *                        m_I + m_J <= 0 (never NaN). Equal to the arithmetic sum where m_I = m_J.
- * Only the LV family averages pairwise: harmonic with any other scheme is PST_EINVAL. Neumann
- * rows (LV eq. 100) use M_I alone and are the same for both. docs/operators.md. */
-typedef enum {
-    PST_MEAN_ARITHMETIC = 0,
-    PST_MEAN_HARMONIC = 1
-} pst_mobility_mean;
-
-/* What pst_op_create does with rows that are rank-deficient or have too few neighbours. */
-typedef enum {
-    PST_DEGENERATE_FALL_BACK = 0, /* take the next level of the scheme's fallback chain
-                                     (pst_scheme_fallback), flag and count the row          */
-    PST_DEGENERATE_REFUSE = 1     /* refuse the operator: PST_ENUMERIC, the counts and the
-                                     first such particle in the message                     */
-} pst_on_degenerate;
-
 /* What pst_op_opts.keep asks the precompute to keep: the weights of the derivative estimates
  * at every particle, which the precompute's inversions already give, so that pst_op_gradient
  * (pst_op_hessian) is one pass over the neighbours that forms the data moments and dots them
@@ -129,8 +129,8 @@ void pst_op_defaults(pst_op_opts *o);
 int pst_scheme_count(void);
 const char *pst_scheme_name(int index);
 const char *pst_scheme_description(int index);
-/* The kernel a scheme uses by default (a pst_kernel), or -1 for an unknown scheme name. */
-int pst_scheme_default_kernel(const char *name);
+/* The kernel a scheme uses by default, or PST_KERNEL_UNKNOWN for an unknown scheme name. */
+pst_kernel pst_scheme_default_kernel(const char *name);
 /* The fallback chain of a scheme's degenerate rows, in the order it is tried, as one line
  * ("quadric fit: too few neighbours or singular -> linear-exact row -> ..."); NULL for an
  * unknown name. docs/operators.md, "Row status and fallbacks". */
@@ -213,11 +213,10 @@ int pst_op_use_half_list(pst_op *op, const pst_nlist *half, char *err);
  * pst_op_use_half_list. */
 int pst_op_half_colours(const pst_op *op);
 
-/* 1 when the operator has its rows (see pst_op_opts.laplacian); its scheme's name; its kernel
- * (a pst_kernel). */
+/* 1 when the operator has its rows (see pst_op_opts.laplacian); its scheme's name; its kernel. */
 int pst_op_has_rows(const pst_op *op);
 const char *pst_op_scheme(const pst_op *op);
-int pst_op_kernel(const pst_op *op);
+pst_kernel pst_op_kernel(const pst_op *op);
 /* The options an operator was built with, as resolved (the kernel is the one in use, never
  * -1; scheme points at the registry's name): what to report beside its results. */
 void pst_op_options(const pst_op *op, pst_op_opts *o);
@@ -234,8 +233,9 @@ int64_t pst_op_pattern_pairs(const pst_op *op);
  * weights are already stored in float. */
 int pst_op_store(pst_op *op);
 
-/* The precision of stored weights. */
+/* The precision of stored weights; PST_STORE_NONE (-1) when none are stored. */
 typedef enum {
+    PST_STORE_NONE = -1,
     PST_STORE_DOUBLE = 0, /* 8 bytes per entry: the stored apply agrees with pst_op_apply to
                              rounding (the default)                                         */
     PST_STORE_FLOAT = 1   /* 4 bytes per entry: each weight rounded to float (2^-24 relative),
@@ -245,7 +245,7 @@ typedef enum {
 } pst_store_precision;
 
 typedef struct {
-    int precision; /* a pst_store_precision (default PST_STORE_DOUBLE) */
+    pst_store_precision precision; /* default PST_STORE_DOUBLE */
 } pst_op_store_opts;
 
 /* Defaults: PST_STORE_DOUBLE. */
@@ -263,8 +263,8 @@ void pst_op_store_defaults(pst_op_store_opts *o);
  * preconditioners are those of the double rows. */
 int pst_op_store_with(pst_op *op, const pst_op_store_opts *o, char *err);
 
-/* The precision of op's stored weights (a pst_store_precision), or -1 when none are stored. */
-int pst_op_store_precision(const pst_op *op);
+/* The precision of op's stored weights, or PST_STORE_NONE when none are stored. */
+pst_store_precision pst_op_store_precision(const pst_op *op);
 
 /* Apply from the stored weights of either precision (same rows as pst_op_apply, to rounding
  * of the stored weights), deterministic for every thread count. PST_EINVAL when nothing is

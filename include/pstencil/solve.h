@@ -78,9 +78,9 @@ typedef enum {
 } pst_amg_interp;
 
 typedef struct {
-    int solver;            /* pst_solver (default AUTO)                                       */
-    int precond;           /* pst_precond (default JACOBI)                                    */
-    int amg_source;        /* pst_amg_source (default AUTO)                                   */
+    pst_solver solver;     /* default AUTO                                                    */
+    pst_precond precond;   /* default JACOBI                                                  */
+    pst_amg_source amg_source; /* default AUTO                                                */
     /* The AMG matrix's stencil and hypre's coarsening (docs/solving.md, "The AMG matrix's
      * stencil" and "hypre's coarsening and interpolation"; the defaults come from the
      * measured tables there): */
@@ -93,8 +93,8 @@ typedef struct {
     int amg_aggressive;    /* levels of aggressive coarsening, 0-10 (default 0)              */
     double amg_strong;     /* strong threshold in (0, 1); 0 = by dimension (0.25 in 2D, 0.5
                               in 3D, the default)                                            */
-    int amg_coarsen;       /* pst_amg_coarsen (default HMIS)                                  */
-    int amg_interp;        /* pst_amg_interp (default EXT_I)                                  */
+    pst_amg_coarsen amg_coarsen; /* default HMIS                                              */
+    pst_amg_interp amg_interp; /* default EXT_I                                               */
     int amg_pmax;          /* interpolation entries kept per row, 0-100; 0 = no truncation
                               (default 4)                                                    */
     int restart;           /* GMRES restart length m (default 50)                             */
@@ -135,8 +135,8 @@ const char *pst_stop_reason_name(int stop);
 
 typedef struct {
     int converged;         /* 1 when the tolerance was reached                                */
-    int stop;              /* pst_stop_reason: why it stopped                                 */
-    int solver;            /* the pst_solver actually used                                    */
+    pst_stop_reason stop;  /* why it stopped                                                  */
+    pst_solver solver;     /* the solver actually used                                        */
     int iterations;
     double rel_residual;   /* true residual ||b - L u|| / ||b|| at return                      */
     double *history;       /* relative residual per iteration (when asked); free with
@@ -200,8 +200,8 @@ int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result
 /* What a handle did: counters a caller (or a test) can check. */
 typedef struct {
     size_t n;              /* rows of the operator                                            */
-    int solver;            /* the pst_solver chosen at set-up                                 */
-    int precond;           /* the pst_precond in use (PST_PREC_NONE when M is the user's)    */
+    pst_solver solver;     /* the solver chosen at set-up                                     */
+    pst_precond precond;   /* the preconditioner in use (PST_PREC_NONE when M is the user's)  */
     int user_precond;      /* 1 when the preconditioner is the caller's M                     */
     int precond_setups;    /* preconditioner set-ups (AMG hierarchies, Jacobi diagonals) done */
     int solves;            /* pst_krylov_solve calls that iterated (or found b = 0)           */

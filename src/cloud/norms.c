@@ -15,12 +15,12 @@ const char *pst_norm_name(int norm)
     return norm >= 0 && norm < PST_NNORMS ? norm_names[norm] : NULL;
 }
 
-int pst_norm_from_name(const char *name)
+pst_norm pst_norm_from_name(const char *name)
 {
     for (int k = 0; k < PST_NNORMS; ++k)
         if (strcmp(name, norm_names[k]) == 0)
-            return k;
-    return -1;
+            return (pst_norm)k;
+    return PST_NORM_UNKNOWN;
 }
 
 /* Euclidean length over the components of particle i. */

@@ -278,7 +278,7 @@ int pst_op_apply(const pst_op *op, const double *u, double *y)
 
 int pst_op_has_rows(const pst_op *op) { return op->rows; }
 const char *pst_op_scheme(const pst_op *op) { return op->scheme->name; }
-int pst_op_kernel(const pst_op *op) { return op->kernel; }
+pst_kernel pst_op_kernel(const pst_op *op) { return op->kernel; }
 void pst_op_options(const pst_op *op, pst_op_opts *o)
 {
     *o = op->opts;

@@ -14,9 +14,9 @@
 
 int pst_op_has_store(const pst_op *op) { return op->w || op->w32; }
 
-int pst_op_store_precision(const pst_op *op)
+pst_store_precision pst_op_store_precision(const pst_op *op)
 {
-    return op->w ? PST_STORE_DOUBLE : op->w32 ? PST_STORE_FLOAT : -1;
+    return op->w ? PST_STORE_DOUBLE : op->w32 ? PST_STORE_FLOAT : PST_STORE_NONE;
 }
 
 void pst_op_store_defaults(pst_op_store_opts *o) { o->precision = PST_STORE_DOUBLE; }

@@ -61,10 +61,10 @@ int pst_scheme_supports(const char *name, int what)
     }
 }
 
-int pst_scheme_default_kernel(const char *name)
+pst_kernel pst_scheme_default_kernel(const char *name)
 {
     const pst_scheme *s = pst_scheme_find(name);
-    return s ? (int)s->default_kernel : -1;
+    return s ? s->default_kernel : PST_KERNEL_UNKNOWN;
 }
 
 const char *pst_scheme_fallback(const char *name)
