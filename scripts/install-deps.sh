@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(build-essential cmake pkg-config libopenblas-dev liblapacke-dev libhwloc-dev
           libbenchmark-dev libhypre-dev libopenmpi-dev python3 python3-vtk9
-          libcjson-dev gnuplot-nox
+          libcjson-dev gnuplot-nox zlib1g-dev
           clang libclang-rt-dev libomp-dev) # the last three: the fuzzers (scripts/fuzz.sh)
 
 missing=()
