@@ -75,22 +75,24 @@ static int add_exact_fields(run_state *r, const sc_task *t, int ncomp,
                             double *const *approx, double *const *exact)
 {
     size_t n = pst_cloud_size(r->c);
-    for (int a = 0; a < ncomp; ++a) {
+    double *ex[6], *er[6];
+    int st = PST_OK;
+    for (int a = 0; a < ncomp && st == PST_OK; ++a) { /* all exact fields, then all errors */
         char name[PST_MAX_NAME];
-        double *ex, *er;
         component_name(t, ncomp, a, "exact", name);
-        int st = add_field(r, t, name, &ex);
-        component_name(t, ncomp, a, "error", name);
-        if (st == PST_OK)
-            st = add_field(r, t, name, &er);
-        if (st != PST_OK)
-            return st;
-        for (size_t i = 0; i < n; ++i) {
-            ex[i] = exact[a][i];
-            er[i] = approx[a][i] - exact[a][i];
-        }
+        st = add_field(r, t, name, &ex[a]);
     }
-    return PST_OK;
+    for (int a = 0; a < ncomp && st == PST_OK; ++a) {
+        char name[PST_MAX_NAME];
+        component_name(t, ncomp, a, "error", name);
+        st = add_field(r, t, name, &er[a]);
+    }
+    for (int a = 0; a < ncomp && st == PST_OK; ++a)
+        for (size_t i = 0; i < n; ++i) {
+            ex[a][i] = exact[a][i];
+            er[a][i] = approx[a][i] - exact[a][i];
+        }
+    return st;
 }
 
 int run_keep_status(run_state *r, const pst_op *op)
