@@ -564,5 +564,16 @@ expect 2 "outputs.vtu with another extension is refused" -- \
 contains err "expected a .vtu (UnstructuredGrid) or .vtp (PolyData) file name" \
   "the refusal says why"
 
+# A solve with boundary groups has no base operator: its VTU carries its own operator's status.
+cat > "$work/sv.json" <<'EOF2'
+{"cloud": {"spacing": 0.1}, "operator": {"scheme": "lv"},
+ "tasks": [{"type": "solve", "name": "u", "rhs": "2", "exact": "x*x",
+            "boundary": [{"where": "all", "type": "dirichlet", "value": "x*x"}]}],
+ "outputs": {"vtu": "sv.vtu"}}
+EOF2
+expect 0 "run a grouped solve" -- bash -c 'cd "$1" && exec "$2" --quiet run sv.json' _ "$work" "$exe"
+check "the grouped solve's VTU has status, u_exact and u_error" \
+  'grep -aq "Name=\"status\"" "$work/sv.vtu" && grep -aq "Name=\"u_error\"" "$work/sv.vtu"'
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
