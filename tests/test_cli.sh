@@ -583,5 +583,37 @@ check "the refused cloud wrote nothing" '[ ! -e "$work/big.csv" ]'
 expect 0 "sysinfo under ulimit -v 800000" -- bash -c 'ulimit -v 800000 && exec "$0" sysinfo' "$exe"
 contains out "memory available .*(limit: RLIMIT_AS" "sysinfo names the limit that applies"
 
+# ParaView outputs (docs/io.md): a gradient with exact values gives g_exact and g_error fields,
+# the VTU joins each into one 3-component array, .vtp is PolyData, other extensions are refused.
+cat > "$work/grad.json" <<'EOF2'
+{"cloud": {"spacing": 0.1}, "fields": {"u": "x*x + y"},
+ "tasks": [{"type": "gradient", "name": "g", "field": "u", "exact": ["2*x", "1"]}],
+ "outputs": {"csv": "g.csv", "vtu": "g.vtp", "fields": ["g"], "vtu_compress": true}}
+EOF2
+expect 0 "run a gradient with exact values" -- \
+  bash -c 'cd "$1" && exec "$2" --quiet run grad.json' _ "$work" "$exe"
+check "outputs.fields g selects g, g_exact and g_error" \
+  '[ "$(head -n 1 "$work/g.csv")" = \
+     "x,y,V,h,kind,nx,ny,g_x,g_y,g_exact_x,g_exact_y,g_error_x,g_error_y" ]'
+check "the .vtp is compressed PolyData with g_error as one vector and a status" \
+  'grep -aq "<VTKFile type=\"PolyData\".*vtkZLibDataCompressor" "$work/g.vtp" &&
+   grep -aq "Name=\"g_error\" NumberOfComponents=\"3\"" "$work/g.vtp" &&
+   grep -aq "Name=\"status\"" "$work/g.vtp"'
+expect 2 "outputs.vtu with another extension is refused" -- \
+  "$exe" --quiet run "$work/grad.json" 'outputs={"vtu":"g.vtk"}'
+contains err "expected a .vtu (UnstructuredGrid) or .vtp (PolyData) file name" \
+  "the refusal says why"
+
+# A solve with boundary groups has no base operator: its VTU carries its own operator's status.
+cat > "$work/sv.json" <<'EOF2'
+{"cloud": {"spacing": 0.1}, "operator": {"scheme": "lv"},
+ "tasks": [{"type": "solve", "name": "u", "rhs": "2", "exact": "x*x",
+            "boundary": [{"where": "all", "type": "dirichlet", "value": "x*x"}]}],
+ "outputs": {"vtu": "sv.vtu"}}
+EOF2
+expect 0 "run a grouped solve" -- bash -c 'cd "$1" && exec "$2" --quiet run sv.json' _ "$work" "$exe"
+check "the grouped solve's VTU has status, u_exact and u_error" \
+  'grep -aq "Name=\"status\"" "$work/sv.vtu" && grep -aq "Name=\"u_error\"" "$work/sv.vtu"'
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

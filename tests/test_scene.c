@@ -739,12 +739,16 @@ static void test_docs(void)
  * compared after normalisation ("./x" is "x", "/tmp/../tmp/x" is "/tmp/x"). */
 static void test_output_paths(void)
 {
-    EXPECT_ERROR("{\"outputs\": {\"csv\": \"out.txt\", \"vtu\": \"out.txt\"}}",
+    EXPECT_ERROR("{\"outputs\": {\"csv\": \"out.vtu\", \"vtu\": \"out.vtu\"}}",
                  "t.json:1:32: key 'outputs.vtu': outputs.csv and outputs.vtu are the same file "
-                 "'out.txt': one would overwrite the other");
-    EXPECT_ERROR("{\"outputs\": {\"vtu\": \"x.out\", \"report\": \".//./x.out\"}}",
+                 "'out.vtu': one would overwrite the other");
+    EXPECT_ERROR("{\"outputs\": {\"vtu\": \"x.vtp\", \"report\": \".//./x.vtp\"}}",
                  "t.json:1:30: key 'outputs.report': outputs.vtu and outputs.report are the same "
-                 "file './/./x.out': one would overwrite the other");
+                 "file './/./x.vtp': one would overwrite the other");
+    /* outputs.vtu names its dataset by the extension */
+    EXPECT_ERROR("{\"outputs\": {\"vtu\": \"x.vtk\"}}",
+                 "t.json:1:14: key 'outputs.vtu': 'x.vtk': expected a .vtu (UnstructuredGrid) or "
+                 ".vtp (PolyData) file name");
     const char *ov[] = {"outputs.report=/tmp/../tmp/r.json"};
     EXPECT_ERROR_OV("{\"outputs\": {\"csv\": \"/tmp/r.json\"}}", ov,
                     "override 'outputs.report=/tmp/../tmp/r.json': key 'outputs.report': "

@@ -119,17 +119,46 @@ int pst_cloud_write_csv(const pst_cloud *c, const char *path, char *err);
 
 /* --- VTU (ParaView) ------------------------------------------------------------------------ */
 
-/* Write a cloud as a VTK XML UnstructuredGrid (.vtu), binary appended raw data, little-endian,
- * 64-bit byte-count headers: the particles as Points (z = 0 in 2D), one VTK_VERTEX cell each,
- * and the PointData arrays id, kind, V, h, normal (3 components), m or M (when the cloud has a
- * mobility; M is the diagonal, 3 components), status (when `row_status` is given) and every
- * named field (docs/io.md). Particles are written in input order (by ids), so a file does not
- * depend on the cloud's storage order or the thread count. `row_status` (may be NULL) holds n
- * bytes in cloud order, e.g. pst_op_status(). All or nothing, like the CSV writer: PST_EIO on a
- * failed write, PST_EINVAL when the ids are not a permutation or a field is named like one of
- * the arrays above ("normal", "M", "status"); `err` names the path. */
+/* Write a cloud as a VTK XML UnstructuredGrid (.vtu) or, when `path` ends in .vtp (any case),
+ * PolyData (Points and one vertex per point in Verts, for vtkXMLPolyDataReader); binary
+ * appended data, little-endian, UInt64 headers: the particles as Points (z = 0 in 2D), one
+ * VTK_VERTEX cell each, and the PointData arrays id, kind, V, h, normal (3 components), m or M
+ * (when the cloud has a mobility; M is the diagonal, 3 components), status (when `row_status`
+ * is given), then the named fields (docs/io.md, "Vectors and tensors"): fields NAME_x, NAME_y
+ * (and NAME_z: required in 3D, taken when present in 2D) as one Float64 array NAME of 3
+ * components (z 0 in 2D); fields NAME_xx, NAME_yy, NAME_xy (2D) or NAME_xx, NAME_yy, NAME_zz,
+ * NAME_xy, NAME_yz, NAME_xz (3D) as one array NAME of 6 components in ParaView's symmetric
+ * tensor order XX, YY, ZZ, XY, YZ, XZ (0 for those 2D lacks); NAME "normal" or "M" never
+ * groups; every other field 1 component. Each array sits where its first field is. Particles
+ * are written in input order (by ids), so a file does not depend on the cloud's storage order
+ * or the thread count. `row_status` (may be NULL) holds n bytes in cloud order, e.g.
+ * pst_op_status(). `flags` PST_VTK_ZLIB compresses every array with zlib in the layout of
+ * VTK's vtkZLibDataCompressor (blocks of 32 KiB; compressor="vtkZLibDataCompressor"). All or
+ * nothing, like the CSV writer: PST_EIO on a failed write, PST_EINVAL when the ids are not a
+ * permutation or two PointData arrays would have one name (a field named like one of the
+ * arrays above, e.g. "normal" or "status", or a scalar field u beside fields u_x, u_y),
+ * PST_ENOMEM; `err` names the path and the arrays. */
+enum { PST_VTK_ZLIB = 1 };
+int pst_cloud_write_vtk(const pst_cloud *c, const char *path, const uint8_t *row_status,
+                        int flags, char *err);
+/* pst_cloud_write_vtk with flags 0 (uncompressed). */
 int pst_cloud_write_vtu(const pst_cloud *c, const char *path, const uint8_t *row_status,
                         char *err);
+
+/* One dataset of a VTK Collection: its time value, its part number within that time (>= 0)
+ * and its file name, relative to the directory of the .pvd file (written as given, XML
+ * escaped). */
+typedef struct {
+    double timestep;
+    int part;
+    const char *file;
+} pst_pvd_dataset;
+
+/* Write a VTK Collection file (.pvd) listing n datasets in the order given, all or nothing
+ * (pst_write_atomic). ParaView plays the timesteps as a time series and shows the parts of
+ * one timestep together. PST_EINVAL (an empty file name, a non-finite timestep, a negative
+ * part), PST_EIO; `err` names the path. */
+int pst_write_pvd(const char *path, const pst_pvd_dataset *d, size_t n, char *err);
 
 /* Read a cloud from a VTK XML UnstructuredGrid (.vtu) or PolyData (.vtp) file with one Piece
  * (docs/io.md, "Reading VTU"): DataArrays in format "appended" (encoding raw or base64),

@@ -156,10 +156,25 @@ void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt
 
 /* ---- files ------------------------------------------------------------------------------- */
 
+/* Whether the outputs.fields entry `entry` selects the cloud's field `field`: its own name,
+ * and for a task's name every field the task added (NAME_x.., NAME_exact.., NAME_error..). */
+static int selected(const pst_scene *s, const char *entry, const char *field)
+{
+    if (strcmp(entry, field) == 0)
+        return 1;
+    size_t len = strlen(entry);
+    if (strncmp(entry, field, len) != 0 || field[len] != '_')
+        return 0;
+    for (int k = 0; k < s->ntasks; ++k)
+        if (strcmp(s->tasks[k].name, entry) == 0)
+            return 1;
+    return 0;
+}
+
 /* A copy of the cloud's particles with only the named fields, so that the writers (which
  * write every field) write the selection. */
-static int select_fields(const pst_cloud *c, char *const *names, int nnames, pst_cloud **out,
-                         char *err, size_t errlen)
+static int select_fields(const pst_scene *s, const pst_cloud *c, char *const *names, int nnames,
+                         pst_cloud **out, char *err, size_t errlen)
 {
     const int dim = pst_cloud_dim(c);
     size_t n = pst_cloud_size(c);
@@ -192,17 +207,23 @@ static int select_fields(const pst_cloud *c, char *const *names, int nnames, pst
     for (int a = 0; st == PST_OK && a < nm; ++a)
         memcpy(pst_cloud_mobility(o, a), pst_cloud_mobility(cm, a), n * sizeof(double));
     for (int f = 0; st == PST_OK && f < nnames; ++f) {
-        const double *src = pst_cloud_field_by_name(cm, names[f]);
-        double *dst;
-        if (!src) {
+        int found = 0;
+        for (size_t q = 0; st == PST_OK && q < pst_cloud_nfields(c); ++q) {
+            const char *name = pst_cloud_field_name(c, q);
+            double *dst;
+            if (!selected(s, names[f], name))
+                continue;
+            st = pst_cloud_add_field(o, name, &dst, NULL);
+            if (st == PST_OK)
+                memcpy(dst, pst_cloud_field_by_name(cm, name), n * sizeof(double));
+            found = 1;
+        }
+        if (st == PST_OK && !found) {
             pst_cloud_destroy(o);
             snprintf(err, errlen, "outputs.fields: no field named '%s' (the scene's fields "
                                   "and task outputs are)", names[f]);
             return PST_EINPUT;
         }
-        st = pst_cloud_add_field(o, names[f], &dst, NULL);
-        if (st == PST_OK)
-            memcpy(dst, src, n * sizeof(double));
     }
     if (st != PST_OK) {
         pst_cloud_destroy(o);
@@ -213,14 +234,14 @@ static int select_fields(const pst_cloud *c, char *const *names, int nnames, pst
     return PST_OK;
 }
 
-int report_write_outputs(const pst_scene *s, const pst_cloud *c, const pst_op *base,
+int report_write_outputs(const pst_scene *s, const pst_cloud *c, const uint8_t *status,
                          cJSON *report, pst_run_counters *cnt, char *err, size_t errlen)
 {
     const pst_cloud *out = c;
     pst_cloud *sel = NULL;
     int st = PST_OK;
     if ((s->out.csv || s->out.vtu) && s->out.nfields > 0) {
-        st = select_fields(c, s->out.fields, s->out.nfields, &sel, err, errlen);
+        st = select_fields(s, c, s->out.fields, s->out.nfields, &sel, err, errlen);
         out = sel;
     }
     char msg[PST_ERRLEN];
@@ -232,7 +253,8 @@ int report_write_outputs(const pst_scene *s, const pst_cloud *c, const pst_op *b
             cnt->files++;
     }
     if (st == PST_OK && s->out.vtu) {
-        st = pst_cloud_write_vtu(out, s->out.vtu, base ? pst_op_status(base) : NULL, msg);
+        st = pst_cloud_write_vtk(out, s->out.vtu, status, s->out.vtu_compress ? PST_VTK_ZLIB : 0,
+                                 msg);
         if (st != PST_OK)
             snprintf(err, errlen, "outputs.vtu: %s", msg);
         else

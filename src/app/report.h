@@ -30,9 +30,10 @@ void report_solve(cJSON *task, const pst_solve_result *res);
 /* The plan's decisions and estimates, the counters and the cloud's size, at the end. */
 void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt,
                    const pst_cloud *c);
-/* Write the scene's outputs: CSV and VTU of the cloud (only outputs.fields when given; the
- * VTU carries the base operator's row status) and the JSON report. Counts the files. */
-int report_write_outputs(const pst_scene *s, const pst_cloud *c, const pst_op *base,
+/* Write the scene's outputs: CSV and VTU of the cloud (only outputs.fields when given: a task's
+ * name selects every field it added) and the JSON report. `status` (may be NULL): the row
+ * status the VTU carries. Counts the files. */
+int report_write_outputs(const pst_scene *s, const pst_cloud *c, const uint8_t *status,
                          cJSON *report, pst_run_counters *cnt, char *err, size_t errlen);
 /* An interpolation task's values at its points: "<csv stem>_<task>.csv" beside outputs.csv
  * with columns x,y[,z],value,laplacian. */

@@ -186,7 +186,8 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
         report_timer(r.report, "cpu", cpu_seconds() - cpu0);
         report_peak_memory(r.report);
         report_finish(r.report, &r.plan, &r.cnt, r.c);
-        st = report_write_outputs(s, r.c, r.base, r.report, &r.cnt, err, errlen);
+        st = report_write_outputs(s, r.c, r.base ? pst_op_status(r.base) : r.status, r.report,
+                                  &r.cnt, err, errlen);
     }
     if (st == PST_OK && !o->quiet)
         report_summary(stdout, r.report);
@@ -202,6 +203,7 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
         cJSON_Delete(r.report);
     pst_op_destroy(r.base);
     pst_nlist_destroy(r.nl);
+    free(r.status);
     if (cloud && (st == PST_OK || (st == PST_ENUMERIC && r.solve_failed)))
         *cloud = r.c;
     else

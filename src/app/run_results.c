@@ -4,6 +4,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* The particles of a task's region: interior particles, all, or those inside a box; *count
  * of them. A Laplacian or divergence task has no L u at its boundary rows (a Dirichlet row is
@@ -32,13 +33,84 @@ static uint8_t *region_mask(run_state *r, const sc_task *t, size_t *count)
     return mask;
 }
 
+/* Field name of component a of a task's result: NAME[_infix] for one component, else
+ * NAME[_infix]_x.. (gradient) or NAME[_infix]_xx.. (Hessian), the components in the order of
+ * the task's result (tasks[].exact). */
+static void component_name(const sc_task *t, int ncomp, int a, const char *infix, char *name)
+{
+    static const char *const grad[] = {"x", "y", "z"};
+    static const char *const hess2[] = {"xx", "yy", "xy"};
+    static const char *const hess3[] = {"xx", "yy", "zz", "xy", "xz", "yz"};
+    const char *sfx = ncomp == 1                     ? NULL
+                      : t->type == SC_TASK_GRADIENT ? grad[a]
+                      : ncomp == 3                  ? hess2[a]
+                                                    : hess3[a];
+    snprintf(name, PST_MAX_NAME, "%s%s%s%s%s", t->name, infix ? "_" : "", infix ? infix : "",
+             sfx ? "_" : "", sfx ? sfx : "");
+}
+
+static int add_field(run_state *r, const sc_task *t, const char *name, double **out)
+{
+    char why[PST_ERRLEN];
+    if (pst_cloud_add_field(r->c, name, out, why) != PST_OK)
+        return run_fail(r, PST_EINPUT, "%s: task '%s': output field %s: %s", r->s->path,
+                        t->name, name, why);
+    return PST_OK;
+}
+
+int run_add_outputs(run_state *r, const sc_task *t, int ncomp, double *out[6])
+{
+    for (int a = 0; a < ncomp; ++a) {
+        char name[PST_MAX_NAME];
+        component_name(t, ncomp, a, NULL, name);
+        int st = add_field(r, t, name, &out[a]);
+        if (st != PST_OK)
+            return st;
+    }
+    return PST_OK;
+}
+
+/* NAME_exact and NAME_error (approx - exact) beside a task's output fields. */
+static int add_exact_fields(run_state *r, const sc_task *t, int ncomp,
+                            double *const *approx, double *const *exact)
+{
+    size_t n = pst_cloud_size(r->c);
+    double *ex[6], *er[6];
+    int st = PST_OK;
+    for (int a = 0; a < ncomp && st == PST_OK; ++a) { /* all exact fields, then all errors */
+        char name[PST_MAX_NAME];
+        component_name(t, ncomp, a, "exact", name);
+        st = add_field(r, t, name, &ex[a]);
+    }
+    for (int a = 0; a < ncomp && st == PST_OK; ++a) {
+        char name[PST_MAX_NAME];
+        component_name(t, ncomp, a, "error", name);
+        st = add_field(r, t, name, &er[a]);
+    }
+    for (int a = 0; a < ncomp && st == PST_OK; ++a)
+        for (size_t i = 0; i < n; ++i) {
+            ex[a][i] = exact[a][i];
+            er[a][i] = approx[a][i] - exact[a][i];
+        }
+    return st;
+}
+
+int run_keep_status(run_state *r, const pst_op *op)
+{
+    size_t n = pst_cloud_size(r->c);
+    if (!r->status && !(r->status = malloc(n ? n : 1)))
+        return run_fail(r, PST_ENOMEM, "out of memory for the row status");
+    memcpy(r->status, pst_op_status(op), n);
+    return PST_OK;
+}
+
 /* Evaluate the task's exact expressions and its norms of approx against them; the norms go
  * into the task's report object. `pts` non-NULL: values at m points instead of particles. */
 int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *approx,
                    double *const pts[3], size_t m)
 {
     const sc_task *t = &r->s->tasks[k];
-    if (!t->nexact || !t->nnorms)
+    if (!t->nexact || (!t->nnorms && pts))
         return PST_OK;
     if (t->nexact != ncomp)
         return run_fail(r, PST_EINPUT,
@@ -60,8 +132,11 @@ int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *app
             st = pts ? run_eval_at_points(r, key, t->exact[a], pts, m, exact[a])
                      : run_eval_at_particles(r, key, t->exact[a], exact[a]);
     }
-    cJSON_AddNumberToObject(tj, "region_particles", (double)in_region);
-    cJSON *norms = cJSON_AddObjectToObject(tj, "norms");
+    if (st == PST_OK && !pts)
+        st = add_exact_fields(r, t, ncomp, approx, exact);
+    if (st == PST_OK && t->nnorms)
+        cJSON_AddNumberToObject(tj, "region_particles", (double)in_region);
+    cJSON *norms = t->nnorms ? cJSON_AddObjectToObject(tj, "norms") : NULL;
     for (int q = 0; q < t->nnorms && st == PST_OK; ++q) {
         double v;
         char msg[PST_ERRLEN];
@@ -83,27 +158,4 @@ int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *app
         free(exact[a]);
     free(mask);
     return st;
-}
-
-/* Output fields of a task: `name` for one component, name_x.. / name_xx.. for more. */
-int run_add_outputs(run_state *r, const sc_task *t, int ncomp, double *out[6])
-{
-    static const char *const grad[] = {"x", "y", "z"};
-    static const char *const hess2[] = {"xx", "yy", "xy"};
-    static const char *const hess3[] = {"xx", "yy", "zz", "xy", "xz", "yz"};
-    for (int a = 0; a < ncomp; ++a) {
-        char name[PST_MAX_NAME];
-        if (ncomp == 1)
-            snprintf(name, sizeof name, "%s", t->name);
-        else
-            snprintf(name, sizeof name, "%s_%s", t->name,
-                     t->type == SC_TASK_GRADIENT ? grad[a]
-                     : ncomp == 3                ? hess2[a]
-                                                 : hess3[a]);
-        char why[PST_ERRLEN];
-        if (pst_cloud_add_field(r->c, name, &out[a], why) != PST_OK)
-            return run_fail(r, PST_EINPUT, "%s: task '%s': output field %s: %s", r->s->path,
-                            t->name, name, why);
-    }
-    return PST_OK;
 }

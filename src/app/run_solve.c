@@ -175,6 +175,8 @@ int run_solve(run_state *r, int k, cJSON *tj)
         st = run_make_operator(r, 1, &bnd, &op);
     if (st == PST_OK)
         st = solve_with(r, k, tj, op, b, u[0]);
+    if (st == PST_OK && op != r->base && !r->base) /* outputs.vtu: this solve's rows */
+        st = run_keep_status(r, op);
     if (op != r->base)
         pst_op_destroy(op);
     r->task_kinds = bnd.kind;

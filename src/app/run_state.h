@@ -21,6 +21,7 @@ typedef struct {
     const uint8_t *task_kinds; /* the kinds a task's error region reads; NULL: the cloud's     */
     cJSON *report, *tasks;
     int solve_failed;
+    uint8_t *status; /* the row status of a solve's own operator, when there is no base one */
     char *err;
     size_t errlen;
 } run_state;
@@ -58,6 +59,9 @@ int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *app
 
 /* The output fields of task t (one per component) added to the cloud, into out. */
 int run_add_outputs(run_state *r, const sc_task *t, int ncomp, double *out[6]);
+
+/* Keep a copy of op's row status for outputs.vtu (r->status). */
+int run_keep_status(run_state *r, const pst_op *op);
 
 /* The three kinds of task (run_estimate.c, run_interpolate.c, run_solve.c). */
 int run_estimate(run_state *r, int k, cJSON *tj);

@@ -134,6 +134,7 @@ typedef struct {
     char *csv, *vtu, *report; /* output paths (NULL: not written), relative to the working dir */
     char *fields[SC_MAX_FIELDS];
     int nfields;             /* 0: every field                                                  */
+    int vtu_compress;        /* zlib-compressed vtu arrays                                      */
 } sc_outputs;
 
 typedef struct {

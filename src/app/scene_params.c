@@ -128,7 +128,8 @@ const sc_param sc_params[] = {
      .flags = SC_F_REQUIRED, .doc = "The input field, declared in fields."},
     {.key = "tasks[].exact", .type = SC_T_EXPRS,
      .doc = "The exact result: one expression, dim for a gradient, 3 (xx, yy, xy) or 6 (xx, "
-            "yy, zz, xy, xz, yz) for a Hessian."},
+            "yy, zz, xy, xz, yz) for a Hessian. The outputs then also hold NAME_exact and "
+            "NAME_error (approx - exact) with the same components."},
     {.key = "tasks[].norms", .type = SC_T_LIST, .item = SC_T_ENUM,
      .values = "rel_l2|qsfdi11|qsfdi11_normalised|lv78|lv95|max_abs|max_rel",
      .hi = SC_NNORMS, .hi_kind = ']',
@@ -240,12 +241,18 @@ const sc_param sc_params[] = {
     {.key = "outputs", .type = SC_T_OBJECT,
      .doc = "What to write; paths are relative to the working directory."},
     {.key = "outputs.csv", .type = SC_T_PATH, .doc = "The cloud and the fields as CSV."},
-    {.key = "outputs.vtu", .type = SC_T_PATH, .doc = "The same as a ParaView .vtu file."},
+    {.key = "outputs.vtu", .type = SC_T_PATH,
+     .doc = "The same for ParaView: .vtu (UnstructuredGrid) or .vtp (PolyData), gradients as "
+            "3-component and Hessians as 6-component arrays, with the row status; another "
+            "extension is refused (docs/io.md)."},
+    {.key = "outputs.vtu_compress", .type = SC_T_BOOL, .def = "false",
+     .doc = "Compress the vtu's arrays with zlib (VTK's vtkZLibDataCompressor)."},
     {.key = "outputs.report", .type = SC_T_PATH,
      .doc = "The run as JSON: sizes, timings, solver results and error norms."},
     {.key = "outputs.fields", .type = SC_T_LIST, .item = SC_T_STRING, .hi = SC_MAX_FIELDS,
      .hi_kind = ']',
-     .doc = "The fields and task outputs written to csv and vtu (default: all of them)."},
+     .doc = "The fields and task outputs written to csv and vtu (default: all of them); a "
+            "task's name selects all its fields, NAME_exact and NAME_error included."},
 
     {.key = "limits", .type = SC_T_OBJECT, .doc = "Resource limits."},
     {.key = "limits.memory_fraction", .type = SC_T_REAL, .def = "0.8", .lo_kind = '(',

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 
 static const char axis_name[3] = {'x', 'y', 'z'};
 
@@ -359,6 +360,14 @@ int scene_read_tasks(ctx *c, const cJSON *root, pst_scene *s)
     return rc;
 }
 
+/* outputs.vtu names the dataset by its extension (any case). */
+static int vtk_extension(const char *path)
+{
+    size_t len = strlen(path);
+    return len >= 4 && (strcasecmp(path + len - 4, ".vtu") == 0 ||
+                        strcasecmp(path + len - 4, ".vtp") == 0);
+}
+
 int scene_read_outputs(ctx *c, const cJSON *root, pst_scene *s)
 {
     const cJSON *o = scene_enter(c, root, "outputs");
@@ -366,6 +375,13 @@ int scene_read_outputs(ctx *c, const cJSON *root, pst_scene *s)
     int rc = scene_set_str(c, &out->csv, scene_get_string(o, "outputs.csv"));
     if (rc == PST_OK)
         rc = scene_set_str(c, &out->vtu, scene_get_string(o, "outputs.vtu"));
+    if (rc == PST_OK && out->vtu && !vtk_extension(out->vtu)) {
+        scene_enter(c, o, "vtu");
+        rc = scene_error(c, NULL, "'%s': expected a .vtu (UnstructuredGrid) or .vtp (PolyData) "
+                                  "file name", out->vtu);
+        scene_pop(c);
+    }
+    out->vtu_compress = scene_get_bool(o, "outputs.vtu_compress");
     if (rc == PST_OK)
         rc = scene_set_str(c, &out->report, scene_get_string(o, "outputs.report"));
     if (rc == PST_OK)
