@@ -217,6 +217,18 @@ sed -e 's/"lpmps"\]/"lpmps", "brookshaw"]/' -e 's/"type": "laplacian"/"type": "g
 expect 20 "sweep: 4 failed runs (exit 16 + 4)" -- "$exe" --quiet sweep "$work/swf.json"
 contains err "4 of 12 runs failed" "sweep says how many runs failed"
 check "failed rows in the CSV" '[ "$(grep -c ",failed," "$work/sw.csv")" -eq 4 ]'
+# output.pvd: each run writes STEM_runK.vtu, the .pvd lists those that ran (not the failed ones)
+sed 's|"summary": "[^"]*"|&, "pvd": "'"$work"'/swp.pvd"|' "$work/swf.json" > "$work/swp.json"
+expect 20 "sweep with output.pvd" -- "$exe" --quiet sweep "$work/swp.json"
+check "the .pvd lists the 8 runs that did not fail, each file there" \
+  "python3 -c 'import os,sys,xml.etree.ElementTree as E
+d=E.parse(sys.argv[1]).getroot().find(\"Collection\").findall(\"DataSet\")
+assert len(d)==8 and all(os.path.exists(os.path.join(os.path.dirname(sys.argv[1]),x.get(\"file\"))) for x in d)
+assert [x.get(\"file\") for x in d][0]==\"swp_run0.vtu\"' '$work/swp.pvd'"
+check "no VTU of a failed run" '[ ! -e "$work/swp_run8.vtu" ] && [ -s "$work/swp_run0.vtu" ]'
+sed 's|swp.pvd|swp.vtu|' "$work/swp.json" > "$work/swpbad.json"
+expect 2 "sweep: output.pvd must be a .pvd" -- "$exe" --quiet sweep "$work/swpbad.json"
+contains err "expected a file name ending in .pvd" "the .pvd name checked"
 sed 's/"cloud.seed"/"cloud.sed"/' "$work/sw.json" > "$work/swbad.json"
 expect 2 "sweep: bad key" -- "$exe" sweep "$work/swbad.json"
 contains err "swbad.json:6:13: key 'grid.cloud.sed': unknown scene key" "sweep names the bad key"

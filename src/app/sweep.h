@@ -31,6 +31,8 @@ typedef struct {
     int noverrides;
     char *overrides[SW_MAX_OVERRIDES]; /* fixed "key=json" overrides                           */
     char *csv, *summary;     /* output paths, relative to the working directory                 */
+    char *pvd;               /* a .pvd collecting each run's VTU, STEM_runK.vtu beside it (NULL:
+                                the runs write no VTU)                                          */
     char *slope_key, *repeat_key;
     size_t ncombos;          /* runs in the whole sweep                                         */
 } pst_sweep;

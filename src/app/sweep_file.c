@@ -397,13 +397,13 @@ static int default_output(const char *path, const char *suffix, char **dst)
     return (*dst = pst_strdup(name)) ? PST_OK : PST_ENOMEM;
 }
 
-/* "output": {csv, summary} file names. */
+/* "output": {csv, summary, pvd} file names (pvd optional, a .pvd). */
 static int read_outputs(pctx *c, const cJSON *root, pst_sweep *sw)
 {
     const cJSON *out = cJSON_GetObjectItemCaseSensitive(root, "output"), *m;
     json_step steps[2] = {{"output", 0}, {NULL, 0}};
     if (out && !cJSON_IsObject(out))
-        return perr(c, steps, 1, "output", "expected an object {csv, summary}");
+        return perr(c, steps, 1, "output", "expected an object {csv, summary, pvd}");
     cJSON_ArrayForEach(m, out)
     {
         steps[1] = (json_step){m->string, 0};
@@ -411,13 +411,17 @@ static int read_outputs(pctx *c, const cJSON *root, pst_sweep *sw)
         snprintf(full, sizeof full, "output.%s", m->string);
         char **dst = strcmp(m->string, "csv") == 0       ? &sw->csv
                      : strcmp(m->string, "summary") == 0 ? &sw->summary
+                     : strcmp(m->string, "pvd") == 0     ? &sw->pvd
                                                          : NULL;
         if (!dst)
-            return perr(c, steps, 2, full, "unknown key (output has csv and summary)");
+            return perr(c, steps, 2, full, "unknown key (output has csv, summary and pvd)");
         if (refuse_repeat(c, out, m, steps, 1, full) != PST_OK)
             return PST_EINPUT;
         if (!cJSON_IsString(m) || !m->valuestring[0])
             return perr(c, steps, 2, full, "expected a file name");
+        size_t len = strlen(m->valuestring);
+        if (dst == &sw->pvd && (len < 5 || strcmp(m->valuestring + len - 4, ".pvd") != 0))
+            return perr(c, steps, 2, full, "expected a file name ending in .pvd");
         if (!(*dst = pst_strdup(m->valuestring)))
             return PST_ENOMEM;
     }
@@ -495,6 +499,7 @@ void pst_sweep_free(pst_sweep *sw)
         free(sw->overrides[q]);
     free(sw->csv);
     free(sw->summary);
+    free(sw->pvd);
     free(sw->slope_key);
     free(sw->repeat_key);
     memset(sw, 0, sizeof *sw);

@@ -6,6 +6,8 @@
 #include "plan.h"
 #include "text_file.h"
 
+#include <cjson/cJSON.h>
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,13 +42,41 @@ void sweep_combo_label(const pst_sweep *sw, size_t k, char *buf, size_t len)
         n += (size_t)snprintf(buf + n, len - n, "%s%s=%s", q ? " " : "", sw->keys[q], vals[q]);
 }
 
-/* Overrides of one run: outputs off, the fixed ones, then the grid's. */
+void sweep_run_vtu(const pst_sweep *sw, size_t k, char *path, size_t len, const char **base)
+{
+    int stem = (int)strlen(sw->pvd) - 4; /* the sweep file's check: it ends in .pvd */
+    snprintf(path, len, "%.*s_run%zu.vtu", stem, sw->pvd, k);
+    if (base) {
+        const char *slash = strrchr(path, '/');
+        *base = slash ? slash + 1 : path;
+    }
+}
+
+/* "outputs=..." of run k: none, or only its VTU when the sweep collects them in a .pvd. */
+static char *outputs_override(const pst_sweep *sw, size_t k)
+{
+    if (!sw->pvd)
+        return pst_strdup("outputs={}");
+    char path[1024];
+    sweep_run_vtu(sw, k, path, sizeof path, NULL);
+    cJSON *o = cJSON_CreateObject();
+    char *json = o && cJSON_AddStringToObject(o, "vtu", path) ? cJSON_PrintUnformatted(o) : NULL;
+    cJSON_Delete(o);
+    size_t len = json ? strlen(json) + 9 : 0;
+    char *ov = json ? malloc(len) : NULL;
+    if (ov)
+        snprintf(ov, len, "outputs=%s", json);
+    free(json);
+    return ov;
+}
+
+/* Overrides of one run: outputs off (or its VTU), the fixed ones, then the grid's. */
 static int run_overrides(const pst_sweep *sw, size_t k, char **ov, int *nov)
 {
     const char *vals[SW_MAX_KEYS];
     pst_sweep_combo(sw, k, vals);
     int n = 0;
-    ov[n++] = pst_strdup("outputs={}");
+    ov[n++] = outputs_override(sw, k);
     for (int q = 0; q < sw->noverrides; ++q)
         ov[n++] = pst_strdup(sw->overrides[q]);
     for (int q = 0; q < sw->nkeys; ++q) {

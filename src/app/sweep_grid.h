@@ -8,6 +8,11 @@
 /* "key=value key=value" of combination k, for messages. */
 void sweep_combo_label(const pst_sweep *sw, size_t k, char *buf, size_t len);
 
+/* The VTU path of run k when the sweep writes a .pvd: "STEM_runK.vtu" beside it, with STEM the
+ * .pvd path without its extension; `base` (may be NULL) receives the name relative to the
+ * .pvd's folder, as the collection lists it. */
+void sweep_run_vtu(const pst_sweep *sw, size_t k, char *path, size_t len, const char **base);
+
 /* The scene of combination k: the sweep's scene text with outputs off, the fixed overrides,
  * then the combination's values. PST_ENOMEM when the overrides cannot be built; otherwise
  * pst_scene_parse's status, with its message in msg. */

@@ -15,6 +15,7 @@
 #include <cjson/cJSON.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* The distinct operator parameters over the sweep's combinations (report_parameters), from
  * the scenes themselves, so that resumed runs count too. A combination whose scene does not
@@ -256,6 +257,34 @@ static int run_all(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j,
     return st;
 }
 
+/* The .pvd of the runs' VTUs: run k as timestep k, for every run whose VTU is there (a failed
+ * run wrote none; a resumed one keeps the file of its earlier sweep). */
+static int write_pvd(const pst_sweep *sw, char *err, size_t errlen)
+{
+    pst_pvd_dataset *d = calloc(sw->ncombos + 1, sizeof *d);
+    char (*names)[1024] = calloc(sw->ncombos + 1, sizeof *names);
+    int st = d && names ? PST_OK : PST_ENOMEM;
+    size_t n = 0;
+    for (size_t k = 0; st == PST_OK && k < sw->ncombos; ++k) {
+        char path[1024];
+        const char *base;
+        sweep_run_vtu(sw, k, path, sizeof path, &base);
+        if (access(path, F_OK) != 0)
+            continue;
+        snprintf(names[n], sizeof names[n], "%s", base);
+        d[n] = (pst_pvd_dataset){(double)k, 0, names[n]};
+        ++n;
+    }
+    char msg[PST_ERRLEN];
+    if (st == PST_OK && (st = pst_write_pvd(sw->pvd, d, n, msg)) != PST_OK)
+        snprintf(err, errlen, "output.pvd: %s", msg);
+    else if (st == PST_ENOMEM)
+        snprintf(err, errlen, "out of memory for the .pvd");
+    free(d);
+    free(names);
+    return st;
+}
+
 int pst_sweep_run(const pst_sweep *sw, const pst_sweep_opts *o, pst_sweep_stats *stats,
                   char *err, size_t errlen)
 {
@@ -278,6 +307,8 @@ int pst_sweep_run(const pst_sweep *sw, const pst_sweep_opts *o, pst_sweep_stats 
         st = write_rows(sw, &j, err, errlen);
     if (st == PST_OK)
         st = write_summary(sw, &j, o->machine, err, errlen);
+    if (st == PST_OK && sw->pvd)
+        st = write_pvd(sw, err, errlen);
     for (size_t k = 0; j.runs && k < sw->ncombos; ++k) {
         stats->rows += j.runs[k].nrows;
         sweep_rowset_clear(&j.runs[k], j.ncols);
