@@ -186,6 +186,21 @@ check "sweep CSV header" \
   '[ "$(head -n 1 "$work/sw.csv" | cut -d, -f1-5)" = "operator.scheme,cloud.spacing,cloud.seed,dim,particles" ]'
 check "sweep summary: groups, fits, machine" \
   "python3 -c 'import json,sys; s=json.load(open(sys.argv[1])); assert len(s[\"groups\"])==4 and len(s[\"fits\"])==4 and s[\"machine\"][\"cores\"]>=1' '$work/sw.summary.json'"
+# runs at once: the same CSV one at a time and two at a time, but for times, CPU and RSS
+cp "$work/sw.csv" "$work/sw_default.csv"
+expect 0 "sweep --jobs 2" -- "$exe" sweep "$work/sw.json" --jobs 2
+contains out "8 of them small, run up to 2 at once in worker processes" "sweep --jobs 2 uses workers"
+cp "$work/sw.csv" "$work/sw_jobs2.csv"
+expect 0 "sweep --jobs 1" -- "$exe" sweep "$work/sw.json" --jobs 1
+check "sweep --jobs 1 and 2: the same CSV but for times, CPU and RSS" \
+  "python3 -c 'import csv,sys; a,b=[list(csv.reader(open(f))) for f in sys.argv[1:]]
+t=lambda h: h.startswith(\"t_\") or h in (\"cpu\",\"peak_rss_bytes\")
+assert len(a)==len(b)==9 and a[0]==b[0]
+assert all(x==y for r,s in zip(a,b) for h,x,y in zip(a[0],r,s) if not t(h))' '$work/sw.csv' '$work/sw_jobs2.csv'"
+expect 1 "sweep --jobs 0" -- "$exe" sweep "$work/sw.json" --jobs 0
+contains err "--jobs needs an integer from 1 to 256" "sweep --jobs checked"
+expect 2 "a sweep worker of another sweep" -- "$exe" sweep "$work/sw.json" --worker 0123456789abcdef
+contains err "is not the sweep this worker was started for" "the worker checks the sweep's digest"
 cp "$work/sw.csv" "$work/sw_before.csv"
 expect 0 "sweep --resume" -- "$exe" sweep "$work/sw.json" --resume
 contains out "0 run, 8 kept" "sweep --resume reruns nothing"

@@ -60,10 +60,17 @@ typedef struct {
     int quiet;                    /* no progress bar                                           */
     const struct cJSON *machine;  /* members copied into the summary (NULL: none)             */
     int (*start_mpi)(void);       /* handed to every run (pst_run_opts.start_mpi)              */
+    /* Runs at once (docs/sweeps.md): with jobs > 1 and a worker program, up to `jobs` small
+     * runs at once, each in a worker process with pst_threads() / jobs threads, and large
+     * runs one at a time in this process; otherwise every run here, one after the other. */
+    int jobs;
+    const char *worker_exe;       /* a pstencil program: `sweep PATH --worker DIGEST` serves
+                                     runs (pst_sweep_serve); needs a sweep loaded from PATH */
 } pst_sweep_opts;
 
 typedef struct {
     long runs;                    /* scene runs made by this call                              */
+    long in_workers;              /* of which in worker processes (runs at once)               */
     long skipped;                 /* combinations kept from the CSV (--resume)                 */
     long failed;                  /* combinations whose rows are failed                        */
     long not_converged;           /* combinations with a solve that did not converge           */
@@ -76,6 +83,13 @@ typedef struct {
  * PST_EIO / PST_EINPUT (a CSV whose header differs, on resume) with the reason in err. */
 int pst_sweep_run(const pst_sweep *sw, const pst_sweep_opts *o, pst_sweep_stats *stats,
                   char *err, size_t errlen);
+
+/* A sweep worker: check `digest` (the parent's digest of the sweep, as sweep_jobs.c passes
+ * it) against sw, then run every combination K sent as "K\n" on socket fd and answer each
+ * with one line of JSON, until the input ends (PST_OK). PST_EINPUT for another sweep or a bad
+ * line, PST_EIO when the parent is gone, PST_ENOMEM; the reason in err. */
+int pst_sweep_serve(const pst_sweep *sw, const char *digest, const pst_sweep_opts *o, int fd,
+                    char *err, size_t errlen);
 
 /* The CSV's columns after the grid keys. */
 extern const char *const pst_sweep_columns[];

@@ -52,6 +52,28 @@ void sweep_run_vtu(const pst_sweep *sw, size_t k, char *path, size_t len, const 
     }
 }
 
+static uint64_t fnv(uint64_t h, const char *s)
+{
+    for (; s && *s; ++s)
+        h = (h ^ (unsigned char)*s) * 0x100000001b3ULL;
+    return (h ^ 0xff) * 0x100000001b3ULL; /* a separator: ("ab", "c") is not ("a", "bc") */
+}
+
+uint64_t sweep_digest(const pst_sweep *sw)
+{
+    uint64_t h = 0xcbf29ce484222325ULL;
+    h = fnv(fnv(fnv(fnv(h, sw->scene_text), sw->scene_path), sw->csv), sw->pvd);
+    for (int q = 0; q < sw->noverrides; ++q)
+        h = fnv(h, sw->overrides[q]);
+    for (int g = 0; g < sw->ngrids; ++g)
+        for (int q = 0; q < sw->nkeys; ++q) {
+            h = fnv(h, sw->keys[q]);
+            for (int v = 0; v < sw->nvalues[g][q]; ++v)
+                h = fnv(h, sw->values[g][q][v]);
+        }
+    return h;
+}
+
 /* "outputs=..." of run k: none, or only its VTU when the sweep collects them in a .pvd. */
 static char *outputs_override(const pst_sweep *sw, size_t k)
 {

@@ -4,6 +4,7 @@
 #include "sweep.h"
 #include "sweep_csv.h"
 #include "sweep_grid.h"
+#include "sweep_jobs.h"
 
 #include "pstencil.h"
 #include "progress.h"
@@ -186,38 +187,54 @@ static int resume_rows(const pst_sweep *sw, sweep_rows *j, char *done, pst_sweep
     return st;
 }
 
-/* Run combination k and add its rows (failed rows when its scene does not parse or its run
- * fails). PST_ENOMEM or PST_OK, whatever the run did (stats says). */
-static int run_combo(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j, size_t k,
-                     pst_sweep_stats *stats)
+int sweep_run_one(const pst_sweep *sw, const pst_sweep_opts *o, size_t k, int *ran,
+                  cJSON **report, char *msg, size_t len)
 {
     pst_scene s;
-    char msg[PST_ERRLEN * 2];
-    int ps = sweep_combo_scene(sw, k, &s, msg, sizeof msg);
-    if (ps == PST_ENOMEM)
-        return ps;
-    if (ps != PST_OK) {
-        stats->failed++;
-        return sweep_add_rows(j, k, NULL, NULL, msg);
-    }
-    cJSON *rep = NULL;
-    pst_run_opts ro = {.quiet = 1, .report = &rep, .start_mpi = o->start_mpi};
-    int rs = pst_run_scene(&s, &ro, NULL, NULL, NULL, msg, sizeof msg);
-    stats->runs++;
-    int st;
-    if (rep) {
-        st = sweep_add_rows(j, k, rep, &s, NULL);
-        stats->not_converged += rs == PST_ENUMERIC;
-    } else {
-        st = sweep_add_rows(j, k, NULL, &s, msg);
-        stats->failed++;
-    }
-    cJSON_Delete(rep);
+    *ran = 0;
+    *report = NULL;
+    int st = sweep_combo_scene(sw, k, &s, msg, len);
+    if (st != PST_OK)
+        return st;
+    pst_run_opts ro = {.quiet = 1, .report = report, .start_mpi = o->start_mpi};
+    st = pst_run_scene(&s, &ro, NULL, NULL, NULL, msg, len);
+    *ran = 1;
     pst_scene_free(&s);
     return st;
 }
 
-static int write_rows(const pst_sweep *sw, const sweep_rows *j, char *err, size_t errlen)
+int sweep_record(sweep_rows *j, size_t k, int ran, const cJSON *report, int status,
+                 const char *msg, pst_sweep_stats *stats)
+{
+    stats->runs += ran;
+    if (report) {
+        stats->not_converged += status == PST_ENUMERIC;
+        return sweep_add_rows(j, k, report, NULL, NULL);
+    }
+    stats->failed++;
+    pst_scene s; /* for the names of the failed tasks, when the scene parses */
+    char unused[PST_ERRLEN];
+    int parsed = sweep_combo_scene(j->sw, k, &s, unused, sizeof unused) == PST_OK;
+    int st = sweep_add_rows(j, k, NULL, parsed ? &s : NULL, msg);
+    if (parsed)
+        pst_scene_free(&s);
+    return st;
+}
+
+int sweep_run_combo(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j, size_t k,
+                     pst_sweep_stats *stats)
+{
+    cJSON *rep;
+    char msg[PST_ERRLEN * 2];
+    int ran, rs = sweep_run_one(sw, o, k, &ran, &rep, msg, sizeof msg);
+    if (rs == PST_ENOMEM && !ran)
+        return rs;
+    int st = sweep_record(j, k, ran, rep, rs, msg, stats);
+    cJSON_Delete(rep);
+    return st;
+}
+
+int sweep_write_rows(const pst_sweep *sw, const sweep_rows *j, char *err, size_t errlen)
 {
     char msg[PST_ERRLEN];
     int st = pst_write_atomic(sw->csv, sweep_write_csv, j, msg);
@@ -226,10 +243,13 @@ static int write_rows(const pst_sweep *sw, const sweep_rows *j, char *err, size_
     return st;
 }
 
-/* Every combination not done, the CSV after each. */
+/* Every combination not done, one after the other here or several at once (sweep_jobs.c),
+ * the CSV after each. */
 static int run_all(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j,
                    const char *done, pst_sweep_stats *stats, char *err, size_t errlen)
 {
+    if (o->jobs > 1 && o->worker_exe)
+        return sweep_run_jobs(sw, o, j, done, stats, err, errlen);
     cli_progress pg;
     progress_begin(&pg, !o->quiet, "sweep", NULL);
     size_t todo = 0, made = 0;
@@ -245,12 +265,12 @@ static int run_all(const pst_sweep *sw, const pst_sweep_opts *o, sweep_rows *j,
         sweep_combo_label(sw, k, label, sizeof label);
         snprintf(detail, sizeof detail, "run %zu/%zu: %.100s", made + 1, todo, label);
         progress_update(&pg, todo ? (double)made / (double)todo : 1, detail);
-        st = run_combo(sw, o, j, k, stats);
+        st = sweep_run_combo(sw, o, j, k, stats);
         ++made;
         if (st != PST_OK)
             snprintf(err, errlen, "out of memory for the rows");
         else
-            st = write_rows(sw, j, err, errlen);
+            st = sweep_write_rows(sw, j, err, errlen);
     }
     progress_update(&pg, 1, ""); /* the last line of a log says all are done */
     progress_end(&pg);
@@ -304,7 +324,7 @@ int pst_sweep_run(const pst_sweep *sw, const pst_sweep_opts *o, pst_sweep_stats 
     if (st == PST_OK)
         st = run_all(sw, o, &j, done, stats, err, errlen);
     if (st == PST_OK) /* also when nothing ran (everything resumed) */
-        st = write_rows(sw, &j, err, errlen);
+        st = sweep_write_rows(sw, &j, err, errlen);
     if (st == PST_OK)
         st = write_summary(sw, &j, o->machine, err, errlen);
     if (st == PST_OK && sw->pvd)
