@@ -23,6 +23,7 @@ typedef struct {
     const int64_t *off; /* the neighbour list (op->nl) */
     const uint32_t *idx;
     double pair_eps;    /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
+    const double *xyzu; /* op->xyzu: the packed rows of a lane apply (kernels/lanes.h), or NULL */
 } pst_kctx;
 
 static inline pst_kctx pst_kctx_of(const pst_op *op)
@@ -31,7 +32,7 @@ static inline pst_kctx pst_kctx_of(const pst_op *op)
     pst_kctx k = {.dim = c->dim, .ncomp = c->mob_ncomp, .kernel = op->kernel, .V = c->V,
                   .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind,
                   .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
-                  .pair_eps = op->opts.min_pair_distance};
+                  .pair_eps = op->opts.min_pair_distance, .xyzu = op->xyzu};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.mob[a] = c->mob[a];

@@ -21,6 +21,7 @@
  * neighbour the row is 0. Neumann rows fall back to n . (linear WLS gradient), else 0. */
 #include "check.h"
 #include "isa.h"
+#include "lanes.h"
 #include "qsfdi_fit.h"
 
 #include <omp.h>
@@ -250,49 +251,87 @@ PST_KHOT void qs_chunk_weights(const qs_ctx *k, int D, const double xi[3], doubl
         a[c] = qs_weight_xyz(D, r[0][c], r[1][c], D == 3 ? r[2][c] : 0.0, o2[c], o4[c], kap);
 }
 
-/* Row i into y (apply) or its weights into w (emission), in the widest vector ISA. Both paths
- * take the weights from qs_chunk_weights, so they are bit-identical. Compute-bound: per
- * neighbour the gather of x_J, a sqrt, a division, ~19 flops of kernel and ~45 (3D) of
- * monomials and kappa, vectorised 8 wide with AVX-512, against 4 bytes of index and u_J. */
-PST_ISA_DISPATCH static void qs_row(const qs_ctx *k, const qs_data *d, int D, const int64_t *off,
-                                    const uint32_t *idx, size_t i, const double *u, double *y,
-                                    double *w)
+/* Row i's weights into w (emission, pst_op_store), in the widest vector ISA: chunk by chunk
+ * through qs_chunk_weights. */
+PST_ISA_DISPATCH static void qs_emit(const qs_ctx *k, const qs_data *d, int D, const int64_t *off,
+                                     const uint32_t *idx, size_t i, double *w)
 {
-    const int nk = QS_NK(D);
-    const double *kap = d->kap + (size_t)nk * i;
-    double xi[3] = {0, 0, 0}, ih = 1.0 / pst_h(&k->c, i), ui = u ? u[i] : 0.0, s = 0;
+    const double *kap = d->kap + (size_t)QS_NK(D) * i;
+    double xi[3] = {0, 0, 0}, ih = 1.0 / pst_h(&k->c, i);
     for (int a = 0; a < D; ++a)
         xi[a] = k->c.x[a][i];
     for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += QS_CHUNK) {
         int n = (int)(off[i + 1] - c0 < QS_CHUNK ? off[i + 1] - c0 : QS_CHUNK);
-        double buf[QS_CHUNK], *a = w ? w + (c0 - off[i]) : buf;
         if (D == 2)
-            qs_chunk_weights(k, 2, xi, ih, kap, idx + c0, n, a);
+            qs_chunk_weights(k, 2, xi, ih, kap, idx + c0, n, w + (c0 - off[i]));
         else
-            qs_chunk_weights(k, 3, xi, ih, kap, idx + c0, n, a);
-        if (!w) {
-            const uint32_t *ic = idx + c0;
-#pragma omp simd reduction(+ : s)
-            for (int c = 0; c < n; ++c)
-                s += a[c] * (u[ic[c]] - ui);
-        }
+            qs_chunk_weights(k, 3, xi, ih, kap, idx + c0, n, w + (c0 - off[i]));
     }
-    if (!w)
-        y[i] = s;
 }
 
-/* Matrix-free apply: each pair's weight recomputed from positions and kappa_I (qs_row). */
+/* The weights of 8 pairs (scaled offsets x, y, z) in the row with coefficients kap, lane by
+ * lane through qs_omega and qs_weight_xyz: the emission's weights bit for bit. */
+PST_KHOT pst_v8 qs_lane_weights(pst_kernel K, int D, double supp, double eps, pst_v8 x,
+                                pst_v8 y, pst_v8 z, const double *kap)
+{
+    pst_v8 d2 = x * x + y * y + (D == 3 ? z * z : pst_v8_splat(0.0)), a;
+#pragma omp simd
+    for (int l = 0; l < PST_LANES; ++l) {
+        double o2, o4;
+        qs_omega(K, D, supp, eps, d2[l], &o2, &o4);
+        a[l] = qs_weight_xyz(D, x[l], y[l], z[l], o2, o4, kap);
+    }
+    return a;
+}
+
+/* Rows [i0, i1) of the matrix-free apply for the constant D and kernel K, 8 pairs at a time
+ * (kernels/lanes.h). Compute-bound: per pair a sqrt, a division, ~19 flops of kernel and ~45
+ * (3D) of monomials and kappa in vector lanes, against 4 bytes of index and a 32-byte row of
+ * the packed array (in cache: the neighbours of Morton-ordered rows overlap). */
+PST_KHOT void qs_lane_rows(const qs_ctx *k, const qs_data *d, int D, pst_kernel K, size_t i0,
+                           size_t i1, double *y)
+{
+    const int64_t *off = k->c.off;
+    const uint32_t *idx = k->c.idx;
+    for (size_t i = i0; i < i1; ++i) {
+        if (k->c.kind[i] == PST_DIRICHLET)
+            continue;
+        const double *kap = d->kap + (size_t)QS_NK(D) * i;
+        pst_lanes L = pst_lanes_row(k->c.xyzu, i, 1.0 / pst_h(&k->c, i));
+        PST_LANES_ROW(L, idx, off[i], off[i + 1], x, yy, z,
+                      qs_lane_weights(K, D, k->supp, k->c.pair_eps, x, yy, z, kap));
+        y[i] = pst_v8_sum(L.acc);
+    }
+}
+
+/* qs_lane_rows instantiated per dimension and kernel, in the widest vector ISA. */
+typedef void (*qs_rows_fn)(const qs_ctx *, const qs_data *, size_t, size_t, double *);
+#define QS_ROWS(D, K, name)                                                                    \
+    PST_ISA_DISPATCH static void qs_rows_##D##_##name(const qs_ctx *k, const qs_data *d,        \
+                                                      size_t i0, size_t i1, double *y)         \
+    {                                                                                          \
+        qs_lane_rows(k, d, D, K, i0, i1, y);                                                   \
+    }
+#define QS_ROWS_K(D)                                                                           \
+    QS_ROWS(D, PST_KERNEL_CUBIC, cubic) QS_ROWS(D, PST_KERNEL_QUINTIC, quintic)                \
+    QS_ROWS(D, PST_KERNEL_WENDLAND_C2, wc2) QS_ROWS(D, PST_KERNEL_WENDLAND_C4, wc4)
+QS_ROWS_K(2)
+QS_ROWS_K(3)
+static const qs_rows_fn qs_rows_table[2][4] = {
+    {qs_rows_2_cubic, qs_rows_2_quintic, qs_rows_2_wc2, qs_rows_2_wc4},
+    {qs_rows_3_cubic, qs_rows_3_quintic, qs_rows_3_wc2, qs_rows_3_wc4}};
+
+/* Matrix-free apply: each pair's weight recomputed from positions and kappa_I, 8 pairs at a
+ * time (qs_lane_rows), blocks of rows per thread. */
 static void qs_apply(const pst_op *op, const double *u, double *y)
 {
+    (void)u; /* read from op->xyzu */
     qs_ctx k = make_ctx(op);
-    const qs_data *d = op->data;
-    const int64_t *off = op->poff;
-    const uint32_t *idx = op->pidx;
-    const int D = k.c.dim;
+    qs_rows_fn rows = qs_rows_table[k.c.dim - 2][k.c.kernel];
+    const size_t n = op->n, block = 256;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i)
-        if (k.c.kind[i] != PST_DIRICHLET)
-            qs_row(&k, d, D, off, idx, i, u, y, NULL);
+    for (size_t b = 0; b < (n + block - 1) / block; ++b)
+        rows(&k, op->data, b * block, b * block + block < n ? b * block + block : n, y);
 }
 
 /* Half-list row i with one h for the cloud: a pair's geometry serves both of its weights
@@ -371,7 +410,7 @@ static void qs_half_rows(const pst_op *op, const int64_t *off, const uint32_t *i
 static void qs_emit_row(const pst_op *op, size_t i, double *w)
 {
     qs_ctx k = make_ctx(op);
-    qs_row(&k, op->data, k.c.dim, op->poff, op->pidx, i, NULL, NULL, w);
+    qs_emit(&k, op->data, k.c.dim, op->poff, op->pidx, i, w);
 }
 
 const pst_scheme pst_scheme_qsfdi = {
@@ -388,11 +427,12 @@ const pst_scheme pst_scheme_qsfdi = {
     .amg_radius = 1.3, /* docs/solving.md: 1.6 h's iterations, 60 % of its entries */
     .precompute = qs_precompute,
     .apply = qs_apply,
+    .lanes = 1,
     .emit_row = qs_emit_row,
     .gradient = pst_qsfdi_gradient,
     .hessian = pst_qsfdi_hessian,
     .interpolate = pst_qsfdi_interpolate,
     .free_data = qs_free,
-    .data_bytes = {64, 120}, /* kap: QS_NK = 8 / 15 doubles */
+    .data_bytes = {96, 152}, /* kap: QS_NK = 8 / 15 doubles; the apply's packed rows: 32 */
     .keep_bytes = {{2 * 64, 3 * 64}, {3 * 120, 6 * 120}}, /* D and QS_NQ kappas per particle */
 };

@@ -26,6 +26,7 @@
 #include "check.h"
 #include "isa.h"
 #include "kernel_common.h"
+#include "lanes.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
 #include "wls.h"
@@ -271,27 +272,52 @@ PST_KHOT void chunk_weights(const wls_ctx *k, int D, int B, pst_kernel K, const 
         t[c] = basis_weight_xyz(D, B, t[c], r[0][c], r[1][c], D == 3 ? r[2][c] : 0.0, lam);
 }
 
-/* Row i into y (apply) or its weights into w (emission), a chunk of neighbours at a time: the
- * weights of a chunk (chunk_weights), then their dot product with u_J - u_I (pst_dot_du). Per
- * neighbour: the gather of x_J and u_J, one sqrt and ~60 flops (3D), all in
- * vector lanes: compute-bound. Measured (3D lpmps, 2 threads, loaded machine) ~2.6 ns per
- * pair and thread (was ~10 with a pair at a time), 3.9-4.8x the stored apply (bench/README.md). */
-PST_KHOT void row_t(const wls_ctx *k, size_t i, const double *u, double *y, double *w, int D,
-                   int B, pst_kernel K)
+/* Row i's weights into w (emission), a chunk of neighbours at a time (chunk_weights). */
+PST_KHOT void emit_t(const wls_ctx *k, size_t i, double *w, int D, int B, pst_kernel K)
 {
     const int nb = D + D * (D + 1) / 2 + B;
-    double xc[3], ih = 1.0 / pst_h(&k->c, i), acc[PST_DOT_LANES] = {0}, t[WLS_CHUNK];
-    const double *lam = k->d->lam + (size_t)nb * i, ui = u ? u[i] : 0.0;
+    double xc[3], ih = 1.0 / pst_h(&k->c, i);
+    const double *lam = k->d->lam + (size_t)nb * i;
     const int64_t e0 = k->c.off[i], e1 = k->c.off[i + 1];
     centre_of(k, D, i, xc);
     for (int64_t c0 = e0; c0 < e1; c0 += WLS_CHUNK) {
         int n = (int)(e1 - c0 < WLS_CHUNK ? e1 - c0 : WLS_CHUNK);
-        chunk_weights(k, D, B, K, xc, ih, lam, k->c.idx + c0, n, w ? w + (c0 - e0) : t);
-        if (!w)
-            pst_dot_du(n, t, k->c.idx + c0, u, ui, acc);
+        chunk_weights(k, D, B, K, xc, ih, lam, k->c.idx + c0, n, w + (c0 - e0));
     }
-    if (!w)
-        y[i] = pst_dot_sum(acc);
+}
+
+/* The weights of 8 pairs (scaled offsets x, y, z) in the row with coefficients lam, lane by
+ * lane with gather's kernel, cut and basis_weight_xyz: the emission's weights bit for bit. */
+PST_KHOT pst_v8 lane_weights(const wls_ctx *k, int D, int B, pst_kernel K, pst_v8 x, pst_v8 y,
+                             pst_v8 z, const double *lam)
+{
+    const double supp = pst_sph_support[K], eps = k->c.pair_eps;
+    pst_v8 q2 = x * x + y * y + (D == 3 ? z * z : pst_v8_splat(0.0)), a;
+#pragma omp simd
+    for (int l = 0; l < PST_LANES; ++l) {
+        double q = sqrt(q2[l]), w = pst_sph_shape(K, D, q, 0);
+        w = ((q < supp) & (q > eps)) ? w : 0.0;
+        a[l] = basis_weight_xyz(D, B, w, x[l], y[l], z[l], lam);
+    }
+    return a;
+}
+
+/* Rows [i0, i1) of the matrix-free apply, 8 pairs at a time (kernels/lanes.h). Per pair: one
+ * sqrt and ~60 flops (3D) in vector lanes against 4 bytes of index and a 32-byte row of the
+ * packed array (in cache): compute-bound. */
+PST_KHOT void lane_rows_t(const wls_ctx *k, size_t i0, size_t i1, double *y, int D, int B,
+                          pst_kernel K)
+{
+    const int nb = D + D * (D + 1) / 2 + B;
+    for (size_t i = i0; i < i1; ++i) {
+        if (k->c.kind[i] == PST_DIRICHLET)
+            continue;
+        const double *lam = k->d->lam + (size_t)nb * i;
+        pst_lanes L = pst_lanes_row(k->c.xyzu, i, 1.0 / pst_h(&k->c, i));
+        PST_LANES_ROW(L, k->c.idx, k->c.off[i], k->c.off[i + 1], x, yy, z,
+                      lane_weights(k, D, B, K, x, yy, z, lam));
+        y[i] = pst_v8_sum(L.acc);
+    }
 }
 
 /* The degree-2 sums of graded lexicographic order (xx xy yy / xx xy xz yy yz zz) in the
@@ -609,18 +635,25 @@ void pst_wls_degrade(pst_op *op, size_t i)
 
 /* ---- apply and emission ------------------------------------------------------------------- */
 
-/* Row i: of the whole list (apply, emission) or, with off != NULL, of the half list (off,
- * idx). */
+/* Row i: its weights into w (emission), or with off != NULL the half-list row of (off, idx);
+ * and rows [i0, i1) of the matrix-free apply (lane_rows_t). */
 typedef void (*row_fn)(const wls_ctx *, size_t, const double *, double *, double *,
                        const int64_t *off, const uint32_t *idx);
+typedef void (*rows_fn)(const wls_ctx *, size_t, size_t, double *);
 #define WLS_ROW(D, B, K)                                                                       \
-    PST_ISA_DISPATCH static void row_##D##_##B##_##K(const wls_ctx *k, size_t i, const double *u, double *y,     \
-                                    double *w, const int64_t *off, const uint32_t *idx)        \
+    PST_ISA_DISPATCH static void row_##D##_##B##_##K(const wls_ctx *k, size_t i, const double *u, \
+                                                     double *y, double *w, const int64_t *off,  \
+                                                     const uint32_t *idx)                       \
     {                                                                                          \
         if (off)                                                                               \
             half_row_t(k, off, idx, i, u, y, D, B, (pst_kernel)K);                             \
         else                                                                                   \
-            row_t(k, i, u, y, w, D, B, (pst_kernel)K);                                         \
+            emit_t(k, i, w, D, B, (pst_kernel)K);                                              \
+    }                                                                                          \
+    PST_ISA_DISPATCH static void rows_##D##_##B##_##K(const wls_ctx *k, size_t i0, size_t i1,  \
+                                                      double *y)                               \
+    {                                                                                          \
+        lane_rows_t(k, i0, i1, y, D, B, (pst_kernel)K);                                        \
     }
 #define WLS_ROW_K(D, B) WLS_ROW(D, B, 0) WLS_ROW(D, B, 1) WLS_ROW(D, B, 2) WLS_ROW(D, B, 3)
 WLS_ROW_K(2, 0)
@@ -631,20 +664,27 @@ static const row_fn row_table[2][2][4] = {
     {{row_2_0_0, row_2_0_1, row_2_0_2, row_2_0_3}, {row_2_1_0, row_2_1_1, row_2_1_2, row_2_1_3}},
     {{row_3_0_0, row_3_0_1, row_3_0_2, row_3_0_3},
      {row_3_1_0, row_3_1_1, row_3_1_2, row_3_1_3}}};
+static const rows_fn rows_table[2][2][4] = {
+    {{rows_2_0_0, rows_2_0_1, rows_2_0_2, rows_2_0_3},
+     {rows_2_1_0, rows_2_1_1, rows_2_1_2, rows_2_1_3}},
+    {{rows_3_0_0, rows_3_0_1, rows_3_0_2, rows_3_0_3},
+     {rows_3_1_0, rows_3_1_1, rows_3_1_2, rows_3_1_3}}};
 
 static row_fn row_for(const wls_ctx *k)
 {
     return row_table[k->c.dim - 2][k->d->typeB][k->d->kernel];
 }
 
+/* Matrix-free apply: blocks of rows per thread, each 8 pairs at a time (lane_rows_t). */
 void pst_wls_apply(const pst_op *op, const double *u, double *y)
 {
+    (void)u; /* read from op->xyzu */
     wls_ctx k = make_ctx(op);
-    row_fn row = row_for(&k);
+    rows_fn rows = rows_table[k.c.dim - 2][k.d->typeB][k.d->kernel];
+    const size_t n = op->n, block = 256;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i)
-        if (k.c.kind[i] != PST_DIRICHLET)
-            row(&k, i, u, y, NULL, NULL, NULL);
+    for (size_t b = 0; b < (n + block - 1) / block; ++b)
+        rows(&k, b * block, b * block + block < n ? b * block + block : n, y);
 }
 
 void pst_wls_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,

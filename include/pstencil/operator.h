@@ -145,8 +145,9 @@ int pst_scheme_degree(const char *name, int lattice);
 int pst_scheme_variants(const char *name);
 
 /* Bytes per particle of a scheme's precomputed data in dimension dim (2 or 3), the largest
- * over its variants, without the stored weights (8 per pattern entry) or the row status
- * (1): what a memory plan counts. 0 for an unknown name or dimension. */
+ * over its variants, with the matrix-free apply's scratch (32 for the schemes that pack
+ * positions and values, pst_op_apply) and without the stored weights (8 per pattern entry)
+ * or the row status (1): what a memory plan counts. 0 for an unknown name or dimension. */
 int pst_scheme_data_bytes(const char *name, int dim);
 
 /* 1 when a scheme's own assembled matrix serves AMG better than the Brookshaw proxy (lsmps;
@@ -191,8 +192,11 @@ void pst_op_destroy(pst_op *op);
 void pst_op_set_progress(pst_op *op, const pst_progress *progress);
 
 /* Matrix-free apply: y = L u, pair geometry recomputed from the positions and the per-particle
- * data. u and y have one value per particle (cloud order) and must not alias. PST_EINVAL for
- * an operator built without rows (opts.laplacian = 0). */
+ * data. u and y have one value per particle (cloud order) and must not alias. The apply is
+ * parallel inside; two applies of one operator must not run at the same time (qsfdi, lpmps,
+ * lsmps and the LV family pack the positions and u into the operator's scratch, 32 bytes per
+ * particle, allocated at the first apply). PST_EINVAL for an operator built without rows
+ * (opts.laplacian = 0), PST_ENOMEM when that scratch cannot be allocated. */
 int pst_op_apply(const pst_op *op, const double *u, double *y);
 
 /* The low-memory layout of the largest clouds (docs/operators.md, "The half-list apply"):

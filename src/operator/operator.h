@@ -35,7 +35,8 @@ typedef struct pst_scheme {
      * operator for derivatives only (opts.laplacian = 0) can skip the precompute */
     int derivatives_standalone;
     /* bytes per particle of the precomputed data (op->data) in 2D and 3D, the largest over
-     * the variants: the planner's memory estimate (pst_scheme_data_bytes) */
+     * the variants, and of op->xyzu (32) for a lane apply: the planner's memory estimate
+     * (pst_scheme_data_bytes) */
     int data_bytes[2];
     /* bytes per particle that opts.keep adds in 2D and 3D, for PST_KEEP_GRADIENT and
      * PST_KEEP_HESSIAN; all 0: the scheme keeps nothing (opts.keep is refused) */
@@ -53,6 +54,9 @@ typedef struct pst_scheme {
     int (*wide_pattern)(const pst_op *op, int64_t **poff, uint32_t **pidx, char *err);
     /* y_I = sum_J w_IJ (u_J - u_I) for every non-Dirichlet row I (threaded). */
     void (*apply)(const pst_op *op, const double *u, double *y);
+    /* 1 when apply reads op->xyzu, the positions and u packed per particle (kernels/lanes.h):
+     * pst_op_apply fills it before the call */
+    int lanes;
     /* The apply on a half list (hoff, hidx: row I holds its neighbours J > I), rows I in
      * [i0, i1): for each pair, y_I += w_IJ (u_J - u_I) unless I is a Dirichlet row and
      * y_J += w_JI (u_I - u_J) unless J is, with the weights of apply (operator_half.c schedules
@@ -111,6 +115,9 @@ struct pst_op {
     int64_t *own_poff;
     uint32_t *own_pidx;
     double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
+    /* (x, y, z, u) per particle for the lane applies (scheme->lanes; z = 0 in 2D), allocated
+     * at the first apply, u rewritten at every apply: like the timer, scratch of the apply */
+    double *xyzu;
     int rows;              /* 1 when the Laplacian rows were precomputed (opts.laplacian)     */
     /* After pst_op_use_half_list: the schedule of the half-list apply and the diagonal, taken
      * from the whole rows before the switch (NULL before). */

@@ -1,0 +1,143 @@
+/* Eight pairs at a time: the matrix-free rows (docs/operators.md, "Matrix-free rows in lanes").
+ *
+ * A row's neighbours are taken 8 at a time. Their positions and values come from the packed
+ * array op->xyzu, (x, y, z, u) per particle (pst_op_apply fills u): four 32-byte loads and a
+ * 4 x 8 transpose in vector shuffles give one vector per component, where per-element
+ * gathers of four separate arrays cost about four times the instructions. The scheme's pair
+ * arithmetic then runs once per lane over these vectors (its own scalar inline functions in a
+ * loop over the 8 lanes, which the compiler turns into vector instructions), so a weight is
+ * bit for bit the one its emission computes pair by pair; and the products w (u_J - u_I) go
+ * into 8 partial sums, neighbour c into lane c mod 8, combined in pst_dot_sum's order: the
+ * apply's row sum is the same for every vector width and thread count.
+ *
+ * The vectors are GCC / Clang vector extensions, not intrinsics: each ISA clone of a
+ * PST_ISA_DISPATCH function compiles them to its own registers (one AVX-512 register, two
+ * AVX2 or four SSE2 registers per vector), with the same IEEE operations in every clone.
+ * Internal; every function is inlined into the row that calls it. */
+#ifndef PSTENCIL_LANES_H
+#define PSTENCIL_LANES_H
+
+#include "kernel_common.h"
+
+#include <string.h>
+
+#if !defined(__clang__) && defined(__GNUC__) && __GNUC__ < 12
+#error "the lane rows need __builtin_shufflevector (GCC 12 or Clang)"
+#endif
+#if !defined(__clang__) && defined(__GNUC__)
+/* 64-byte vectors cross no call boundary here (every function is inlined), so the ABI note
+ * GCC gives for them without AVX-512 does not apply. */
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
+#define PST_LANES 8
+
+typedef double pst_v8 __attribute__((vector_size(64)));
+typedef double pst_v4 __attribute__((vector_size(32)));
+
+PST_KHOT pst_v8 pst_v8_splat(double a) { return (pst_v8){a, a, a, a, a, a, a, a}; }
+
+/* The lanes' sum in pst_dot_sum's order. */
+PST_KHOT double pst_v8_sum(pst_v8 a)
+{
+    return ((a[0] + a[4]) + (a[2] + a[6])) + ((a[1] + a[5]) + (a[3] + a[7]));
+}
+
+/* The packed (x, y, z, u) of particle j. */
+PST_KHOT pst_v4 pst_lanes_particle(const double *xyzu, uint32_t j)
+{
+    pst_v4 p;
+    memcpy(&p, xyzu + 4 * (size_t)j, sizeof p);
+    return p;
+}
+
+/* (x, y, z, u) of the particles j[0..8) as four vectors: each pair of particles (l, l + 4)
+ * in one 64-byte register, then interleaves of pairs of registers (x0 x1 z0 z1 x4 x5 z4 z5
+ * and y0 y1 u0 u1 ...) and a last shuffle into lane order. */
+PST_KHOT void pst_lanes_transpose(const double *xyzu, const uint32_t *j, pst_v8 *x, pst_v8 *y,
+                                  pst_v8 *z, pst_v8 *u)
+{
+    pst_v8 p04 = __builtin_shufflevector(pst_lanes_particle(xyzu, j[0]),
+                                         pst_lanes_particle(xyzu, j[4]), 0, 1, 2, 3, 4, 5, 6, 7);
+    pst_v8 p15 = __builtin_shufflevector(pst_lanes_particle(xyzu, j[1]),
+                                         pst_lanes_particle(xyzu, j[5]), 0, 1, 2, 3, 4, 5, 6, 7);
+    pst_v8 p26 = __builtin_shufflevector(pst_lanes_particle(xyzu, j[2]),
+                                         pst_lanes_particle(xyzu, j[6]), 0, 1, 2, 3, 4, 5, 6, 7);
+    pst_v8 p37 = __builtin_shufflevector(pst_lanes_particle(xyzu, j[3]),
+                                         pst_lanes_particle(xyzu, j[7]), 0, 1, 2, 3, 4, 5, 6, 7);
+    pst_v8 l01 = __builtin_shufflevector(p04, p15, 0, 8, 2, 10, 4, 12, 6, 14);
+    pst_v8 h01 = __builtin_shufflevector(p04, p15, 1, 9, 3, 11, 5, 13, 7, 15);
+    pst_v8 l23 = __builtin_shufflevector(p26, p37, 0, 8, 2, 10, 4, 12, 6, 14);
+    pst_v8 h23 = __builtin_shufflevector(p26, p37, 1, 9, 3, 11, 5, 13, 7, 15);
+    *x = __builtin_shufflevector(l01, l23, 0, 1, 8, 9, 4, 5, 12, 13);
+    *z = __builtin_shufflevector(l01, l23, 2, 3, 10, 11, 6, 7, 14, 15);
+    *y = __builtin_shufflevector(h01, h23, 0, 1, 8, 9, 4, 5, 12, 13);
+    *u = __builtin_shufflevector(h01, h23, 2, 3, 10, 11, 6, 7, 14, 15);
+}
+
+/* One row in lanes: its centre and value, 1/h, and the partial sums. */
+typedef struct {
+    const double *xyzu;
+    size_t i;
+    pst_v8 xi, yi, zi, ui, ih, acc;
+} pst_lanes;
+
+PST_KHOT pst_lanes pst_lanes_row(const double *xyzu, size_t i, double ih)
+{
+    const double *p = xyzu + 4 * i;
+    return (pst_lanes){.xyzu = xyzu, .i = i, .xi = pst_v8_splat(p[0]), .yi = pst_v8_splat(p[1]),
+                       .zi = pst_v8_splat(p[2]), .ui = pst_v8_splat(p[3]),
+                       .ih = pst_v8_splat(ih), .acc = pst_v8_splat(0.0)};
+}
+
+/* The pairs idx[e .. e + 8) of the row (fewer before e1: the missing lanes are the row's own
+ * particle, a pair at distance 0, which every scheme's rule counts as degenerate with weight
+ * 0 and whose u_J - u_I is 0): the scaled offsets (x_J - x_I) / h_I as the rows' gathers form
+ * them, and u_J - u_I. */
+PST_KHOT void pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx, int64_t e, int64_t e1,
+                              pst_v8 *x, pst_v8 *y, pst_v8 *z, pst_v8 *du)
+{
+    uint32_t pad[PST_LANES];
+    const uint32_t *j = idx + e;
+    if (e1 - e < PST_LANES) {
+        for (int l = 0; l < PST_LANES; ++l)
+            pad[l] = l < e1 - e ? j[l] : (uint32_t)L->i;
+        j = pad;
+    }
+    pst_v8 X, Y, Z, U;
+    pst_lanes_transpose(L->xyzu, j, &X, &Y, &Z, &U);
+    *x = (X - L->xi) * L->ih;
+    *y = (Y - L->yi) * L->ih;
+    *z = (Z - L->zi) * L->ih;
+    *du = U - L->ui;
+}
+
+/* The pairs idx[e0 .. e1) of row L into L.acc: for each block of 8, `weights`, an expression
+ * in the pst_v8 scaled offsets x, y, z (the names given), times u_J - u_I. Two blocks per step:
+ * independent chains the core overlaps; the sums stay in lane order. */
+#define PST_LANES_ROW(L, idx, e0, e1, x, y, z, weights)                                        \
+    do {                                                                                       \
+        int64_t pst_e_ = (e0);                                                                 \
+        for (; pst_e_ + 2 * PST_LANES <= (e1); pst_e_ += 2 * PST_LANES) {                      \
+            pst_v8 pst_a_, pst_du_, pst_a2_, pst_du2_;                                         \
+            {                                                                                  \
+                pst_v8 x, y, z;                                                                \
+                pst_lanes_pairs(&(L), idx, pst_e_, e1, &x, &y, &z, &pst_du_);                  \
+                pst_a_ = (weights);                                                            \
+            }                                                                                  \
+            {                                                                                  \
+                pst_v8 x, y, z;                                                                \
+                pst_lanes_pairs(&(L), idx, pst_e_ + PST_LANES, e1, &x, &y, &z, &pst_du2_);     \
+                pst_a2_ = (weights);                                                           \
+            }                                                                                  \
+            (L).acc += pst_a_ * pst_du_;                                                       \
+            (L).acc += pst_a2_ * pst_du2_;                                                     \
+        }                                                                                      \
+        for (; pst_e_ < (e1); pst_e_ += PST_LANES) {                                           \
+            pst_v8 x, y, z, pst_du_;                                                           \
+            pst_lanes_pairs(&(L), idx, pst_e_, e1, &x, &y, &z, &pst_du_);                      \
+            (L).acc += (weights) * pst_du_;                                                    \
+        }                                                                                      \
+    } while (0)
+
+#endif /* PSTENCIL_LANES_H */
