@@ -34,6 +34,7 @@
 
 typedef double pst_v8 __attribute__((vector_size(64)));
 typedef double pst_v4 __attribute__((vector_size(32)));
+typedef int64_t pst_v8i __attribute__((vector_size(64))); /* a comparison's lanes: 0 or -1 */
 
 PST_KHOT pst_v8 pst_v8_splat(double a) { return (pst_v8){a, a, a, a, a, a, a, a}; }
 
@@ -93,11 +94,11 @@ PST_KHOT pst_lanes pst_lanes_row(const double *xyzu, size_t i, double ih)
 /* The pairs idx[e .. e + 8) of the row (fewer before e1: the missing lanes are the row's own
  * particle, a pair at distance 0, which every scheme's rule counts as degenerate with weight
  * 0 and whose u_J - u_I is 0): the scaled offsets (x_J - x_I) / h_I as the rows' gathers form
- * them, and u_J - u_I. */
-PST_KHOT void pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx, int64_t e, int64_t e1,
-                              pst_v8 *x, pst_v8 *y, pst_v8 *z, pst_v8 *du)
+ * them, and u_J - u_I. Returns the 8 neighbours (idx + e, or pad filled). */
+PST_KHOT const uint32_t *pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx, int64_t e,
+                                         int64_t e1, uint32_t pad[PST_LANES], pst_v8 *x,
+                                         pst_v8 *y, pst_v8 *z, pst_v8 *du)
 {
-    uint32_t pad[PST_LANES];
     const uint32_t *j = idx + e;
     if (e1 - e < PST_LANES) {
         for (int l = 0; l < PST_LANES; ++l)
@@ -110,33 +111,64 @@ PST_KHOT void pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx, int64_t e
     *y = (Y - L->yi) * L->ih;
     *z = (Z - L->zi) * L->ih;
     *du = U - L->ui;
+    return j;
+}
+
+/* The neighbours idx[0..n) of row L into arrays, for the rows that work a chunk at a time:
+ * the scaled offsets at x[a * stride + c] (a < 3) and u_J - u_I at du[c]. Writes up to n
+ * rounded up to a multiple of 8 (the padded lanes). */
+PST_KHOT void pst_lanes_gather(const pst_lanes *L, const uint32_t *idx, int n, double *x,
+                               int stride, double *du)
+{
+    for (int c = 0; c < n; c += PST_LANES) {
+        uint32_t pad[PST_LANES];
+        pst_v8 X, Y, Z, U;
+        pst_lanes_pairs(L, idx, c, n, pad, &X, &Y, &Z, &U);
+        memcpy(x + c, &X, sizeof X);
+        memcpy(x + stride + c, &Y, sizeof Y);
+        memcpy(x + 2 * stride + c, &Z, sizeof Z);
+        memcpy(du + c, &U, sizeof U);
+    }
+}
+
+/* acc[c mod 8] += t[c] du[c] for c < n: pst_dot_du's lanes, with u_J - u_I given. */
+PST_KHOT void pst_lanes_dot(int n, const double *t, const double *du, double acc[PST_LANES])
+{
+    int c = 0;
+    for (; c + PST_LANES <= n; c += PST_LANES)
+        for (int l = 0; l < PST_LANES; ++l)
+            acc[l] += t[c + l] * du[c + l];
+    for (; c < n; ++c)
+        acc[c % PST_LANES] += t[c] * du[c];
 }
 
 /* The pairs idx[e0 .. e1) of row L into L.acc: for each block of 8, `weights`, an expression
- * in the pst_v8 scaled offsets x, y, z (the names given), times u_J - u_I. Two blocks per step:
- * independent chains the core overlaps; the sums stay in lane order. */
-#define PST_LANES_ROW(L, idx, e0, e1, x, y, z, weights)                                        \
+ * in the neighbours j (const uint32_t *) and the pst_v8 scaled offsets x, y, z (the names
+ * given), times u_J - u_I. Two blocks per step: independent chains the core overlaps; the
+ * sums stay in lane order. */
+#define PST_LANES_BLOCK(L, idx, e, e1, j, x, y, z, weights, a, du)                              \
+    do {                                                                                       \
+        uint32_t pst_pad_[PST_LANES];                                                          \
+        pst_v8 x, y, z;                                                                        \
+        const uint32_t *j = pst_lanes_pairs(&(L), idx, e, e1, pst_pad_, &x, &y, &z, &(du));    \
+        (void)j;                                                                               \
+        (a) = (weights);                                                                       \
+    } while (0)
+#define PST_LANES_ROW(L, idx, e0, e1, j, x, y, z, weights)                                     \
     do {                                                                                       \
         int64_t pst_e_ = (e0);                                                                 \
         for (; pst_e_ + 2 * PST_LANES <= (e1); pst_e_ += 2 * PST_LANES) {                      \
             pst_v8 pst_a_, pst_du_, pst_a2_, pst_du2_;                                         \
-            {                                                                                  \
-                pst_v8 x, y, z;                                                                \
-                pst_lanes_pairs(&(L), idx, pst_e_, e1, &x, &y, &z, &pst_du_);                  \
-                pst_a_ = (weights);                                                            \
-            }                                                                                  \
-            {                                                                                  \
-                pst_v8 x, y, z;                                                                \
-                pst_lanes_pairs(&(L), idx, pst_e_ + PST_LANES, e1, &x, &y, &z, &pst_du2_);     \
-                pst_a2_ = (weights);                                                           \
-            }                                                                                  \
+            PST_LANES_BLOCK(L, idx, pst_e_, e1, j, x, y, z, weights, pst_a_, pst_du_);         \
+            PST_LANES_BLOCK(L, idx, pst_e_ + PST_LANES, e1, j, x, y, z, weights, pst_a2_,      \
+                            pst_du2_);                                                         \
             (L).acc += pst_a_ * pst_du_;                                                       \
             (L).acc += pst_a2_ * pst_du2_;                                                     \
         }                                                                                      \
         for (; pst_e_ < (e1); pst_e_ += PST_LANES) {                                           \
-            pst_v8 x, y, z, pst_du_;                                                           \
-            pst_lanes_pairs(&(L), idx, pst_e_, e1, &x, &y, &z, &pst_du_);                      \
-            (L).acc += (weights) * pst_du_;                                                    \
+            pst_v8 pst_a_, pst_du_;                                                            \
+            PST_LANES_BLOCK(L, idx, pst_e_, e1, j, x, y, z, weights, pst_a_, pst_du_);         \
+            (L).acc += pst_a_ * pst_du_;                                                       \
         }                                                                                      \
     } while (0)
 

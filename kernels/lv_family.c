@@ -21,6 +21,7 @@
  * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN. */
 #include "isa.h"
 #include "kernel_common.h"
+#include "lanes.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
 #include "wls.h"
@@ -227,18 +228,23 @@ PST_KHOT void chunk_kernel(pst_kernel K, int D, int needW, int n, const double *
 }
 
 /* Separate loops, so that the sqrt (the library is built without math errno) and the kernel
- * (one loop per kernel, the switch outside) vectorise. */
+ * (one loop per kernel, the switch outside) vectorise. The offsets come from the positions,
+ * or with L (the matrix-free apply) from its packed rows (pst_lanes_gather), u_J - u_I with
+ * them into du. */
 PST_KHOT void chunk_geometry(const lv_ctx *k, int D, int needW, size_t i, const uint32_t *idx,
-                             int n, lv_chunk *ch)
+                             int n, lv_chunk *ch, const pst_lanes *L, double *du)
 {
     double d[LV_CHUNK], ht[LV_CHUNK], hi = pst_h(&k->c, i);
+    if (L)
+        pst_lanes_gather(L, idx, n, ch->x[0], LV_CHUNK, du);
+    else
+        for (int c = 0; c < n; ++c)
+            for (int b = 0; b < D; ++b)
+                ch->x[b][c] = k->c.x[b][idx[c]] - k->c.x[b][i];
     for (int c = 0; c < n; ++c) {
         double d2 = 0;
-        for (int b = 0; b < D; ++b) {
-            double xb = k->c.x[b][idx[c]] - k->c.x[b][i];
-            ch->x[b][c] = xb;
-            d2 += xb * xb;
-        }
+        for (int b = 0; b < D; ++b)
+            d2 += ch->x[b][c] * ch->x[b][c];
         ch->d2[c] = d2;
     }
     if (k->c.h)
@@ -279,13 +285,14 @@ PST_KHOT void chunk_row_weights(const lv_ctx *k, int D, int G, int T, int H, siz
                            ch->a[c], ch->W[c], mi, &mj[0][c], &F[c]);
 }
 
-/* The weights of row i for its neighbours idx[0..n) into t. */
+/* The weights of row i for its neighbours idx[0..n) into t (with L: chunk_geometry's). */
 PST_KHOT void chunk_weights(const lv_ctx *k, int D, int G, int T, int H, size_t i,
-                            const uint32_t *idx, int n, double *t)
+                            const uint32_t *idx, int n, double *t, const pst_lanes *L,
+                            double *du)
 {
     lv_chunk ch;
     double mi[3], mn[3], F[LV_CHUNK];
-    chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, idx, n, &ch);
+    chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, idx, n, &ch, L, du);
     row_mobility(k, D, T, i, mi, mn);
     if (k->c.kind[i] == PST_NEUMANN) {
 #pragma omp simd
@@ -301,19 +308,23 @@ PST_KHOT void chunk_weights(const lv_ctx *k, int D, int G, int T, int H, size_t 
         t[c] = F[c] == 0.0 ? 0.0 : t[c];
 }
 
-/* Row i into y (apply) or its weights into w (emission), a chunk of neighbours at a time: the
- * chunk's geometry and weights in vector lanes (chunk_weights), then their dot product with
- * u_J - u_I (pst_dot_du). */
+/* Row i into y (apply, from the packed rows: pst_lanes_gather) or its weights into w
+ * (emission, from the positions), a chunk of neighbours at a time: the chunk's geometry and
+ * weights in vector lanes (chunk_weights), then their dot product with u_J - u_I in
+ * pst_dot_du's lanes. */
 PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
-                  const double *u, double *y, double *w, int D, int G, int T, int H)
+                    double *y, double *w, int D, int G, int T, int H)
 {
-    double acc[PST_DOT_LANES] = {0}, t[LV_CHUNK], ui = u ? u[i] : 0.0;
+    double acc[PST_LANES] = {0}, t[LV_CHUNK], du[LV_CHUNK];
     for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += LV_CHUNK) {
         int n = (int)(off[i + 1] - c0 < LV_CHUNK ? off[i + 1] - c0 : LV_CHUNK);
-        double *wt = w ? w + (c0 - off[i]) : t;
-        chunk_weights(k, D, G, T, H, i, idx + c0, n, wt);
-        if (!w)
-            pst_dot_du(n, wt, idx + c0, u, ui, acc);
+        if (w) {
+            chunk_weights(k, D, G, T, H, i, idx + c0, n, w + (c0 - off[i]), NULL, NULL);
+        } else {
+            pst_lanes L = pst_lanes_row(k->c.xyzu, i, 1.0);
+            chunk_weights(k, D, G, T, H, i, idx + c0, n, t, &L, du);
+            pst_lanes_dot(n, t, du, acc);
+        }
     }
     if (!w)
         y[i] = pst_dot_sum(acc);
@@ -341,7 +352,7 @@ typedef void (*row_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t
         if (half)                                                                              \
             half_row_t(k, off, idx, i, u, y, D, G, T, H);                                      \
         else                                                                                   \
-            row_t(k, off, idx, i, u, y, w, D, G, T, H);                                        \
+            row_t(k, off, idx, i, y, w, D, G, T, H);                                           \
     }
 #define LV_ROWS_H(D, G) LV_ROW(D, G, 0, 0) LV_ROW(D, G, 0, 1) LV_ROW(D, G, 1, 0) LV_ROW(D, G, 1, 1)
 #define LV_ROWS_G(D) LV_ROWS_H(D, 1) LV_ROWS_H(D, 2) LV_ROWS_H(D, 3) LV_ROWS_H(D, 4)
@@ -447,7 +458,7 @@ PST_KHOT void row_sums_t(const lv_ctx *k, int D, int G, size_t i, const int64_t 
         const uint32_t *ic = idx + c0;
         lv_chunk ch;
         double g[3][LV_CHUNK], F[LV_CHUNK], v[LV_CHUNK], vx[3][LV_CHUNK], t[LV_CHUNK];
-        chunk_geometry(k, D, needW, i, ic, n, &ch);
+        chunk_geometry(k, D, needW, i, ic, n, &ch, NULL, NULL);
 #pragma omp simd
         for (int c = 0; c < n; ++c) {
             double gc[3];
@@ -786,6 +797,7 @@ static void lv_degrade(pst_op *op, size_t i)
                            .min_neighbours = MIN,                                             \
                            .precompute = PRE,                                                 \
                            .apply = lv_apply,                                                 \
+                           .lanes = 1,                                                        \
                            .half_rows = lv_half_rows,                                         \
                            .emit_row = lv_emit_row,                                           \
                            .scale = lv_scale,                                                 \
@@ -793,7 +805,8 @@ static void lv_degrade(pst_op *op, size_t i)
                            .lemma3 = LEMMA,                                                   \
                            .degrade = DEGRADE,                                                \
                            .free_data = lv_free,                                              \
-                           .data_bytes = {96, 160}} /* C, zeta, eta, s, nu, grad nu */
+                           .data_bytes = {128, 192}} /* C, zeta, eta, s, nu, grad nu; the    \
+                                                        apply's packed rows (32) */
 
 LV_SCHEME(pst_scheme_brookshaw, "brookshaw", "Brookshaw 1985, m_I + m_J (LV eq. 27)",
           "no neighbour -> zero row (the Brookshaw row is the other schemes' last resort)", 0, 0,

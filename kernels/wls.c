@@ -314,7 +314,7 @@ PST_KHOT void lane_rows_t(const wls_ctx *k, size_t i0, size_t i1, double *y, int
             continue;
         const double *lam = k->d->lam + (size_t)nb * i;
         pst_lanes L = pst_lanes_row(k->c.xyzu, i, 1.0 / pst_h(&k->c, i));
-        PST_LANES_ROW(L, k->c.idx, k->c.off[i], k->c.off[i + 1], x, yy, z,
+        PST_LANES_ROW(L, k->c.idx, k->c.off[i], k->c.off[i + 1], j, x, yy, z,
                       lane_weights(k, D, B, K, x, yy, z, lam));
         y[i] = pst_v8_sum(L.acc);
     }
