@@ -10,39 +10,15 @@
  * into 8 partial sums, neighbour c into lane c mod 8, combined in pst_dot_sum's order: the
  * apply's row sum is the same for every vector width and thread count.
  *
- * The vectors are GCC / Clang vector extensions, not intrinsics: each ISA clone of a
- * PST_ISA_DISPATCH function compiles them to its own registers (one AVX-512 register, two
- * AVX2 or four SSE2 registers per vector), with the same IEEE operations in every clone.
- * Internal; every function is inlined into the row that calls it. */
+ * The vectors are those of src/core/lanes8.h. Internal; every function is inlined into the
+ * row that calls it. */
 #ifndef PSTENCIL_LANES_H
 #define PSTENCIL_LANES_H
 
 #include "kernel_common.h"
+#include "lanes8.h"
 
 #include <string.h>
-
-#if !defined(__clang__) && defined(__GNUC__) && __GNUC__ < 12
-#error "the lane rows need __builtin_shufflevector (GCC 12 or Clang)"
-#endif
-#if !defined(__clang__) && defined(__GNUC__)
-/* 64-byte vectors cross no call boundary here (every function is inlined), so the ABI note
- * GCC gives for them without AVX-512 does not apply. */
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
-
-#define PST_LANES 8
-
-typedef double pst_v8 __attribute__((vector_size(64)));
-typedef double pst_v4 __attribute__((vector_size(32)));
-typedef int64_t pst_v8i __attribute__((vector_size(64))); /* a comparison's lanes: 0 or -1 */
-
-PST_KHOT pst_v8 pst_v8_splat(double a) { return (pst_v8){a, a, a, a, a, a, a, a}; }
-
-/* The lanes' sum in pst_dot_sum's order. */
-PST_KHOT double pst_v8_sum(pst_v8 a)
-{
-    return ((a[0] + a[4]) + (a[2] + a[6])) + ((a[1] + a[5]) + (a[3] + a[7]));
-}
 
 /* The packed (x, y, z, u) of particle j. */
 PST_KHOT pst_v4 pst_lanes_particle(const double *xyzu, uint32_t j)

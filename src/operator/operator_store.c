@@ -5,6 +5,7 @@
 #include "operator.h"
 #include "check.h"
 #include "isa.h"
+#include "lanes8.h"
 
 #include <float.h>
 #include <math.h>
@@ -173,76 +174,82 @@ int pst_op_store_with(pst_op *op, const pst_op_store_opts *o, char *err)
 
 int pst_op_store(pst_op *op) { return pst_op_store_with(op, NULL, NULL); }
 
-/* Rows [i0, i1) from float weights, summed in double. Each weight is widened exactly, so the
- * only difference from the double store is the weights' own rounding (2^-24 relative). */
-static PST_ISA_DISPATCH void rows_float(const int64_t *off, const uint32_t *idx, const float *w,
-                                        const uint8_t *kind, const double *u, double *y,
-                                        size_t i0, size_t i1)
+/* Rows [i0, i1) of the stored apply from the double weights wd or, with single, the float
+ * weights wf (a float weight is widened exactly, so the float store differs only by its
+ * weights' rounding, 2^-24 relative). 8 pairs at a time (src/core/lanes8.h): the weights as
+ * one vector load, u_J as element loads, times u_J - u_I into 8 partial sums; the row's last
+ * pairs (fewer than 8) go to lanes 0, 1, ... as scalars: neighbour c in lane c mod 8, the lanes
+ * combined in pst_v8_sum's order, so the sum is the same for every ISA and thread count.
+ * Bound: per-core loads at 2 threads here (8 index loads, 8 element loads merged into one
+ * vector, one weight load per 8 pairs), near the memory's bandwidth: measured 3D qsfdi, 2
+ * threads, best of 21 beside a triad of the same bytes (2026-12-04, bench/README.md): 0.77-0.83
+ * of the triad, against 0.67-0.72 for the simd reduction it replaces (whose partial sums GCC
+ * kept on the stack), lv (55 pairs per row) 0.55-0.58 against 0.50-0.57. Dirichlet rows (their
+ * stored weights are zeros) are the identity and skip the stream: a boundary layer is 6 % of
+ * the rows of a 100^3 cloud and 17 % of a 33^3 one. */
+static inline __attribute__((always_inline)) void
+stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *wd,
+            const float *wf, const uint8_t *kind, const double *u, double *y, size_t i0,
+            size_t i1)
 {
     for (size_t i = i0; i < i1; ++i) {
         if (kind[i] == PST_DIRICHLET) {
             y[i] = u[i];
             continue;
         }
-        double ui = u[i], s = 0;
-#pragma omp simd reduction(+ : s)
-        for (int64_t k = off[i]; k < off[i + 1]; ++k)
-            s += (double)w[k] * (u[idx[k]] - ui);
-        y[i] = s;
+        const double ui = u[i];
+        const pst_v8 uiv = pst_v8_splat(ui);
+        pst_v8 acc = pst_v8_splat(0.0);
+        int64_t k = off[i];
+        for (; k + PST_LANES <= off[i + 1]; k += PST_LANES) {
+            pst_v8 wv, uj;
+            if (single)
+                for (int l = 0; l < PST_LANES; ++l)
+                    wv[l] = (double)wf[k + l];
+            else
+                memcpy(&wv, wd + k, sizeof wv);
+            for (int l = 0; l < PST_LANES; ++l)
+                uj[l] = u[idx[k + l]];
+            acc += wv * (uj - uiv);
+        }
+        for (int l = 0; k < off[i + 1]; ++k, ++l)
+            acc[l] += (single ? (double)wf[k] : wd[k]) * (u[idx[k]] - ui);
+        y[i] = pst_v8_sum(acc);
     }
 }
 
-#define FLOAT_BLOCK 1024 /* rows per call of rows_float: its dispatch costs < 0.1 % of a block */
+PST_ISA_DISPATCH static void rows_double(const int64_t *off, const uint32_t *idx,
+                                         const double *w, const uint8_t *kind, const double *u,
+                                         double *y, size_t i0, size_t i1)
+{
+    stored_rows(off, idx, 0, w, NULL, kind, u, y, i0, i1);
+}
 
-/* Stored apply, y_I = sum_J w_IJ (u_J - u_I): the matrix-free apply's weights, summed in SIMD
- * partial sums, so the two paths agree to rounding. Per pair 8 bytes of weight (4 in float) +
- * 4 of index streamed, u_J gathered (Morton order keeps it in cache); about 12 (8) bytes and
- * 3 flops. */
+PST_ISA_DISPATCH static void rows_float(const int64_t *off, const uint32_t *idx, const float *w,
+                                        const uint8_t *kind, const double *u, double *y,
+                                        size_t i0, size_t i1)
+{
+    stored_rows(off, idx, 1, NULL, w, kind, u, y, i0, i1);
+}
+
+#define STORED_BLOCK 1024 /* rows per call of a worker: its dispatch costs < 0.1 % of a block */
+
+/* Stored apply, y_I = sum_J w_IJ (u_J - u_I): the matrix-free apply's weights, so the two
+ * paths agree to rounding. Per pair 8 bytes of weight (4 in float) + 4 of index streamed, u_J
+ * gathered (Morton order keeps it in cache); about 12 (8) bytes and 3 flops. */
 int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
 {
     if (!pst_op_has_store(op))
         return PST_EINVAL;
     double t0 = omp_get_wtime();
-    const int64_t *off = op->poff;
-    const uint32_t *idx = op->pidx;
-    const uint8_t *kind = op->kind;
-    if (op->w32) {
-        /* Bound: per-core loads (the u_J gathers are scalar loads: GCC emits no gather
-         * instructions for these targets), not the bandwidth. Measured 2026-12-02, 10^6
-         * particles, alternated with the double loop below (load 0.3-1): 3D qsfdi (187 pairs
-         * per row) 0.72-0.81 of the double store's time at 1 and 2 threads, 3D lv (55) 0.86;
-         * 2D lv (17) 1.1x slower: short rows pay the wide reduction's epilogue. The
-         * dispatched worker's wide simd reduction is what makes the float stream pay in 3D;
-         * the same dispatch gains nothing on the double loop. */
-        size_t nb = (op->n + FLOAT_BLOCK - 1) / FLOAT_BLOCK;
+    size_t nb = (op->n + STORED_BLOCK - 1) / STORED_BLOCK;
 #pragma omp parallel for schedule(static)
-        for (size_t b = 0; b < nb; ++b) {
-            size_t i1 = (b + 1) * FLOAT_BLOCK < op->n ? (b + 1) * FLOAT_BLOCK : op->n;
-            rows_float(off, idx, op->w32, kind, u, y, b * FLOAT_BLOCK, i1);
-        }
-        pst_op_record_apply(op, t0);
-        return PST_OK;
-    }
-    const double *w = op->w;
-    /* Bound: per-core load throughput (12 bytes of w and idx per pair plus the u gather), not
-     * the machine's bandwidth on 2 cores (bench/README.md). The simd reduction splits the row
-     * sum into independent partial sums, so consecutive pairs no longer wait on one add chain:
-     * about 20 % faster than the sequential sum, and still deterministic for any thread count.
-     * A dispatched per-block worker (x86-64-v3/v4), fixed 4/8/16-lane partial sums and masked
-     * row tails measured within noise of this loop (2026-12-02, bench/README.md), so it stays.
-     * Dirichlet rows (their stored weights are zeros) are the identity and skip the stream: a
-     * boundary layer is 6 % of the rows of a 100^3 cloud and 17 % of a 33^3 one. */
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i) {
-        if (kind[i] == PST_DIRICHLET) {
-            y[i] = u[i];
-            continue;
-        }
-        double ui = u[i], s = 0;
-#pragma omp simd reduction(+ : s)
-        for (int64_t k = off[i]; k < off[i + 1]; ++k)
-            s += w[k] * (u[idx[k]] - ui);
-        y[i] = s;
+    for (size_t b = 0; b < nb; ++b) {
+        size_t i0 = b * STORED_BLOCK, i1 = i0 + STORED_BLOCK < op->n ? i0 + STORED_BLOCK : op->n;
+        if (op->w)
+            rows_double(op->poff, op->pidx, op->w, op->kind, u, y, i0, i1);
+        else
+            rows_float(op->poff, op->pidx, op->w32, op->kind, u, y, i0, i1);
     }
     pst_op_record_apply(op, t0);
     return PST_OK;
