@@ -439,68 +439,94 @@ PST_KHOT double chunk_dot(int n, const double *restrict p, const double *restric
     return pst_dot_sum(acc);
 }
 
-/* The sums of row i for constant D and G, a chunk of neighbours at a time: the chunk's geometry
- * and gradients in vector lanes (chunk_geometry, gradient_from: the applies' arithmetic), then
- * each sum as its own vectorised dot product over the chunk. The first pass without xi, the
- * Gamma* pass with it. Per neighbour (3D, first pass): the gather, a sqrt, a division, ~25
- * flops of kernel and gradient and 2 per each of the 21 sums (Gamma is symmetric: its upper
- * triangle, mirrored) - compute-bound, like qsfdi's moments. */
-PST_KHOT void row_sums_t(const lv_ctx *k, int D, int G, size_t i, const int64_t *off,
-                         const uint32_t *idx, const double *xi, lv_sums *s)
+/* One chunk of a row's pairs as the precompute's sums read them: the geometry, the
+ * gradients g and F (gradient_from, the applies' arithmetic), v = V_J and v x. */
+typedef struct {
+    lv_chunk ch;
+    double g[3][LV_CHUNK], F[LV_CHUNK], v[LV_CHUNK], vx[3][LV_CHUNK];
+} lv_pairs;
+
+PST_KHOT void chunk_pairs(const lv_ctx *k, int D, int G, size_t i, const uint32_t *ic, int n,
+                          lv_pairs *p)
 {
-    const int needW = G == PST_GRAD_G2 || G == PST_GRAD_G4;
+    chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, ic, n, &p->ch, NULL, NULL);
+#pragma omp simd
+    for (int c = 0; c < n; ++c) {
+        double gc[3];
+        p->F[c] = gradient_from(k, D, G, i, ic[c], &p->ch.x[0][c], LV_CHUNK, p->ch.d2[c],
+                                p->ch.a[c], p->ch.W[c], gc);
+        for (int b = 0; b < D; ++b)
+            p->g[b][c] = gc[b];
+    }
+    for (int c = 0; c < n; ++c)
+        p->v[c] = k->c.V[ic[c]];
+    for (int a = 0; a < D; ++a)
+        for (int c = 0; c < n; ++c)
+            p->vx[a][c] = p->v[c] * p->ch.x[a][c];
+}
+
+/* The first pass's sums of a chunk (A, N, N~, Gamma: the upper triangle of the symmetric
+ * Gamma), added to s. */
+PST_KHOT void chunk_sums(int D, int n, const lv_pairs *p, lv_sums *s)
+{
+    double t[LV_CHUNK];
+    for (int c = 0; c < n; ++c)
+        t[c] = p->v[c] * p->F[c];
+    for (int a = 0; a < D; ++a) {
+        s->N[a] += chunk_dot(n, p->v, p->g[a]);
+        s->Nt[a] += chunk_dot(n, t, p->ch.x[a]);
+        for (int b = 0; b < D; ++b)
+            s->A[a * D + b] += chunk_dot(n, p->vx[a], p->g[b]);
+        double tx[LV_CHUNK];
+        for (int c = 0; c < n; ++c)
+            tx[c] = t[c] * p->ch.x[a][c];
+        for (int b = a; b < D; ++b)
+            s->G[a * D + b] += chunk_dot(n, tx, p->ch.x[b]);
+    }
+}
+
+/* Gamma* of a chunk, sum V x (g - x (xi . g))^T, added to s->Gs. */
+PST_KHOT void chunk_star(int D, int n, const lv_pairs *p, const double *xi, lv_sums *s)
+{
+    double t[LV_CHUNK];
+    for (int c = 0; c < n; ++c) {
+        double xg = 0;
+        for (int b = 0; b < D; ++b)
+            xg += xi[b] * p->g[b][c];
+        t[c] = xg;
+    }
+    for (int b = 0; b < D; ++b) {
+        double gb[LV_CHUNK];
+        for (int c = 0; c < n; ++c)
+            gb[c] = p->g[b][c] - p->ch.x[b][c] * t[c];
+        for (int a = 0; a < D; ++a)
+            s->Gs[a * D + b] += chunk_dot(n, p->vx[a], gb);
+    }
+}
+
+/* The sums of row i for constant D and G, a chunk of neighbours at a time: the chunk's pairs
+ * in vector lanes (chunk_pairs), then each sum as its own vectorised dot product over the
+ * chunk; the first pass without xi, the Gamma* pass with it. A row of one chunk (3D ~55
+ * neighbours) keeps its pairs in *p from the first pass for the second, which then costs its
+ * 9 sums only. Per neighbour (3D, first pass): the gather, a sqrt, a division, ~25 flops of
+ * kernel and gradient and 2 per each of the 21 sums (Gamma is symmetric: its upper triangle,
+ * mirrored) - compute-bound, like qsfdi's moments. */
+PST_KHOT void row_sums_t(const lv_ctx *k, int D, int G, size_t i, const int64_t *off,
+                         const uint32_t *idx, const double *xi, lv_sums *s, lv_pairs *p)
+{
     if (xi)
         memset(s->Gs, 0, sizeof s->Gs);
     else
         memset(s, 0, offsetof(lv_sums, Gs));
+    const int one_chunk = off[i + 1] - off[i] <= LV_CHUNK;
     for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += LV_CHUNK) {
         const int n = (int)(off[i + 1] - c0 < LV_CHUNK ? off[i + 1] - c0 : LV_CHUNK);
-        const uint32_t *ic = idx + c0;
-        lv_chunk ch;
-        double g[3][LV_CHUNK], F[LV_CHUNK], v[LV_CHUNK], vx[3][LV_CHUNK], t[LV_CHUNK];
-        chunk_geometry(k, D, needW, i, ic, n, &ch, NULL, NULL);
-#pragma omp simd
-        for (int c = 0; c < n; ++c) {
-            double gc[3];
-            F[c] = gradient_from(k, D, G, i, ic[c], &ch.x[0][c], LV_CHUNK, ch.d2[c], ch.a[c],
-                                 ch.W[c], gc);
-            for (int b = 0; b < D; ++b)
-                g[b][c] = gc[b];
-        }
-        for (int c = 0; c < n; ++c)
-            v[c] = k->c.V[ic[c]];
-        for (int a = 0; a < D; ++a)
-            for (int c = 0; c < n; ++c)
-                vx[a][c] = v[c] * ch.x[a][c];
-        if (xi) {
-            for (int c = 0; c < n; ++c) {
-                double xg = 0;
-                for (int b = 0; b < D; ++b)
-                    xg += xi[b] * g[b][c];
-                t[c] = xg;
-            }
-            for (int b = 0; b < D; ++b) {
-                double gb[LV_CHUNK];
-                for (int c = 0; c < n; ++c)
-                    gb[c] = g[b][c] - ch.x[b][c] * t[c];
-                for (int a = 0; a < D; ++a)
-                    s->Gs[a * D + b] += chunk_dot(n, vx[a], gb);
-            }
-            continue;
-        }
-        for (int c = 0; c < n; ++c)
-            t[c] = v[c] * F[c];
-        for (int a = 0; a < D; ++a) {
-            s->N[a] += chunk_dot(n, v, g[a]);
-            s->Nt[a] += chunk_dot(n, t, ch.x[a]);
-            for (int b = 0; b < D; ++b)
-                s->A[a * D + b] += chunk_dot(n, vx[a], g[b]);
-            double tx[LV_CHUNK];
-            for (int c = 0; c < n; ++c)
-                tx[c] = t[c] * ch.x[a][c];
-            for (int b = a; b < D; ++b)
-                s->G[a * D + b] += chunk_dot(n, tx, ch.x[b]);
-        }
+        if (!xi || !one_chunk)
+            chunk_pairs(k, D, G, i, idx + c0, n, p);
+        if (xi)
+            chunk_star(D, n, p, xi, s);
+        else
+            chunk_sums(D, n, p, s);
     }
     if (!xi)
         for (int a = 0; a < D; ++a)
@@ -510,13 +536,13 @@ PST_KHOT void row_sums_t(const lv_ctx *k, int D, int G, size_t i, const int64_t 
 
 /* row_sums_t instantiated for each dimension and gradient variant, in the widest vector ISA. */
 typedef void (*sums_fn)(const lv_ctx *, size_t, const int64_t *, const uint32_t *,
-                        const double *, lv_sums *);
+                        const double *, lv_sums *, lv_pairs *);
 #define LV_SUMS(D, G)                                                                          \
     PST_ISA_DISPATCH static void sums_##D##_##G(const lv_ctx *k, size_t i, const int64_t *off,  \
                                                 const uint32_t *idx, const double *xi,          \
-                                                lv_sums *s)                                     \
+                                                lv_sums *s, lv_pairs *p)                        \
     {                                                                                          \
-        row_sums_t(k, D, G, i, off, idx, xi, s);                                               \
+        row_sums_t(k, D, G, i, off, idx, xi, s, p);                                            \
     }
 LV_SUMS(2, 1) LV_SUMS(2, 2) LV_SUMS(2, 3) LV_SUMS(2, 4)
 LV_SUMS(3, 1) LV_SUMS(3, 2) LV_SUMS(3, 3) LV_SUMS(3, 4)
@@ -567,7 +593,8 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
     /* A = sum V x (x) g, N = sum V g (53), N~ = sum V F x (65), Gamma = sum V F x x^T (55) */
     sums_fn sums = sums_table[dim - 2][k->variant - 1];
     lv_sums S;
-    sums(k, i, off, idx, NULL, &S);
+    lv_pairs pairs; /* the row's pairs, kept from the first pass for the Gamma* pass */
+    sums(k, i, off, idx, NULL, &S, &pairs);
     double *A = S.A, *N = S.N, *Nt = S.Nt, *G = S.G;
     if (k->variant == PST_GRAD_G2) /* the self term of (16) in (53): makes N = 0 exactly */
         for (int a = 0; a < dim; ++a)
@@ -604,7 +631,7 @@ static uint8_t particle(const pst_op *op, const lv_ctx *k, size_t i, const int64
     memcpy(norm, G, sizeof norm);
     if (which == LV_MSPH) {
         /* Gamma* (71) = sum V x (g - x (xi . g))^T, with xi = C^T N~ */
-        sums(k, i, off, idx, xi, &S);
+        sums(k, i, off, idx, xi, &S, &pairs);
         const double *Gs = S.Gs;
         if (pst_mat_sdd_positive(dim, Gs))
             memcpy(norm, Gs, sizeof norm);
