@@ -832,8 +832,7 @@ static void lv_degrade(pst_op *op, size_t i)
                            .lemma3 = LEMMA,                                                   \
                            .degrade = DEGRADE,                                                \
                            .free_data = lv_free,                                              \
-                           .data_bytes = {128, 192}} /* C, zeta, eta, s, nu, grad nu; the    \
-                                                        apply's packed rows (32) */
+                           .data_bytes = {96, 160}} /* C, zeta, eta, s, nu, grad nu */
 
 LV_SCHEME(pst_scheme_brookshaw, "brookshaw", "Brookshaw 1985, m_I + m_J (LV eq. 27)",
           "no neighbour -> zero row (the Brookshaw row is the other schemes' last resort)", 0, 0,

@@ -433,6 +433,6 @@ const pst_scheme pst_scheme_qsfdi = {
     .hessian = pst_qsfdi_hessian,
     .interpolate = pst_qsfdi_interpolate,
     .free_data = qs_free,
-    .data_bytes = {96, 152}, /* kap: QS_NK = 8 / 15 doubles; the apply's packed rows: 32 */
+    .data_bytes = {64, 120}, /* kap: QS_NK = 8 / 15 doubles */
     .keep_bytes = {{2 * 64, 3 * 64}, {3 * 120, 6 * 120}}, /* D and QS_NQ kappas per particle */
 };

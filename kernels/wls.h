@@ -67,7 +67,6 @@ PST_KHOT double pst_dot_sum(const double acc[PST_DOT_LANES])
     .half_rows = pst_wls_half_rows,                                                            \
     .emit_row = pst_wls_emit_row, .gradient = pst_wls_gradient, .hessian = pst_wls_hessian,    \
     .interpolate = pst_wls_interpolate, .degrade = pst_wls_degrade, .free_data = pst_wls_free, \
-    .data_bytes = {81, 113} /* lam: nb doubles (6 / 10 with type B), a level byte and the \
-                               apply's packed rows (32) */
+    .data_bytes = {49, 81} /* lam: nb doubles (6 / 10 with type B) and a level byte */
 
 #endif

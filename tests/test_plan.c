@@ -516,7 +516,11 @@ static void test_fit_memory(void)
     size_t n = 1000000;
     CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
     CHECK(p.task_amg_radius[0] == -1 && p.task_restart[0] == 50); /* room enough: as asked */
-    CHECK(fabs(p.bytes_operators - (double)n * (1 + pst_scheme_data_bytes("lpmps", 3))) < 1);
+    /* the data, the status byte and the matrix-free apply's packed rows (32 bytes) */
+    CHECK_INT(pst_scheme_apply_bytes("lpmps"), 32);
+    CHECK_INT(pst_scheme_apply_bytes("cspm"), 0);
+    CHECK_INT(pst_scheme_apply_bytes("nosuch"), 0);
+    CHECK(fabs(p.bytes_operators - (double)n * (1 + pst_scheme_data_bytes("lpmps", 3) + 32)) < 1);
     double loose = p.bytes_total, avail = p.bytes_available;
     const double cut[3] = {0.9, 0.7, 0.6};
     for (int k = 0; k < 3; ++k) {
@@ -524,6 +528,8 @@ static void test_fit_memory(void)
         CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
         /* first the half list, then the tight radius, then a shorter restart */
         CHECK_INT(p.half_list, 1);
+        /* the half-list apply packs nothing */
+        CHECK(fabs(p.bytes_operators - (double)n * (1 + pst_scheme_data_bytes("lpmps", 3))) < 1);
         CHECK(p.task_amg_radius[0] == (k == 0 ? -1 : 1.3));
         CHECK(k < 2 ? p.task_restart[0] == 50 : p.task_restart[0] >= 20 && p.task_restart[0] < 50);
         CHECK(p.bytes_total <= s.memory_fraction * p.bytes_available);

@@ -145,10 +145,15 @@ int pst_scheme_degree(const char *name, int lattice);
 int pst_scheme_variants(const char *name);
 
 /* Bytes per particle of a scheme's precomputed data in dimension dim (2 or 3), the largest
- * over its variants, with the matrix-free apply's scratch (32 for the schemes that pack
- * positions and values, pst_op_apply) and without the stored weights (8 per pattern entry)
- * or the row status (1): what a memory plan counts. 0 for an unknown name or dimension. */
+ * over its variants, without the stored weights (8 per pattern entry) or the row status
+ * (1): what a memory plan counts. 0 for an unknown name or dimension. */
 int pst_scheme_data_bytes(const char *name, int dim);
+
+/* Bytes per particle that the matrix-free apply adds to an operator on its whole list at its
+ * first call: the positions and values packed for the lane rows (32 for qsfdi, lpmps, lsmps
+ * and the LV family; docs/operators.md, "Matrix-free rows in lanes"). 0 for the other schemes
+ * and an unknown name; an operator on a half list adds nothing. */
+int pst_scheme_apply_bytes(const char *name);
 
 /* 1 when a scheme's own assembled matrix serves AMG better than the Brookshaw proxy (lsmps;
  * measured in docs/solving.md, "The AMG matrix per scheme"): the matrix pst_solve_opts

@@ -35,8 +35,7 @@ typedef struct pst_scheme {
      * operator for derivatives only (opts.laplacian = 0) can skip the precompute */
     int derivatives_standalone;
     /* bytes per particle of the precomputed data (op->data) in 2D and 3D, the largest over
-     * the variants, and of op->xyzu (32) for a lane apply: the planner's memory estimate
-     * (pst_scheme_data_bytes) */
+     * the variants: the planner's memory estimate (pst_scheme_data_bytes) */
     int data_bytes[2];
     /* bytes per particle that opts.keep adds in 2D and 3D, for PST_KEEP_GRADIENT and
      * PST_KEEP_HESSIAN; all 0: the scheme keeps nothing (opts.keep is refused) */

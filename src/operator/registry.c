@@ -91,6 +91,12 @@ int pst_scheme_data_bytes(const char *name, int dim)
     return s && (dim == 2 || dim == 3) ? s->data_bytes[dim - 2] : 0;
 }
 
+int pst_scheme_apply_bytes(const char *name)
+{
+    const pst_scheme *s = pst_scheme_find(name);
+    return s && s->lanes ? 4 * (int)sizeof(double) : 0;
+}
+
 int pst_scheme_keep_bytes(const char *name, int dim, int keep)
 {
     const pst_scheme *s = pst_scheme_find(name);
