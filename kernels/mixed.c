@@ -532,27 +532,55 @@ PST_ISA_DISPATCH static void moments(const mx_ctx *k, int S, size_t i, double *t
     }
 }
 
-/* Invert the leading m x m block of the scaled moments (packed triangle of size mt): LDL^T,
- * the full inverse and its 1-norm condition number. Fills Q (row length qm) with rows 1..D of
- * the inverse in the unscaled basis: Q[a][c] = inv[1+a][c] / h^(1 + deg c). Returns the status
- * of the inversion. */
-static uint8_t invert(const pst_op *op, int D, const double *tri, int m, double h, double *Q,
-                      int qm)
+/* The inverse of a symmetric m x m matrix from its LDL^T factor f (pst_ldlt_factor), as
+ * L^-T D^-1 L^-1: the rows of X = L^-1 (row r is e_r - sum_k<r L_rk X_k), then row r of the
+ * inverse as sum_k>=r X_kr / D_k X_k. Whole-row updates of constant length (the zeros above
+ * the diagonal of X included), which vectorise, in place of m solves against the unit
+ * vectors; no reduction is reordered, so every ISA clone gives the same numbers. */
+PST_KHOT void ldlt_inverse(int m, const double *f, double *inv)
+{
+    double X[100];
+    for (int r = 0; r < m; ++r) {
+        double x[10];
+        for (int c = 0; c < m; ++c)
+            x[c] = c == r ? 1.0 : 0.0;
+        for (int k = 0; k < r; ++k) {
+            const double l = f[r * m + k], *xk = X + k * m;
+#pragma omp simd
+            for (int c = 0; c < m; ++c)
+                x[c] -= l * xk[c];
+        }
+        for (int c = 0; c < m; ++c)
+            X[r * m + c] = x[c];
+    }
+    for (int r = 0; r < m; ++r) {
+        double v[10] = {0};
+        for (int k = r; k < m; ++k) {
+            const double xr = X[k * m + r] / f[k * m + k], *xk = X + k * m;
+#pragma omp simd
+            for (int c = 0; c < m; ++c)
+                v[c] += xr * xk[c];
+        }
+        for (int c = 0; c < m; ++c)
+            inv[r * m + c] = v[c];
+    }
+}
+
+/* Invert the leading m x m block of the scaled moments (packed triangle): LDL^T, the full
+ * inverse and its 1-norm condition number ||A||_1 ||A^-1||_1. Fills Q (row length qm) with
+ * rows 1..D of the inverse in the unscaled basis: Q[a][c] = inv[1+a][c] / h^(1 + deg c).
+ * Returns the status of the inversion. m and qm are constants in every instantiation, so the
+ * loops are unrolled. */
+PST_KHOT uint8_t invert(const pst_op *op, int D, const double *tri, int m, double h, double *Q,
+                        int qm)
 {
     double a[100], f[100], inv[100];
     for (int r = 0, t = 0; r < m; ++r)
         for (int c = 0; c <= r; ++c, ++t)
-            a[r * m + c] = a[c * m + r] = tri[t];
-    memcpy(f, a, (size_t)(m * m) * sizeof *f);
+            a[r * m + c] = a[c * m + r] = f[r * m + c] = tri[t];
     if (!(pst_ldlt_factor(m, f) > 0))
         return PST_ROW_RANK_DEFICIENT;
-    for (int c = 0; c < m; ++c) {
-        double b[10] = {0};
-        b[c] = 1.0;
-        pst_ldlt_solve(m, f, b);
-        for (int r = 0; r < m; ++r)
-            inv[r * m + c] = b[r];
-    }
+    ldlt_inverse(m, f, inv);
     double cond = pst_mat_norm1(m, a) * pst_mat_norm1(m, inv);
     if (!(cond * op->opts.rank_tol < 1.0)) /* also catches NaN and inf */
         return PST_ROW_RANK_DEFICIENT;
@@ -569,10 +597,11 @@ static uint8_t invert(const pst_op *op, int D, const double *tri, int m, double 
 }
 
 /* INVERSION of particle i: the scheme's fit, else the linear fit (mixed2), else no fit. */
-static uint8_t inversion(const pst_op *op, const mx_ctx *k, size_t i, const double *tri)
+PST_KHOT uint8_t inversion_t(const pst_op *op, const mx_ctx *k, int D, int S, size_t i,
+                             const double *tri)
 {
     mx_data *d = op->data;
-    int D = k->c.dim, S = d->which, m = d->m;
+    const int m = basis_size(D, S);
     double *Q = d->Q + (size_t)D * m * i;
     int64_t count = k->c.off[i + 1] - k->c.off[i];
     uint8_t st = PST_ROW_OK;
@@ -600,6 +629,19 @@ static uint8_t inversion(const pst_op *op, const mx_ctx *k, size_t i, const doub
     d->mode[i] = MX_NOFIT;
     memset(Q, 0, (size_t)(D * m) * sizeof *Q);
     return st;
+}
+
+/* inversion_t in the widest vector ISA (called from the OpenMP region, which the clones do not
+ * reach), with the dimension and the basis size constants. */
+PST_ISA_DISPATCH static uint8_t inversion(const pst_op *op, const mx_ctx *k, size_t i,
+                                          const double *tri)
+{
+    int S = ((const mx_data *)op->data)->which;
+    if (k->c.dim == 2)
+        return S == MX_QUADRATIC ? inversion_t(op, k, 2, MX_QUADRATIC, i, tri)
+                                 : inversion_t(op, k, 2, MX_LINEAR, i, tri);
+    return S == MX_QUADRATIC ? inversion_t(op, k, 3, MX_QUADRATIC, i, tri)
+                             : inversion_t(op, k, 3, MX_LINEAR, i, tri);
 }
 
 /* In-place sort of a short row of column indices: insertion sort below 16, else quicksort on
