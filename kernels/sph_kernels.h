@@ -120,12 +120,21 @@ static inline double pst_sph_shape(pst_kernel k, int dim, double q, int deriv)
 /* h^-(dim+deriv) * sigma * f^(deriv)(r/h), cut to exactly 0 for r >= support*h (a select, not
  * a branch; it also turns r = inf, where Wendland's q*t is inf*0, into 0). The chain rule
  * d/dr = (1/h) d/dq gives the extra 1/h per derivative. Preconditions:
- * pst_sph_valid(k, dim, r, h) and deriv in 0..2; callers check once, outside hot loops. */
-static inline double pst_sph_eval(pst_kernel k, int dim, double r, double h, int deriv)
+ * pst_sph_valid(k, dim, r, h) and deriv in 0..2; callers check once, outside hot loops.
+ * pst_sph_uncut is the value before the cut: a vectorised loop takes it and applies the cut
+ * (r < support*h ? v : 0) in a loop of its own, the same numbers; in one loop GCC keeps the
+ * select as a branch around the powers (it may not speculate FP multiplies) and the generic
+ * x86-64 clone, which has no masked stores, does not vectorise it. */
+static inline double pst_sph_uncut(pst_kernel k, int dim, double r, double h, int deriv)
 {
     const double ih = 1.0 / h;
-    const double v = pst_sph_sigma[k][dim - 1] * pst_sph_ipow(ih, dim + deriv)
-                     * pst_sph_shape(k, dim, r * ih, deriv);
+    return pst_sph_sigma[k][dim - 1] * pst_sph_ipow(ih, dim + deriv)
+           * pst_sph_shape(k, dim, r * ih, deriv);
+}
+
+static inline double pst_sph_eval(pst_kernel k, int dim, double r, double h, int deriv)
+{
+    const double v = pst_sph_uncut(k, dim, r, h, deriv);
     return r < pst_sph_support[k] * h ? v : 0.0;
 }
 
