@@ -449,7 +449,9 @@ typedef struct {
 PST_KHOT void chunk_pairs(const lv_ctx *k, int D, int G, size_t i, const uint32_t *ic, int n,
                           lv_pairs *p)
 {
-    chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, ic, n, &p->ch, NULL, NULL);
+    double du[LV_CHUNK];
+    pst_lanes L = pst_lanes_row(k->c.xyzu, i, 1.0); /* its u (0 or an apply's) is not read */
+    chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, ic, n, &p->ch, &L, du);
 #pragma omp simd
     for (int c = 0; c < n; ++c) {
         double gc[3];
@@ -505,8 +507,11 @@ PST_KHOT void chunk_star(int D, int n, const lv_pairs *p, const double *xi, lv_s
 }
 
 /* The sums of row i for constant D and G, a chunk of neighbours at a time: the chunk's pairs
- * in vector lanes (chunk_pairs), then each sum as its own vectorised dot product over the
- * chunk; the first pass without xi, the Gamma* pass with it. A row of one chunk (3D ~55
+ * in vector lanes (chunk_pairs, the offsets from the packed rows), then each sum as its own
+ * vectorised dot product over the chunk; the first pass without xi, the Gamma* pass with it.
+ * A chunk's count is rounded up to a multiple of 8 with the row's own particle, a degenerate
+ * pair: g = F = x = 0 there, so every product it adds is exactly 0, the sums are those of the
+ * chunk itself bit for bit, and chunk_dot runs no scalar tail. A row of one chunk (3D ~55
  * neighbours) keeps its pairs in *p from the first pass for the second, which then costs its
  * 9 sums only. Per neighbour (3D, first pass): the gather, a sqrt, a division, ~25 flops of
  * kernel and gradient and 2 per each of the 21 sums (Gamma is symmetric: its upper triangle,
@@ -520,9 +525,14 @@ PST_KHOT void row_sums_t(const lv_ctx *k, int D, int G, size_t i, const int64_t 
         memset(s, 0, offsetof(lv_sums, Gs));
     const int one_chunk = off[i + 1] - off[i] <= LV_CHUNK;
     for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += LV_CHUNK) {
-        const int n = (int)(off[i + 1] - c0 < LV_CHUNK ? off[i + 1] - c0 : LV_CHUNK);
-        if (!xi || !one_chunk)
-            chunk_pairs(k, D, G, i, idx + c0, n, p);
+        const int m = (int)(off[i + 1] - c0 < LV_CHUNK ? off[i + 1] - c0 : LV_CHUNK);
+        const int n = (m + PST_LANES - 1) / PST_LANES * PST_LANES;
+        if (!xi || !one_chunk) {
+            uint32_t ic[LV_CHUNK];
+            for (int c = 0; c < n; ++c)
+                ic[c] = c < m ? idx[c0 + c] : (uint32_t)i;
+            chunk_pairs(k, D, G, i, ic, n, p);
+        }
         if (xi)
             chunk_star(D, n, p, xi, s);
         else

@@ -149,10 +149,11 @@ int pst_scheme_variants(const char *name);
  * (1): what a memory plan counts. 0 for an unknown name or dimension. */
 int pst_scheme_data_bytes(const char *name, int dim);
 
-/* Bytes per particle that the matrix-free apply adds to an operator on its whole list at its
- * first call: the positions and values packed for the lane rows (32 for qsfdi, lpmps, lsmps
- * and the LV family; docs/operators.md, "Matrix-free rows in lanes"). 0 for the other schemes
- * and an unknown name; an operator on a half list adds nothing. */
+/* Bytes per particle that an operator with rows keeps for its lane rows, the positions and
+ * values packed for the precompute and the matrix-free apply (32 for qsfdi, lpmps, lsmps and
+ * the LV family; docs/operators.md, "Matrix-free rows in lanes"), beside its data
+ * (pst_scheme_data_bytes). 0 for the other schemes and an unknown name; freed when the
+ * operator moves to a half list. */
 int pst_scheme_apply_bytes(const char *name);
 
 /* 1 when a scheme's own assembled matrix serves AMG better than the Brookshaw proxy (lsmps;
@@ -199,9 +200,8 @@ void pst_op_set_progress(pst_op *op, const pst_progress *progress);
 /* Matrix-free apply: y = L u, pair geometry recomputed from the positions and the per-particle
  * data. u and y have one value per particle (cloud order) and must not alias. The apply is
  * parallel inside; two applies of one operator must not run at the same time (qsfdi, lpmps,
- * lsmps and the LV family pack the positions and u into the operator's scratch, 32 bytes per
- * particle, allocated at the first apply). PST_EINVAL for an operator built without rows
- * (opts.laplacian = 0), PST_ENOMEM when that scratch cannot be allocated. */
+ * lsmps and the LV family write u into the operator's packed positions and values, 32 bytes
+ * per particle). PST_EINVAL for an operator built without rows (opts.laplacian = 0). */
 int pst_op_apply(const pst_op *op, const double *u, double *y);
 
 /* The low-memory layout of the largest clouds (docs/operators.md, "The half-list apply"):

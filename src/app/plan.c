@@ -348,8 +348,8 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
     int nops = p->base_operator;
     for (int k = 0; k < s->ntasks; ++k)
         nops += s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].ngroups > 0;
-    /* the scheme's per-particle data, the row status and the matrix-free apply's packed rows
-     * (the last not on a half list, below) */
+    /* the scheme's per-particle data, the row status and the packed rows of the lane schemes
+     * (until the switch to a half list, below) */
     const double packed = n * pst_scheme_apply_bytes(s->op.scheme);
     p->bytes_operators = nops * (n * (1.0 + pst_scheme_data_bytes(s->op.scheme, dim)) + packed);
     pst_memory_avail avail;
@@ -369,11 +369,11 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
         /* matrix-free and short of memory: the half list is smaller; the whole list lives
          * through the precompute and the copy only */
         p->half_list = 1;
-        p->bytes_operators -= packed; /* the half-list apply packs nothing (nops is 1) */
+        p->bytes_operators -= packed; /* freed with the whole list (nops is 1) */
         p->bytes_half_list = n * (8.0 + 2.0 * p->neighbours);
         double solves = fit_solves(p, s, p->bytes_half_list, budget, 1);
         p->bytes_total = fmax(solves, p->bytes_cloud + p->bytes_neighbours +
-                                          p->bytes_half_list + p->bytes_operators);
+                                          p->bytes_half_list + p->bytes_operators + packed);
     }
     if (p->bytes_total > budget) {
         snprintf(err, errlen, "the run needs about %.2f GB (cloud %.2f, neighbours %.2f, "

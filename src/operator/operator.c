@@ -138,6 +138,24 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
 
 /* PST_DEGENERATE_REFUSE: an operator with a rank-deficient or too-few-neighbours row is an
  * error that names the counts and the first such particle (input order). */
+/* op->xyzu of a lane scheme: the positions, packed before the precompute (which reads them
+ * too), u = 0 until an apply writes it. */
+static int pack_positions(pst_op *op)
+{
+    const pst_cloud *c = op->cloud;
+    double *p = op->xyzu = pst_alloc(op->n * 4 * sizeof *op->xyzu);
+    if (!p)
+        return PST_ENOMEM;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < op->n; ++i) {
+        p[4 * i] = c->x[0][i];
+        p[4 * i + 1] = c->x[1][i];
+        p[4 * i + 2] = c->dim == 3 ? c->x[2][i] : 0.0;
+        p[4 * i + 3] = 0.0;
+    }
+    return PST_OK;
+}
+
 static int refuse_degenerate(const pst_op *op, char *err)
 {
     size_t rank = op->counts[PST_ROW_RANK_DEFICIENT], few = op->counts[PST_ROW_TOO_FEW];
@@ -189,13 +207,18 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
         pst_set_err(err, "cannot allocate the row status of %zu particles", c->n);
         return PST_ENOMEM;
     }
+    /* Derivatives only: the rows are skipped when the scheme's derivative estimates do not
+     * read them (the planner's "model only what a scene needs"). */
+    op->rows = o->laplacian || !scheme->derivatives_standalone;
+    if (op->rows && scheme->lanes && pack_positions(op) != PST_OK) {
+        pst_op_destroy(op);
+        pst_set_err(err, "cannot allocate the packed positions of %zu particles", c->n);
+        return PST_ENOMEM;
+    }
     if (!scheme->wide_pattern) { /* a wide pattern is built only where it is read */
         op->poff = pst_nlist_offsets(nl);
         op->pidx = pst_nlist_indices(nl);
     }
-    /* Derivatives only: the rows are skipped when the scheme's derivative estimates do not
-     * read them (the planner's "model only what a scene needs"). */
-    op->rows = o->laplacian || !scheme->derivatives_standalone;
     double t0 = omp_get_wtime();
     pst_tally tally;
     op->tally = op->rows ? pst_tally_start(&tally, &o->progress, c->n) : NULL;
@@ -263,26 +286,14 @@ void pst_op_record_apply(const pst_op *op, double t0)
     ((pst_op *)op)->phase[PST_PHASE_APPLY] = omp_get_wtime() - t0;
 }
 
-/* op->xyzu for a lane apply: the positions at the first call, u at every call (a strided
- * write of 8 bytes per particle, about 1 % of the apply's time). */
-static int pack_values(const pst_op *op, const double *u)
+/* u into op->xyzu for a lane apply: a strided write of 8 bytes per particle, about 1 % of the
+ * apply's time. */
+static void pack_values(const pst_op *op, const double *u)
 {
-    pst_op *scratch = (pst_op *)op;
-    const pst_cloud *c = op->cloud;
-    int fresh = !op->xyzu;
-    if (fresh && !(scratch->xyzu = pst_alloc(op->n * 4 * sizeof *op->xyzu)))
-        return PST_ENOMEM;
-    double *p = scratch->xyzu;
+    double *p = op->xyzu;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i) {
-        if (fresh) {
-            p[4 * i] = c->x[0][i];
-            p[4 * i + 1] = c->x[1][i];
-            p[4 * i + 2] = c->dim == 3 ? c->x[2][i] : 0.0;
-        }
+    for (size_t i = 0; i < op->n; ++i)
         p[4 * i + 3] = u[i];
-    }
-    return PST_OK;
 }
 
 int pst_op_apply(const pst_op *op, const double *u, double *y)
@@ -293,8 +304,8 @@ int pst_op_apply(const pst_op *op, const double *u, double *y)
     if (op->half) {
         pst_op_apply_half(op, u, y);
     } else {
-        if (op->scheme->lanes && pack_values(op, u) != PST_OK)
-            return PST_ENOMEM;
+        if (op->scheme->lanes)
+            pack_values(op, u);
         op->scheme->apply(op, u, y);
     }
     dirichlet_rows(op, u, y);

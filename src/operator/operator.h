@@ -53,8 +53,8 @@ typedef struct pst_scheme {
     int (*wide_pattern)(const pst_op *op, int64_t **poff, uint32_t **pidx, char *err);
     /* y_I = sum_J w_IJ (u_J - u_I) for every non-Dirichlet row I (threaded). */
     void (*apply)(const pst_op *op, const double *u, double *y);
-    /* 1 when apply reads op->xyzu, the positions and u packed per particle (kernels/lanes.h):
-     * pst_op_apply fills it before the call */
+    /* 1 when the precompute and apply read op->xyzu, the positions and u packed per particle
+     * (kernels/lanes.h): pst_op_create packs the positions, pst_op_apply u before the call */
     int lanes;
     /* The apply on a half list (hoff, hidx: row I holds its neighbours J > I), rows I in
      * [i0, i1): for each pair, y_I += w_IJ (u_J - u_I) unless I is a Dirichlet row and
@@ -114,8 +114,9 @@ struct pst_op {
     int64_t *own_poff;
     uint32_t *own_pidx;
     double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
-    /* (x, y, z, u) per particle for the lane applies (scheme->lanes; z = 0 in 2D), allocated
-     * at the first apply, u rewritten at every apply: like the timer, scratch of the apply */
+    /* (x, y, z, u) per particle for the lane rows (scheme->lanes; z = 0 in 2D): the positions
+     * packed by pst_op_create before the precompute, u written by every apply (like the
+     * timer, scratch of the apply); freed when the operator moves to a half list */
     double *xyzu;
     int rows;              /* 1 when the Laplacian rows were precomputed (opts.laplacian)     */
     /* After pst_op_use_half_list: the schedule of the half-list apply and the diagonal, taken
