@@ -7,7 +7,7 @@
  * arithmetic then runs once per lane over these vectors (its own scalar inline functions in a
  * loop over the 8 lanes, which the compiler turns into vector instructions), so a weight is
  * bit for bit the one its emission computes pair by pair; and the products w (u_J - u_I) go
- * into 8 partial sums, neighbour c into lane c mod 8, combined in pst_dot_sum's order: the
+ * into 8 partial sums, neighbour c into lane c mod 8, combined in pst_v8_sum's order: the
  * apply's row sum is the same for every vector width and thread count.
  *
  * The vectors are those of src/core/lanes8.h. Internal; every function is inlined into the
@@ -19,38 +19,6 @@
 #include "lanes8.h"
 
 #include <string.h>
-
-/* The packed (x, y, z, u) of particle j. */
-PST_KHOT pst_v4 pst_lanes_particle(const double *xyzu, uint32_t j)
-{
-    pst_v4 p;
-    memcpy(&p, xyzu + 4 * (size_t)j, sizeof p);
-    return p;
-}
-
-/* (x, y, z, u) of the particles j[0..8) as four vectors: each pair of particles (l, l + 4)
- * in one 64-byte register, then interleaves of pairs of registers (x0 x1 z0 z1 x4 x5 z4 z5
- * and y0 y1 u0 u1 ...) and a last shuffle into lane order. */
-PST_KHOT void pst_lanes_transpose(const double *xyzu, const uint32_t *j, pst_v8 *x, pst_v8 *y,
-                                  pst_v8 *z, pst_v8 *u)
-{
-    pst_v8 p04 = __builtin_shufflevector(pst_lanes_particle(xyzu, j[0]),
-                                         pst_lanes_particle(xyzu, j[4]), 0, 1, 2, 3, 4, 5, 6, 7);
-    pst_v8 p15 = __builtin_shufflevector(pst_lanes_particle(xyzu, j[1]),
-                                         pst_lanes_particle(xyzu, j[5]), 0, 1, 2, 3, 4, 5, 6, 7);
-    pst_v8 p26 = __builtin_shufflevector(pst_lanes_particle(xyzu, j[2]),
-                                         pst_lanes_particle(xyzu, j[6]), 0, 1, 2, 3, 4, 5, 6, 7);
-    pst_v8 p37 = __builtin_shufflevector(pst_lanes_particle(xyzu, j[3]),
-                                         pst_lanes_particle(xyzu, j[7]), 0, 1, 2, 3, 4, 5, 6, 7);
-    pst_v8 l01 = __builtin_shufflevector(p04, p15, 0, 8, 2, 10, 4, 12, 6, 14);
-    pst_v8 h01 = __builtin_shufflevector(p04, p15, 1, 9, 3, 11, 5, 13, 7, 15);
-    pst_v8 l23 = __builtin_shufflevector(p26, p37, 0, 8, 2, 10, 4, 12, 6, 14);
-    pst_v8 h23 = __builtin_shufflevector(p26, p37, 1, 9, 3, 11, 5, 13, 7, 15);
-    *x = __builtin_shufflevector(l01, l23, 0, 1, 8, 9, 4, 5, 12, 13);
-    *z = __builtin_shufflevector(l01, l23, 2, 3, 10, 11, 6, 7, 14, 15);
-    *y = __builtin_shufflevector(h01, h23, 0, 1, 8, 9, 4, 5, 12, 13);
-    *u = __builtin_shufflevector(h01, h23, 2, 3, 10, 11, 6, 7, 14, 15);
-}
 
 /* One row in lanes: its centre and value, 1/h, and the partial sums. */
 typedef struct {
@@ -82,7 +50,7 @@ PST_KHOT const uint32_t *pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx
         j = pad;
     }
     pst_v8 X, Y, Z, U;
-    pst_lanes_transpose(L->xyzu, j, &X, &Y, &Z, &U);
+    pst_v8_rows4(L->xyzu, j, &X, &Y, &Z, &U);
     *x = (X - L->xi) * L->ih;
     *y = (Y - L->yi) * L->ih;
     *z = (Z - L->zi) * L->ih;

@@ -8,6 +8,7 @@
 #define PSTENCIL_LANES8_H
 
 #include <stdint.h>
+#include <string.h>
 
 #if !defined(__clang__) && defined(__GNUC__) && __GNUC__ < 12
 #error "pst_v8 needs __builtin_shufflevector (GCC 12 or later, or Clang)"
@@ -31,6 +32,40 @@ PST_V8_INLINE pst_v8 pst_v8_splat(double a) { return (pst_v8){a, a, a, a, a, a, 
 PST_V8_INLINE double pst_v8_sum(pst_v8 a)
 {
     return ((a[0] + a[4]) + (a[2] + a[6])) + ((a[1] + a[5]) + (a[3] + a[7]));
+}
+
+/* Row j of an array of rows of 4 doubles (32 bytes each). */
+PST_V8_INLINE pst_v4 pst_v8_row4(const double *rows, uint32_t j)
+{
+    pst_v4 p;
+    memcpy(&p, rows + 4 * (size_t)j, sizeof p);
+    return p;
+}
+
+/* Rows j[0..8) of an array of rows of 4 doubles (the packed positions and values of the lane
+ * rows, (x, y, z, u)) as four vectors, one per column: each pair of rows (l, l + 4) in one
+ * 64-byte register, then interleaves of pairs of registers (x0 x1 z0 z1 x4 x5 z4 z5 and
+ * y0 y1 u0 u1 ...) and a last shuffle into lane order: four 32-byte loads and 12 shuffles where
+ * element loads would take 32 loads and as many merges. */
+PST_V8_INLINE void pst_v8_rows4(const double *rows, const uint32_t *j, pst_v8 *c0, pst_v8 *c1,
+                                pst_v8 *c2, pst_v8 *c3)
+{
+    pst_v8 p04 = __builtin_shufflevector(pst_v8_row4(rows, j[0]), pst_v8_row4(rows, j[4]), 0, 1,
+                                         2, 3, 4, 5, 6, 7);
+    pst_v8 p15 = __builtin_shufflevector(pst_v8_row4(rows, j[1]), pst_v8_row4(rows, j[5]), 0, 1,
+                                         2, 3, 4, 5, 6, 7);
+    pst_v8 p26 = __builtin_shufflevector(pst_v8_row4(rows, j[2]), pst_v8_row4(rows, j[6]), 0, 1,
+                                         2, 3, 4, 5, 6, 7);
+    pst_v8 p37 = __builtin_shufflevector(pst_v8_row4(rows, j[3]), pst_v8_row4(rows, j[7]), 0, 1,
+                                         2, 3, 4, 5, 6, 7);
+    pst_v8 l01 = __builtin_shufflevector(p04, p15, 0, 8, 2, 10, 4, 12, 6, 14);
+    pst_v8 h01 = __builtin_shufflevector(p04, p15, 1, 9, 3, 11, 5, 13, 7, 15);
+    pst_v8 l23 = __builtin_shufflevector(p26, p37, 0, 8, 2, 10, 4, 12, 6, 14);
+    pst_v8 h23 = __builtin_shufflevector(p26, p37, 1, 9, 3, 11, 5, 13, 7, 15);
+    *c0 = __builtin_shufflevector(l01, l23, 0, 1, 8, 9, 4, 5, 12, 13);
+    *c2 = __builtin_shufflevector(l01, l23, 2, 3, 10, 11, 6, 7, 14, 15);
+    *c1 = __builtin_shufflevector(h01, h23, 0, 1, 8, 9, 4, 5, 12, 13);
+    *c3 = __builtin_shufflevector(h01, h23, 2, 3, 10, 11, 6, 7, 14, 15);
 }
 
 #endif /* PSTENCIL_LANES8_H */

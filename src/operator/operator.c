@@ -138,8 +138,8 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
 
 /* PST_DEGENERATE_REFUSE: an operator with a rank-deficient or too-few-neighbours row is an
  * error that names the counts and the first such particle (input order). */
-/* op->xyzu of a lane scheme: the positions, packed before the precompute (which reads them
- * too), u = 0 until an apply writes it. */
+/* op->xyzu: the positions, packed before the precompute and the flat-row check, which read
+ * them; u = 0 until an apply writes it. Kept by a lane scheme, whose applies read it. */
 static int pack_positions(pst_op *op)
 {
     const pst_cloud *c = op->cloud;
@@ -210,7 +210,7 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
     /* Derivatives only: the rows are skipped when the scheme's derivative estimates do not
      * read them (the planner's "model only what a scene needs"). */
     op->rows = o->laplacian || !scheme->derivatives_standalone;
-    if (op->rows && scheme->lanes && pack_positions(op) != PST_OK) {
+    if (op->rows && (scheme->lanes || scheme->degrade) && pack_positions(op) != PST_OK) {
         pst_op_destroy(op);
         pst_set_err(err, "cannot allocate the packed positions of %zu particles", c->n);
         return PST_ENOMEM;
@@ -225,6 +225,10 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
     int st = op->rows ? scheme->precompute(op, err) : PST_OK;
     if (st == PST_OK && op->rows)
         pst_op_check_flat_rows(op);
+    if (!scheme->lanes) { /* only the flat-row check read it */
+        pst_free(op->xyzu);
+        op->xyzu = NULL;
+    }
     if (st == PST_OK)
         pst_tally_finish(op->tally);
     op->tally = NULL;

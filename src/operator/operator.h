@@ -114,9 +114,10 @@ struct pst_op {
     int64_t *own_poff;
     uint32_t *own_pidx;
     double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
-    /* (x, y, z, u) per particle for the lane rows (scheme->lanes; z = 0 in 2D): the positions
-     * packed by pst_op_create before the precompute, u written by every apply (like the
-     * timer, scratch of the apply); freed when the operator moves to a half list */
+    /* (x, y, z, u) per particle (z = 0 in 2D): the positions packed by pst_op_create for the
+     * precompute and the flat-row check of the schemes with lanes or a degrade hook; kept by a
+     * lane scheme (scheme->lanes), whose every apply writes u (like the timer, scratch of the
+     * apply), until the operator moves to a half list; freed after the create otherwise */
     double *xyzu;
     int rows;              /* 1 when the Laplacian rows were precomputed (opts.laplacian)     */
     /* After pst_op_use_half_list: the schedule of the half-list apply and the diagonal, taken

@@ -8,6 +8,7 @@
 
 #include "internal.h"
 #include "isa.h"
+#include "lanes8.h"
 #include "small_matrix.h"
 
 #include <math.h>
@@ -66,8 +67,12 @@ typedef struct {
 /* Sums over row i's live neighbours of 1, x and x x^T (upper triangle, packed), offsets
  * scaled by 1/h_I. A pair is live when it is farther than min_pair_distance h_I and within the
  * kernel support of the larger smoothing length, so the test never sees fewer neighbours than
- * a scheme does. D is a constant in the two instantiations below and the loop a vectorised
- * reduction: bound by the gather of the neighbours' positions. */
+ * a scheme does. D is a constant in the instantiations below. The neighbours come 8 at a time
+ * from the packed positions (op->xyzu, src/core/lanes8.h), the last block padded with the row's
+ * own particle (distance 0: not live), into 8 lanes per sum: bound by the loads and the ~25
+ * vector operations per block. Measured (3D 10^6, perf, 1 thread): 12 % of lv's precompute
+ * with element gathers and an omp simd reduction, 10 % now; lsmps's precompute 7-14 % faster
+ * in all (2 threads). */
 static inline __attribute__((always_inline)) void moments(const pst_op *op, int D, int PH,
                                                           size_t i, double *s)
 {
@@ -75,31 +80,40 @@ static inline __attribute__((always_inline)) void moments(const pst_op *op, int 
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
     const double hi = pst_cloud_h_at(c, i), ih = 1.0 / hi, supp = pst_kernel_support(op->kernel);
-    const double eps2 = op->opts.min_pair_distance * op->opts.min_pair_distance;
-    const double *x = c->x[0], *y = c->x[1], *z = c->x[2], *h = c->h;
-    const double xi = x[i], yi = y[i], zi = D == 3 ? z[i] : 0.0;
-    double n = 0, sx = 0, sy = 0, sz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-#pragma omp simd reduction(+ : n, sx, sy, sz, xx, xy, xz, yy, yz, zz)
-    for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-        size_t j = idx[e];
-        double dx = (x[j] - xi) * ih, dy = (y[j] - yi) * ih, dz = D == 3 ? (z[j] - zi) * ih : 0;
-        double d2 = dx * dx + dy * dy + dz * dz;
-        double r = PH ? supp * fmax(hi, h[j]) * ih : supp; /* the larger h's support, in h_I */
-        double live = d2 > eps2 && d2 < r * r ? 1.0 : 0.0;
-        n += live;
-        sx += live * dx;
-        sy += live * dy;
-        sz += live * dz;
-        xx += live * dx * dx;
-        xy += live * dx * dy;
-        xz += live * dx * dz;
-        yy += live * dy * dy;
-        yz += live * dy * dz;
-        zz += live * dz * dz;
-    }
-    const double v[10] = {n, sx, sy, sz, xx, xy, xz, yy, yz, zz};
+    const double eps2 = op->opts.min_pair_distance * op->opts.min_pair_distance, *h = c->h;
+    const double *p = op->xyzu + 4 * i;
+    const pst_v8 xi = pst_v8_splat(p[0]), yi = pst_v8_splat(p[1]), zi = pst_v8_splat(p[2]);
+    const pst_v8 zero = pst_v8_splat(0.0);
+    pst_v8 acc[10];
     for (int k = 0; k < 10; ++k)
-        s[k] = v[k];
+        acc[k] = zero;
+    for (int64_t e = off[i]; e < off[i + 1]; e += PST_LANES) {
+        uint32_t pad[PST_LANES];
+        const uint32_t *j = idx + e;
+        if (off[i + 1] - e < PST_LANES) {
+            for (int l = 0; l < PST_LANES; ++l)
+                pad[l] = e + l < off[i + 1] ? idx[e + l] : (uint32_t)i;
+            j = pad;
+        }
+        pst_v8 X, Y, Z, U, r = pst_v8_splat(supp);
+        pst_v8_rows4(op->xyzu, j, &X, &Y, &Z, &U);
+        const pst_v8 dx = (X - xi) * ih, dy = (Y - yi) * ih, dz = D == 3 ? (Z - zi) * ih : zero;
+        const pst_v8 d2 = dx * dx + dy * dy + dz * dz;
+        if (PH) /* the larger h's support, in h_I */
+            for (int l = 0; l < PST_LANES; ++l)
+                r[l] = supp * fmax(hi, h[j[l]]) * ih;
+        pst_v8 live = zero;
+#pragma omp simd
+        for (int l = 0; l < PST_LANES; ++l)
+            live[l] = ((d2[l] > eps2) & (d2[l] < r[l] * r[l])) ? 1.0 : 0.0;
+        const pst_v8 v[10] = {live,           live * dx,      live * dy,      live * dz,
+                              live * dx * dx, live * dx * dy, live * dx * dz, live * dy * dy,
+                              live * dy * dz, live * dz * dz};
+        for (int k = 0; k < 10; ++k)
+            acc[k] += v[k];
+    }
+    for (int k = 0; k < 10; ++k)
+        s[k] = pst_v8_sum(acc[k]);
 }
 
 /* The instantiations: dimension, and per-particle (PH = 1) or uniform smoothing length; in the
