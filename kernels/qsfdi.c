@@ -81,10 +81,8 @@ PST_ISA_DISPATCH static int qs_row_moments(const qs_ctx *k, int D, size_t i, con
     double xi[3] = {0, 0, 0}, ih = 1.0 / pst_h(&k->c, i);
     for (int a = 0; a < D; ++a)
         xi[a] = k->c.x[a][i];
-    return D == 2 ? qs_moments(k, 2, xi, ih, idx, off[i], off[i + 1], NULL, 0.0, m, m + QS_N2(2),
-                               NULL, NULL)
-                  : qs_moments(k, 3, xi, ih, idx, off[i], off[i + 1], NULL, 0.0, m, m + QS_N2(3),
-                               NULL, NULL);
+    return D == 2 ? qs_moments(k, 2, xi, ih, idx, off[i], off[i + 1], m, m + QS_N2(2))
+                  : qs_moments(k, 3, xi, ih, idx, off[i], off[i + 1], m, m + QS_N2(3));
 }
 
 /* The kept derivative kappas of row i (opts.keep), as qs_deriv_row_t (qsfdi_derivs.c) forms

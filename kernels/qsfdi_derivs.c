@@ -2,6 +2,7 @@
  * interpolation at points (eqs. 32-35), from the fit of qsfdi_fit.h. */
 #include "check.h"
 #include "isa.h"
+#include "lanes.h"
 #include "qsfdi_fit.h"
 
 #include <omp.h>
@@ -23,27 +24,104 @@ PST_KHOT double qs_deriv_dot(int D, const double *kap, const double *du2, const 
     return which ? v / (h * h) : v / h;
 }
 
-/* Gradient or Hessian at row i. With the kappas kept by the precompute (opts.keep): the data
- * moments dotted with them (bit for bit the computed result: the same sums, the same kappa). Otherwise one pass of geometry and data moments, the inversions,
+/* The 15 (3D; 2D: 8) sums of the data moments, as named vectors so that they stay in
+ * registers (an array of them was kept on the stack: a load and a store per update). In
+ * (r2s, r2c) order: xx yy zz xy xz yz (2D: xx yy xy, in the xx, yy, zz slots). */
+typedef struct {
+    pst_v8 x, y, z, xx2, yy2, zz2, xy2, xz2, yz2, xx4, yy4, zz4, xy4, xz4, yz4;
+} qs_dsums;
+
+/* The data moments of 8 pairs (the block of idx at e) added to *s: qs_data_moments' terms. */
+PST_KHOT void qs_data_block(const qs_ctx *k, int D, pst_kernel K, const pst_lanes *L,
+                            const uint32_t *idx, int64_t e, int64_t e1, qs_dsums *s)
+{
+    uint32_t pad[PST_LANES];
+    pst_v8 x, y, z, du, o2 = pst_v8_splat(0.0), o4 = o2;
+    pst_lanes_pairs(L, idx, e, e1, pad, &x, &y, &z, &du);
+    const pst_v8 d2 = x * x + y * y + (D == 3 ? z * z : pst_v8_splat(0.0));
+#pragma omp simd
+    for (int l = 0; l < PST_LANES; ++l) {
+        double a2, a4;
+        qs_omega(K, D, k->supp, k->c.pair_eps, d2[l], &a2, &a4);
+        o2[l] = a2;
+        o4[l] = a4;
+    }
+    const pst_v8 o2u = o2 * du, o4u = o4 * du, xx = x * x, yy = y * y, xy = x * y;
+    s->x += o2u * x;
+    s->y += o2u * y;
+    s->xx2 += o2u * xx;
+    s->yy2 += o2u * yy;
+    s->xx4 += o4u * xx;
+    s->yy4 += o4u * yy;
+    if (D == 2) {
+        s->zz2 += o2u * xy;
+        s->zz4 += o4u * xy;
+        return;
+    }
+    const pst_v8 zz = z * z, xz = x * z, yz = y * z;
+    s->z += o2u * z;
+    s->zz2 += o2u * zz;
+    s->xy2 += o2u * xy;
+    s->xz2 += o2u * xz;
+    s->yz2 += o2u * yz;
+    s->zz4 += o4u * zz;
+    s->xy4 += o4u * xy;
+    s->xz4 += o4u * xz;
+    s->yz4 += o4u * yz;
+}
+
+/* The data moments of row i for u (op->xyzu holds it, pst_op_gradient / _hessian wrote it):
+ * du2 = sum omega2 m (u_j - u_i) (the D linear then the quadratic monomials, in the order of
+ * (r, r2s, r2c)) and du4 = sum omega4 (r2s, r2c) (u_j - u_i), 8 neighbours at a time from the
+ * packed rows (kernels/lanes.h) with qs_omega lane by lane, into 8 lanes per sum: the same
+ * sums for every ISA level and thread count. Per neighbour a sqrt, a division, ~19 flops of
+ * kernel and 2 per each of the 15 (3D) sums, in vector lanes; two blocks per step, whose
+ * geometry and kernel the core overlaps (their sums go in block order). */
+PST_KHOT void qs_data_moments(const qs_ctx *k, int D, pst_kernel K, size_t i, double ih,
+                              const int64_t *off, const uint32_t *idx, double *du2, double *du4)
+{
+    const pst_v8 zero = pst_v8_splat(0.0);
+    qs_dsums s = {zero, zero, zero, zero, zero, zero, zero, zero,
+                  zero, zero, zero, zero, zero, zero, zero};
+    pst_lanes L = pst_lanes_row(k->c.xyzu, i, ih);
+    int64_t e = off[i];
+    for (; e + 2 * PST_LANES <= off[i + 1]; e += 2 * PST_LANES) {
+        qs_data_block(k, D, K, &L, idx, e, off[i + 1], &s);
+        qs_data_block(k, D, K, &L, idx, e + PST_LANES, off[i + 1], &s);
+    }
+    for (; e < off[i + 1]; e += PST_LANES)
+        qs_data_block(k, D, K, &L, idx, e, off[i + 1], &s);
+    const pst_v8 v2[9] = {s.x, s.y, s.z, s.xx2, s.yy2, s.zz2, s.xy2, s.xz2, s.yz2};
+    const pst_v8 v4[6] = {s.xx4, s.yy4, s.zz4, s.xy4, s.xz4, s.yz4};
+    for (int a = 0; a < D; ++a)
+        du2[a] = pst_v8_sum(v2[a]);
+    for (int a = 0; a < QS_NQ(D); ++a) {
+        du2[D + a] = pst_v8_sum(v2[3 + a]);
+        du4[a] = pst_v8_sum(v4[a]);
+    }
+}
+
+/* Gradient or Hessian at row i for the constant D and kernel K. With the kappas kept by the
+ * precompute (with_kept, a constant: opts.keep): the data moments dotted with them (bit for bit the computed result:
+ * the same sums, the same kappa). Otherwise one pass of geometry moments, the inversions,
  * then one kappa per component (no stored weights needed: docs/schemes/qsfdi.md); fallback
  * rows take the linear WLS gradient (or 0) and a zero Hessian, as the kept kappas do
  * (qs_keep_row). */
-PST_KHOT void qs_deriv_row_t(const qs_ctx *k, const double *kept, int D, size_t i,
-                             const int64_t *off, const uint32_t *idx, const double *u,
-                             double *const out[6], int which)
+PST_KHOT void qs_deriv_row_t(const qs_ctx *k, const double *kept, int D, pst_kernel K, size_t i,
+                             const int64_t *off, const uint32_t *idx, double *const out[6],
+                             int which, int with_kept)
 {
     const int n2 = QS_N2(D), nq = QS_NQ(D), nk = QS_NK(D), ncomp = which ? nq : D;
     double xi[3] = {0, 0, 0}, mom[QS_NMOM], du2[9], du4[6], h = pst_h(&k->c, i);
     for (int a = 0; a < D; ++a)
         xi[a] = k->c.x[a][i];
-    if (kept) {
-        qs_moments(k, D, xi, 1.0 / h, idx, off[i], off[i + 1], u, u[i], NULL, NULL, du2, du4);
+    qs_data_moments(k, D, K, i, 1.0 / h, off, idx, du2, du4);
+    if (with_kept) {
         for (int c = 0; c < ncomp; ++c)
             out[c][i] = qs_deriv_dot(D, kept + ((size_t)ncomp * i + c) * nk, du2, du4, h, which);
         return;
     }
-    int live = qs_moments(k, D, xi, 1.0 / h, idx, off[i], off[i + 1], u, u[i], mom, mom + n2,
-                          du2, du4);
+    int live = qs_moments(k, D, xi, 1.0 / h, idx, off[i], off[i + 1], mom, mom + n2);
     qs_state st;
     int fit = live >= qs_min(D) && qs_invert(k, D, mom, mom + n2, &st) < PST_ROW_RANK_DEFICIENT;
     for (int c = 0; c < ncomp; ++c) {
@@ -64,39 +142,65 @@ PST_KHOT void qs_deriv_row_t(const qs_ctx *k, const double *kept, int D, size_t 
     }
 }
 
-PST_ISA_DISPATCH static void qs_deriv_row(const qs_ctx *k, const double *kept, int D, size_t i,
-                                          const int64_t *off, const uint32_t *idx,
-                                          const double *u, double *const out[6], int which)
-{
-    if (D == 2)
-        qs_deriv_row_t(k, kept, 2, i, off, idx, u, out, which);
-    else
-        qs_deriv_row_t(k, kept, 3, i, off, idx, u, out, which);
-}
+/* qs_deriv_row_t per dimension and kernel, in the widest vector ISA; the rows with kept
+ * kappas apart, so that the inversions inlined into the others do not crowd the registers of
+ * their data-moment loop. */
+typedef void (*qs_deriv_fn)(const qs_ctx *, const double *, size_t, const int64_t *,
+                            const uint32_t *, double *const[6], int);
+#define QS_DERIV(D, K, name)                                                                   \
+    PST_ISA_DISPATCH static void qs_kept_##D##_##name(const qs_ctx *k, const double *kept,      \
+                                                      size_t i, const int64_t *off,            \
+                                                      const uint32_t *idx,                     \
+                                                      double *const out[6], int which)         \
+    {                                                                                          \
+        qs_deriv_row_t(k, kept, D, K, i, off, idx, out, which, 1);                             \
+    }                                                                                          \
+    PST_ISA_DISPATCH static void qs_deriv_##D##_##name(const qs_ctx *k, const double *kept,     \
+                                                       size_t i, const int64_t *off,           \
+                                                       const uint32_t *idx,                    \
+                                                       double *const out[6], int which)        \
+    {                                                                                          \
+        if (kept)                                                                              \
+            qs_kept_##D##_##name(k, kept, i, off, idx, out, which);                            \
+        else                                                                                   \
+            qs_deriv_row_t(k, NULL, D, K, i, off, idx, out, which, 0);                         \
+    }
+#define QS_DERIV_K(D)                                                                          \
+    QS_DERIV(D, PST_KERNEL_CUBIC, cubic) QS_DERIV(D, PST_KERNEL_QUINTIC, quintic)              \
+    QS_DERIV(D, PST_KERNEL_WENDLAND_C2, wc2) QS_DERIV(D, PST_KERNEL_WENDLAND_C4, wc4)
+QS_DERIV_K(2)
+QS_DERIV_K(3)
+static const qs_deriv_fn qs_deriv_table[2][4] = {
+    {qs_deriv_2_cubic, qs_deriv_2_quintic, qs_deriv_2_wc2, qs_deriv_2_wc4},
+    {qs_deriv_3_cubic, qs_deriv_3_quintic, qs_deriv_3_wc2, qs_deriv_3_wc4}};
 
-/* Gradient (which = 0) or Hessian (1) of u at every particle (qs_deriv_row). */
-static void qs_derivs(const pst_op *op, const double *u, double *const out[6], int which)
+/* Gradient (which = 0) or Hessian (1) of u at every particle (qs_deriv_row_t); u is read from
+ * op->xyzu. */
+static void qs_derivs(const pst_op *op, double *const out[6], int which)
 {
     qs_ctx k = make_ctx(op);
     const qs_data *d = op->data;
     const double *kept = !d ? NULL : which ? d->hkap : d->gkap;
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
+    qs_deriv_fn row = qs_deriv_table[op->dim - 2][k.c.kernel];
 #pragma omp parallel for schedule(dynamic, 1)
     for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
         PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i)
-            qs_deriv_row(&k, kept, op->dim, i, off, idx, u, out, which);
+            row(&k, kept, i, off, idx, out, which);
 }
 
 void pst_qsfdi_gradient(const pst_op *op, const double *u, double *const grad[3])
 {
+    (void)u; /* read from op->xyzu */
     double *const out[6] = {grad[0], grad[1], grad[2], NULL, NULL, NULL};
-    qs_derivs(op, u, out, 0);
+    qs_derivs(op, out, 0);
 }
 
 void pst_qsfdi_hessian(const pst_op *op, const double *u, double *const hess[6])
 {
-    qs_derivs(op, u, hess, 1);
+    (void)u; /* read from op->xyzu */
+    qs_derivs(op, hess, 1);
 }
 
 /* ---- interpolation at points (eqs. 32-35) ---------------------------------------------------- */
@@ -111,7 +215,7 @@ PST_KHOT int qs_point_t(const qs_ctx *k, int D, const double p[3], double h, con
 {
     const int n2 = QS_N2(D), nq = QS_NQ(D);
     double mom[QS_NMOM], ih = 1.0 / h;
-    if (qs_moments(k, D, p, ih, idx, e0, e1, NULL, 0.0, mom, mom + n2, NULL, NULL) < qs_min(D))
+    if (qs_moments(k, D, p, ih, idx, e0, e1, mom, mom + n2) < qs_min(D))
         return 0;
     qs_state st;
     if (qs_invert(k, D, mom, mom + n2, &st) >= PST_ROW_RANK_DEFICIENT)

@@ -173,59 +173,30 @@ PST_KHOT int qs_gather(const qs_ctx *k, int D, const double xi[3], double ih, co
     }
 }
 
-/* The degree-2 monomials of graded lexicographic order (xx xy yy / xx xy xz yy yz zz) in the
- * order of (r2s, r2c) (xx yy xy / xx yy zz xy xz yz). */
-static const unsigned char qs_gl2q[2][6] = {{0, 2, 1}, {0, 3, 5, 1, 2, 4}};
-
 /* One pass over the neighbours idx[e0..e1) of the point xi (smoothing length 1/ih): the omega2
- * moments nu (degree 2-4) and omega4 moments mu (degree 3-4), unless nu is NULL (the data
- * moments alone, for the kept derivatives: the same sums bit for bit); with u, also the data moments
- * du2 = sum omega2 m (u_j - ui) and du4 = sum omega4 (r2s, r2c)(u_j - ui). Returns the live
- * pairs. Per neighbour: the gather, sqrt, division and ~19 flops of kernel, then 12 / 31
- * omega2 and 9 / 25 omega4 sums in pst_wls_msums' vectorised loops (compute-bound, ~2/3 of
- * the time). Measured (3D, 1 thread): 12.2 ns per neighbour with default flags, 8.0 native
- * (was ~57 ns before the gather and the separate sum loops). */
+ * moments nu (degree 2-4) and omega4 moments mu (degree 3-4). Returns the live pairs. Per
+ * neighbour: the gather, sqrt, division and ~19 flops of kernel, then 12 / 31 omega2 and 9 /
+ * 25 omega4 sums in pst_wls_msums' vectorised loops (compute-bound, ~2/3 of the time).
+ * Measured (3D, 1 thread): 12.2 ns per neighbour with default flags, 8.0 native (was ~57 ns
+ * before the gather and the separate sum loops). The data moments of the derivatives are
+ * qsfdi_derivs.c's, in lanes. */
 PST_KHOT int qs_moments(const qs_ctx *k, int D, const double xi[3], double ih, const uint32_t *idx,
-                      int64_t e0, int64_t e1, const double *u, double ui, double *restrict nu,
-                      double *restrict mu, double *restrict du2, double *restrict du4)
+                      int64_t e0, int64_t e1, double *restrict nu, double *restrict mu)
 {
-    const int n2 = QS_N2(D), nd2 = QS_ND2(D), nq = QS_NQ(D), nd3 = D == 2 ? 4 : 10;
-    double g2[2][6] = {{0}};
+    const int n2 = QS_N2(D), nd2 = QS_ND2(D), nd3 = D == 2 ? 4 : 10;
     int live = 0;
-    if (nu) {
-        memset(nu, 0, (size_t)n2 * sizeof *nu);
-        memset(mu, 0, (size_t)(n2 - nd2) * sizeof *mu);
-    }
-    if (u)
-        memset(du2, 0, (size_t)QS_NM(D) * sizeof *du2);
+    memset(nu, 0, (size_t)n2 * sizeof *nu);
+    memset(mu, 0, (size_t)(n2 - nd2) * sizeof *mu);
     for (int64_t c0 = e0; c0 < e1; c0 += QS_CHUNK) {
         int n = (int)(e1 - c0 < QS_CHUNK ? e1 - c0 : QS_CHUNK);
         double r[3][QS_CHUNK], o2[QS_CHUNK], o4[QS_CHUNK];
         live += qs_gather(k, D, xi, ih, idx + c0, n, r, o2, o4);
-        if (nu) {
-            pst_wls_msums(D, 2, n, r[0], QS_CHUNK, o2, nu);
-            pst_wls_msums(D, 3, n, r[0], QS_CHUNK, o2, nu + nd2);
-            pst_wls_msums(D, 4, n, r[0], QS_CHUNK, o2, nu + nd2 + nd3);
-            pst_wls_msums(D, 3, n, r[0], QS_CHUNK, o4, mu);
-            pst_wls_msums(D, 4, n, r[0], QS_CHUNK, o4, mu + nd3);
-        }
-        if (u) {
-            double o2u[QS_CHUNK], o4u[QS_CHUNK];
-            for (int c = 0; c < n; ++c) {
-                double du = u[idx[c0 + c]] - ui;
-                o2u[c] = o2[c] * du;
-                o4u[c] = o4[c] * du;
-            }
-            pst_wls_msums(D, 1, n, r[0], QS_CHUNK, o2u, du2);
-            pst_wls_msums(D, 2, n, r[0], QS_CHUNK, o2u, g2[0]);
-            pst_wls_msums(D, 2, n, r[0], QS_CHUNK, o4u, g2[1]);
-        }
+        pst_wls_msums(D, 2, n, r[0], QS_CHUNK, o2, nu);
+        pst_wls_msums(D, 3, n, r[0], QS_CHUNK, o2, nu + nd2);
+        pst_wls_msums(D, 4, n, r[0], QS_CHUNK, o2, nu + nd2 + nd3);
+        pst_wls_msums(D, 3, n, r[0], QS_CHUNK, o4, mu);
+        pst_wls_msums(D, 4, n, r[0], QS_CHUNK, o4, mu + nd3);
     }
-    if (u)
-        for (int a = 0; a < nq; ++a) {
-            du2[D + a] = g2[0][qs_gl2q[D - 2][a]];
-            du4[a] = g2[1][qs_gl2q[D - 2][a]];
-        }
     return live;
 }
 

@@ -149,10 +149,10 @@ int pst_scheme_variants(const char *name);
  * (1): what a memory plan counts. 0 for an unknown name or dimension. */
 int pst_scheme_data_bytes(const char *name, int dim);
 
-/* Bytes per particle that an operator with rows keeps for its lane rows, the positions and
- * values packed for the precompute and the matrix-free apply (32 for qsfdi, lpmps, lsmps and
- * the LV family; docs/operators.md, "Matrix-free rows in lanes"), beside its data
- * (pst_scheme_data_bytes). 0 for the other schemes and an unknown name; freed when the
+/* Bytes per particle that an operator keeps for its lane rows, the positions and values
+ * packed for the precompute, the matrix-free apply and qsfdi's derivatives (32 for qsfdi,
+ * lpmps, lsmps and the LV family; docs/operators.md, "Matrix-free rows in lanes"), beside its
+ * data (pst_scheme_data_bytes). 0 for the other schemes and an unknown name; freed when the
  * operator moves to a half list. */
 int pst_scheme_apply_bytes(const char *name);
 
@@ -199,9 +199,10 @@ void pst_op_set_progress(pst_op *op, const pst_progress *progress);
 
 /* Matrix-free apply: y = L u, pair geometry recomputed from the positions and the per-particle
  * data. u and y have one value per particle (cloud order) and must not alias. The apply is
- * parallel inside; two applies of one operator must not run at the same time (qsfdi, lpmps,
- * lsmps and the LV family write u into the operator's packed positions and values, 32 bytes
- * per particle). PST_EINVAL for an operator built without rows (opts.laplacian = 0). */
+ * parallel inside; two applies (gradients, Hessians) of one operator must not run at the same
+ * time (qsfdi, lpmps, lsmps and the LV family write u into the operator's packed positions
+ * and values, 32 bytes per particle). PST_EINVAL for an operator built without rows
+ * (opts.laplacian = 0). */
 int pst_op_apply(const pst_op *op, const double *u, double *y);
 
 /* The low-memory layout of the largest clouds (docs/operators.md, "The half-list apply"):
@@ -350,12 +351,15 @@ int pst_op_audit_flags(const pst_op *op, uint8_t *flags);
 
 /* Corrected gradient <grad u>_I = sum_J V_J (u_J - u_I) C_I grad W_IJ (LV eq. 54) with the
  * operator's kernel and gradient variant; exact for linear fields wherever C exists.
- * grad has dim arrays of n values. PST_EINVAL for schemes without C (brookshaw). */
+ * grad has dim arrays of n values. PST_EINVAL for schemes without C (brookshaw). Like
+ * pst_op_apply, not at the same time as another apply, gradient or Hessian of the same
+ * operator: they write u into its packed rows. */
 int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3]);
 
 /* Second derivatives of u at the particles from the scheme's fit: hess[0..2] = u_xx, u_yy, u_xy
  * in 2D; u_xx, u_yy, u_zz, u_xy, u_xz, u_yz in 3D (n values each). PST_EINVAL for schemes
- * without a quadratic fit. */
+ * without a quadratic fit. Not at the same time as another apply, gradient or Hessian of the
+ * same operator (pst_op_gradient). */
 int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6]);
 
 /* Interpolate u, and its Laplacian, at m points that need not be particles (QSFDI eqs. 32-35

@@ -139,7 +139,8 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
 /* PST_DEGENERATE_REFUSE: an operator with a rank-deficient or too-few-neighbours row is an
  * error that names the counts and the first such particle (input order). */
 /* op->xyzu: the positions, packed before the precompute and the flat-row check, which read
- * them; u = 0 until an apply writes it. Kept by a lane scheme, whose applies read it. */
+ * them; u = 0 until an apply or a derivative writes it. Kept by a lane scheme, whose applies
+ * (and qsfdi's derivatives) read it. */
 static int pack_positions(pst_op *op)
 {
     const pst_cloud *c = op->cloud;
@@ -210,7 +211,7 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
     /* Derivatives only: the rows are skipped when the scheme's derivative estimates do not
      * read them (the planner's "model only what a scene needs"). */
     op->rows = o->laplacian || !scheme->derivatives_standalone;
-    if (op->rows && (scheme->lanes || scheme->degrade) && pack_positions(op) != PST_OK) {
+    if ((scheme->lanes || (op->rows && scheme->degrade)) && pack_positions(op) != PST_OK) {
         pst_op_destroy(op);
         pst_set_err(err, "cannot allocate the packed positions of %zu particles", c->n);
         return PST_ENOMEM;
@@ -290,8 +291,8 @@ void pst_op_record_apply(const pst_op *op, double t0)
     ((pst_op *)op)->phase[PST_PHASE_APPLY] = omp_get_wtime() - t0;
 }
 
-/* u into op->xyzu for a lane apply: a strided write of 8 bytes per particle, about 1 % of the
- * apply's time. */
+/* u into op->xyzu for the lane rows of an apply or a derivative: a strided write of 8 bytes per
+ * particle, about 1 % of an apply's time. */
 static void pack_values(const pst_op *op, const double *u)
 {
     double *p = op->xyzu;
@@ -653,6 +654,8 @@ int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
 {
     if (!op->scheme->gradient || op->half)
         return PST_EINVAL;
+    if (op->xyzu)
+        pack_values(op, u);
     pst_op copy;
     pst_tally tally;
     const pst_op *v = progress_view(op, op->n, &copy, &tally);
@@ -665,6 +668,8 @@ int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6])
 {
     if (!op->scheme->hessian || op->half)
         return PST_EINVAL;
+    if (op->xyzu)
+        pack_values(op, u);
     pst_op copy;
     pst_tally tally;
     const pst_op *v = progress_view(op, op->n, &copy, &tally);

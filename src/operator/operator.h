@@ -53,8 +53,9 @@ typedef struct pst_scheme {
     int (*wide_pattern)(const pst_op *op, int64_t **poff, uint32_t **pidx, char *err);
     /* y_I = sum_J w_IJ (u_J - u_I) for every non-Dirichlet row I (threaded). */
     void (*apply)(const pst_op *op, const double *u, double *y);
-    /* 1 when the precompute and apply read op->xyzu, the positions and u packed per particle
-     * (kernels/lanes.h): pst_op_create packs the positions, pst_op_apply u before the call */
+    /* 1 when the precompute, apply (and derivatives) read op->xyzu, the positions and u packed
+     * per particle (kernels/lanes.h): pst_op_create packs the positions, pst_op_apply,
+     * pst_op_gradient and pst_op_hessian u before the call */
     int lanes;
     /* The apply on a half list (hoff, hidx: row I holds its neighbours J > I), rows I in
      * [i0, i1): for each pair, y_I += w_IJ (u_J - u_I) unless I is a Dirichlet row and
@@ -116,8 +117,9 @@ struct pst_op {
     double phase[PST_NPHASES]; /* seconds per phase (pst_op_phase_times); apply is mutable */
     /* (x, y, z, u) per particle (z = 0 in 2D): the positions packed by pst_op_create for the
      * precompute and the flat-row check of the schemes with lanes or a degrade hook; kept by a
-     * lane scheme (scheme->lanes), whose every apply writes u (like the timer, scratch of the
-     * apply), until the operator moves to a half list; freed after the create otherwise */
+     * lane scheme (scheme->lanes), into which every apply, gradient and Hessian writes its u
+     * (like the timer, scratch of the call), until the operator moves to a half list; freed
+     * after the create otherwise */
     double *xyzu;
     int rows;              /* 1 when the Laplacian rows were precomputed (opts.laplacian)     */
     /* After pst_op_use_half_list: the schedule of the half-list apply and the diagonal, taken
