@@ -136,8 +136,6 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
     return PST_OK;
 }
 
-/* PST_DEGENERATE_REFUSE: an operator with a rank-deficient or too-few-neighbours row is an
- * error that names the counts and the first such particle (input order). */
 /* op->xyzu: the positions, packed before the precompute and the flat-row check, which read
  * them; u = 0 until an apply or a derivative writes it. Kept by a lane scheme, whose applies
  * (and qsfdi's derivatives) read it. */
@@ -157,6 +155,8 @@ static int pack_positions(pst_op *op)
     return PST_OK;
 }
 
+/* PST_DEGENERATE_REFUSE: an operator with a rank-deficient or too-few-neighbours row is an
+ * error that names the counts and the first such particle (input order). */
 static int refuse_degenerate(const pst_op *op, char *err)
 {
     size_t rank = op->counts[PST_ROW_RANK_DEFICIENT], few = op->counts[PST_ROW_TOO_FEW];
