@@ -429,13 +429,8 @@ typedef struct {
  * in every build (the stability table's solve counts depend on its last bits). */
 PST_KHOT double chunk_dot(int n, const double *restrict p, const double *restrict q)
 {
-    double acc[PST_DOT_LANES] = {0};
-    int c = 0;
-    for (; c + PST_DOT_LANES <= n; c += PST_DOT_LANES)
-        for (int l = 0; l < PST_DOT_LANES; ++l)
-            acc[l] += p[c + l] * q[c + l];
-    for (; c < n; ++c)
-        acc[c % PST_DOT_LANES] += p[c] * q[c];
+    double acc[PST_LANES] = {0};
+    pst_lanes_dot(n, p, q, acc);
     return pst_dot_sum(acc);
 }
 

@@ -310,14 +310,9 @@ typedef void (*qs_rows_fn)(const qs_ctx *, const qs_data *, size_t, size_t, doub
     {                                                                                          \
         qs_lane_rows(k, d, D, K, i0, i1, y);                                                   \
     }
-#define QS_ROWS_K(D)                                                                           \
-    QS_ROWS(D, PST_KERNEL_CUBIC, cubic) QS_ROWS(D, PST_KERNEL_QUINTIC, quintic)                \
-    QS_ROWS(D, PST_KERNEL_WENDLAND_C2, wc2) QS_ROWS(D, PST_KERNEL_WENDLAND_C4, wc4)
-QS_ROWS_K(2)
-QS_ROWS_K(3)
-static const qs_rows_fn qs_rows_table[2][4] = {
-    {qs_rows_2_cubic, qs_rows_2_quintic, qs_rows_2_wc2, qs_rows_2_wc4},
-    {qs_rows_3_cubic, qs_rows_3_quintic, qs_rows_3_wc2, qs_rows_3_wc4}};
+QS_FOR_KERNELS(QS_ROWS, 2)
+QS_FOR_KERNELS(QS_ROWS, 3)
+static const qs_rows_fn qs_rows_table[2][4] = QS_KERNEL_TABLE(qs_rows);
 
 /* Matrix-free apply: each pair's weight recomputed from positions and kappa_I, 8 pairs at a
  * time (qs_lane_rows), blocks of rows per thread. */

@@ -165,14 +165,9 @@ typedef void (*qs_deriv_fn)(const qs_ctx *, const double *, size_t, const int64_
         else                                                                                   \
             qs_deriv_row_t(k, NULL, D, K, i, off, idx, out, which, 0);                         \
     }
-#define QS_DERIV_K(D)                                                                          \
-    QS_DERIV(D, PST_KERNEL_CUBIC, cubic) QS_DERIV(D, PST_KERNEL_QUINTIC, quintic)              \
-    QS_DERIV(D, PST_KERNEL_WENDLAND_C2, wc2) QS_DERIV(D, PST_KERNEL_WENDLAND_C4, wc4)
-QS_DERIV_K(2)
-QS_DERIV_K(3)
-static const qs_deriv_fn qs_deriv_table[2][4] = {
-    {qs_deriv_2_cubic, qs_deriv_2_quintic, qs_deriv_2_wc2, qs_deriv_2_wc4},
-    {qs_deriv_3_cubic, qs_deriv_3_quintic, qs_deriv_3_wc2, qs_deriv_3_wc4}};
+QS_FOR_KERNELS(QS_DERIV, 2)
+QS_FOR_KERNELS(QS_DERIV, 3)
+static const qs_deriv_fn qs_deriv_table[2][4] = QS_KERNEL_TABLE(qs_deriv);
 
 /* Gradient (which = 0) or Hessian (1) of u at every particle (qs_deriv_row_t); u is read from
  * op->xyzu. */
