@@ -226,7 +226,7 @@ static void test_report_numbers(void)
     cJSON *r = cJSON_CreateObject(), *arr = cJSON_AddArrayToObject(r, "list");
     cJSON *inner = cJSON_AddObjectToObject(r, "inner");
     for (int q = 0; q < nv; ++q) {
-        char key[8];
+        char key[16];
         snprintf(key, sizeof key, "v%d", q);
         cJSON_AddItemToArray(arr, cJSON_CreateNumber(v[q]));
         cJSON_AddNumberToObject(inner, key, v[q]);
@@ -240,7 +240,7 @@ static void test_report_numbers(void)
     sweep_report_decode(r);
     CHECK(strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(r, "name")), "lap") == 0);
     for (int q = 0; q < nv; ++q) {
-        char key[8];
+        char key[16];
         snprintf(key, sizeof key, "v%d", q);
         double a = cJSON_GetNumberValue(cJSON_GetArrayItem(cJSON_GetObjectItem(r, "list"), q));
         double b = cJSON_GetNumberValue(cJSON_GetObjectItem(cJSON_GetObjectItem(r, "inner"), key));

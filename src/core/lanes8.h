@@ -13,11 +13,8 @@
 #if !defined(__clang__) && defined(__GNUC__) && __GNUC__ < 12
 #error "pst_v8 needs __builtin_shufflevector (GCC 12 or later, or Clang)"
 #endif
-#if !defined(__clang__) && defined(__GNUC__)
-/* 64-byte vectors cross no call boundary here (every function is inlined), so the ABI note
- * GCC gives for them without AVX-512 does not apply. */
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
+/* Every function taking or returning a pst_v8 is inlined: the library builds with -Wno-psabi
+ * (CMakeLists.txt), since GCC's notes on the ABI of 64-byte vectors do not apply. */
 
 #define PST_LANES 8
 #define PST_V8_INLINE static inline __attribute__((always_inline))
