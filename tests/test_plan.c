@@ -438,10 +438,6 @@ static void test_amg_source_to_fit(void)
     pst_scene_free(&s);
 }
 
-/* Where memory is short the plan of a matrix-free AMG solve first takes the half list, then
- * the tight proxy radius (1.3 h), then shortens the GMRES restart (not below 20), and each plan fits its budget; the
- * operator's estimate is the scheme's own per-particle bytes. The budget is set through
- * limits.memory_fraction as a fraction of the memory the first plan saw. */
 /* A matrix-free solve keeps the whole list where it fits (its apply is the faster one); short of
  * memory it runs on a half list (the whole list freed after the precompute) and gives the
  * stored solve's answer; stored weights, a gradient task, a scheme without a half-list apply or
@@ -449,8 +445,8 @@ static void test_amg_source_to_fit(void)
 static void test_half_list(void)
 {
     const char *base[] = {
-        "tasks=[{\"type\":\"solve\",\"name\":\"sol\",\"rhs\":\"-100*sin(6*x+8*y)\","
-        "\"exact\":\"sin(6*x+8*y)\",\"rtol\":1e-11}]",
+        ("tasks=[{\"type\":\"solve\",\"name\":\"sol\",\"rhs\":\"-100*sin(6*x+8*y)\","
+         "\"exact\":\"sin(6*x+8*y)\",\"rtol\":1e-11}]"),
         "tasks.0.operator=matrix_free", "tasks.0.precond=jacobi"};
     const char *schemes[3] = {"operator.scheme=qsfdi", "operator.scheme=lv",
                               "operator.scheme=lsmps"};
@@ -505,6 +501,11 @@ static void test_half_list(void)
     }
 }
 
+/* Where memory is short the plan of a matrix-free AMG solve first takes the half list, then
+ * the tight proxy radius (1.3 h), then shortens the GMRES restart (not below 20), and each
+ * plan fits its budget; the operator's estimate is the scheme's own per-particle bytes. The
+ * budget is set through limits.memory_fraction as a fraction of the memory the first plan
+ * saw. */
 static void test_fit_memory(void)
 {
     /* lpmps: its automatic AMG radius is 1.6 h (qsfdi's is the tight 1.3 h already) */
