@@ -30,7 +30,7 @@
 
 #define MAXT 8
 #define MAXREPS 15
-#define TRIAD_N 10000000 /* 3 x 80 MB: far beyond the caches */
+#define TRIAD_N 10000000 /* 3 x 80 MB: beyond most caches, not a 300 MiB L3 (bench/README.md) */
 
 enum { TRIAD, NEIGHBOURS, PRECOMPUTE, STORED, FREE, SETUP, SOLVE, NPHASE };
 static const char *const phase_names[NPHASE] = {

@@ -138,7 +138,7 @@ int main(int argc, char **argv)
         return 1;
     }
     char err[PST_ERRLEN];
-    /* 3 x 80 MB: far beyond the caches, small beside the solve's memory. */
+    /* 3 x 80 MB: beyond most caches (not a 300 MiB L3), small beside the solve's memory. */
     double triad = pstb_triad_gbs(10000000, 10);
     pst_cloud *c = bench_poisson_cloud("bench_solve", dim, n, ratio);
     if (!c)

