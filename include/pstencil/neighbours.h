@@ -59,6 +59,43 @@ int pst_nlist_is_half(const pst_nlist *nl);
 /* The support (radius in units of h) the list was built with. */
 double pst_nlist_support(const pst_nlist *nl);
 
+/* ------------------------------------------------------------------------------------------ */
+/* Moving particles: Verlet lists (docs/neighbours.md, "Moving particles")                    */
+/* ------------------------------------------------------------------------------------------ */
+
+/* pst_nlist_build, and beside the list a wide one of radius (support + skin) * (h_i + h_j) / 2
+ * with the positions and h it was built from, for pst_nlist_update. skin is in units of h, in
+ * [0, support]; 0 gives a plain list, which every update builds again. The list itself is the
+ * one pst_nlist_build gives, entry for entry. PST_EINVAL, PST_EINPUT, PST_ENOMEM. */
+int pst_nlist_build_skin(pst_nlist **out, const pst_cloud *c, double support, double skin,
+                         char *err);
+
+/* What an update did. */
+typedef struct {
+    int rebuilt;              /* 1: the wide list was built again (or the whole list, skin 0) */
+    double moved;             /* largest displacement since the wide list's build             */
+    double grown;             /* largest growth of an h since then (0 if none grew)          */
+    double budget;            /* the rebuild rule's bound on 2 moved + support * grown       */
+    int64_t pairs;            /* entries of the updated list                                  */
+    uint64_t rebuilds, filters; /* wide builds and filter passes so far (skin > 0)            */
+} pst_nlist_update_info;
+
+/* Bring nl up to date with the cloud c after its positions or h changed in place (the same
+ * particles: c is the cloud nl was built on, or one of the same size and order). With a skin,
+ * when 2 moved + support * grown <= skin * min h (h as at the wide build, less a rounding
+ * allowance) the list is the wide list's pairs filtered by the true radius, an O(pairs) pass;
+ * otherwise, or when the cloud was permuted (pst_cloud_permute, pst_cloud_morton_sort) since,
+ * the wide list is built again. Either way the result is, entry for entry, the list
+ * pst_nlist_build would give now, for every thread count. Without a skin: a fresh build. The
+ * list's handle stays valid; its offsets and indices may move (read them again). Operators
+ * built on nl must be refreshed before their next use. info may be NULL. PST_EINVAL (a half or
+ * cut list, a cloud of another size), PST_EINPUT (a non-finite position, h out of range),
+ * PST_ENOMEM; on failure nl is unusable until an update succeeds. */
+int pst_nlist_update(pst_nlist *nl, const pst_cloud *c, pst_nlist_update_info *info, char *err);
+
+/* The skin a list keeps for its updates (0 for a plain list). */
+double pst_nlist_skin(const pst_nlist *nl);
+
 /* Statistics of a list. */
 typedef struct {
     int64_t pairs;             /* stored entries                                  */

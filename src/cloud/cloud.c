@@ -405,8 +405,10 @@ int pst_cloud_permute(pst_cloud *c, const uint32_t *perm, char *err)
     uint8_t *seen = pst_calloc(c->n, 1);
     double *scratch = pst_alloc(c->n * sizeof(double));
     int st = seen && scratch ? check_permutation(perm, c->n, seen, err) : PST_ENOMEM;
-    if (st == PST_OK)
+    if (st == PST_OK) {
         permute_arrays(c, perm, scratch, seen); /* the seen bytes become the kinds' scratch */
+        c->permutations++;
+    }
     pst_free(seen);
     pst_free(scratch);
     PST_CHECK(st == PST_ENOMEM, st, err, "permute: out of memory for %zu particles", c->n);

@@ -17,6 +17,8 @@ struct pst_cloud {
     int mob_ncomp;       /* 0 (m = 1), 1 (scalar) or dim (diagonal tensor)                   */
     double *mob[3];      /* mobility components                                              */
     int64_t *id;         /* original input index                                             */
+    uint64_t permutations; /* pst_cloud_permute calls so far: a list kept for an update
+                              (pst_nlist_update) notices a reordered cloud                    */
     size_t nfields;
     char (*field_name)[PST_MAX_NAME];
     double **field;

@@ -21,6 +21,7 @@
 #include "cells.h"
 #include "check.h"
 #include "isa.h"
+#include "nlist_rule.h"
 #include "tally.h"
 
 #include <float.h>
@@ -105,39 +106,6 @@ static size_t cell_candidates(const ctx *k, size_t r, cand *out)
                 out[j] = e;
             }
     return m;
-}
-
-/* d2 < r2 as the sign bit of d2 - r2: equal for non-NaN d2 and finite r2 (the difference of
- * two distinct doubles is never 0 and rounding keeps its sign; d2 = r2 gives +0). Unlike the
- * compare, it vectorises into an integer count on baseline x86-64 (SSE2) and needs no
- * unordered-compare fix-up in the scalar compaction. */
-static inline size_t closer(double d2, double r2)
-{
-    double diff = d2 - r2;
-    uint64_t bits;
-    memcpy(&bits, &diff, sizeof bits);
-    return (size_t)(bits >> 63);
-}
-
-/* The neighbour test of slot q against the particle at xi with smoothing length hi (choice 1,
- * docs/choices.md), shared by both passes so that they agree bit for bit. */
-static inline __attribute__((always_inline)) size_t
-pair_hit(const double *restrict X, const double *restrict Y, const double *restrict Z,
-         const double *restrict H, const double xi[3], double hi, double halfs, double r2u,
-         int dim, int varh, size_t q)
-{
-    double dx = X[q] - xi[0], dy = Y[q] - xi[1];
-    double d2 = dx * dx + dy * dy;
-    if (dim == 3) {
-        double dz = Z[q] - xi[2];
-        d2 += dz * dz;
-    }
-    double r2 = r2u;
-    if (varh) {
-        double r = halfs * (hi + H[q]);
-        r2 = r * r;
-    }
-    return closer(d2, r2);
 }
 
 /* The hot loops: slot p (at xp, smoothing length hi, cloud index self) against the slots
@@ -323,7 +291,7 @@ static int h_in_range(double h)
     return h >= PST_H_MIN && h <= PST_H_MAX; /* false for NaN */
 }
 
-static int check_input(const pst_cloud *c, double support, char *err)
+int pst_nlist_check_cloud(const pst_cloud *c, double support, char *err)
 {
     PST_CHECK(!(support > 0) || !isfinite(support), PST_EINVAL, err,
               "neighbour list: support must be finite and > 0 (got %g)", support);
@@ -527,7 +495,7 @@ int pst_nlist_build_with(pst_nlist **out, const pst_cloud *c, double support,
                          const pst_progress *progress, char *err)
 {
     *out = NULL;
-    PST_TRY(check_input(c, support, err));
+    PST_TRY(pst_nlist_check_cloud(c, support, err));
     size_t n = c->n;
     pst_nlist *nl = NULL;
     PST_TRY(new_list(&nl, n, support, err));
@@ -588,6 +556,7 @@ void pst_nlist_destroy(pst_nlist *nl)
         return;
     pst_free(nl->offset);
     pst_free(nl->index);
+    pst_verlet_free(nl->verlet);
     free(nl);
 }
 
@@ -615,5 +584,9 @@ void pst_nlist_get_stats(const pst_nlist *nl, pst_nlist_stats *s)
     s->max = mx;
     s->mean = n ? (double)s->pairs / (double)n : 0.0;
     s->isolated = isolated;
-    s->bytes = sizeof *nl + (n + 1) * sizeof *nl->offset + (size_t)s->pairs * sizeof *nl->index;
+    /* a Verlet list's index holds its capacity, counted with the wide list and the positions
+     * it keeps */
+    s->bytes = sizeof *nl + (n + 1) * sizeof *nl->offset +
+               (nl->verlet ? pst_verlet_bytes(nl->verlet, n)
+                           : (size_t)s->pairs * sizeof *nl->index);
 }

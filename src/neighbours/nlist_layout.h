@@ -13,7 +13,18 @@ struct pst_nlist {
     int half;            /* 1: row i holds only its neighbours j > i (pst_nlist_halve)      */
     int64_t *offset;     /* n + 1 */
     uint32_t *index;     /* offset[n] */
+    struct pst_verlet *verlet; /* the skin list and the state pst_nlist_update reads, or NULL
+                                  (nlist_update.c)                                         */
 };
+
+/* A list's Verlet state (nlist_update.c): freed, and the bytes it holds (the wide list, the
+ * kept positions, the list's index at its capacity) for a cloud of n particles. */
+void pst_verlet_free(struct pst_verlet *v);
+size_t pst_verlet_bytes(const struct pst_verlet *v, size_t n);
+
+/* The checks of a build on the cloud c at radius support (units of h): finite positions, h in
+ * range, a representable radius. PST_EINVAL, PST_EINPUT (message in err, particle by id). */
+int pst_nlist_check_cloud(const pst_cloud *c, double support, char *err);
 
 /* Neighbours of arbitrary points (points.c, for interpolation): for each of the m points
  * (pts[d][k], d < dim) the particles of c with |x - p| < radius, as CSR: off (m + 1 entries)
