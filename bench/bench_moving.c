@@ -6,8 +6,8 @@
  * Morton-sorted with cells of the list's radius. The field: a smooth swirl scaled so that no particle moves more than
  * `--move` s0 in a step (default 0.1). Per repetition, for the rebuild and for
  * each skin in turn (alternated, each from the same start), `--steps` steps of: move,
- * then the list (pst_nlist_build, or pst_nlist_update), then the precompute of the scheme's
- * operator on it (pst_op_create; the same on both sides until operators can be refreshed).
+ * then the list (pst_nlist_build, or pst_nlist_update), then the scheme's operator on it
+ * (pst_op_create every step, or created at the first step and pst_op_refresh after).
  * Printed: medians over the repetitions of the list's and the precompute's time per step, the
  * steps per second, the updates' rebuilds, and the list's speed-up over the rebuild.
  *
@@ -121,6 +121,7 @@ static int run(const args *a, double s0, double skin, result *r)
     oo.scheme = a->scheme;
     *r = (result){0};
     pst_nlist_update_info info = {0};
+    pst_op *op = NULL;
     for (int s = 0; s < a->steps; ++s) {
         move(c, a->move * s0);
         double t0 = omp_get_wtime();
@@ -132,12 +133,16 @@ static int run(const args *a, double s0, double skin, result *r)
             st = pst_nlist_update(nl, c, &info, err);
         }
         double t1 = omp_get_wtime();
-        pst_op *op = NULL;
-        if (st == PST_OK)
+        if (st == PST_OK && (skin < 0 || !op)) {
+            pst_op_destroy(op);
+            op = NULL;
             st = pst_op_create(&op, c, nl, &oo, err);
+        } else if (st == PST_OK) {
+            st = pst_op_refresh(op, err);
+        }
         double t2 = omp_get_wtime();
-        pst_op_destroy(op);
         if (st != PST_OK) {
+            pst_op_destroy(op);
             fprintf(stderr, "bench_moving: %s\n", err);
             pst_nlist_destroy(nl);
             pst_cloud_destroy(c);
@@ -147,6 +152,7 @@ static int run(const args *a, double s0, double skin, result *r)
         r->pre += (t2 - t1) / a->steps;
     }
     r->rebuilds = skin < 0 ? (uint64_t)a->steps : info.rebuilds - 1; /* less the first build */
+    pst_op_destroy(op);
     pst_nlist_destroy(nl);
     pst_cloud_destroy(c);
     return 0;

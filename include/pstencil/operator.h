@@ -186,12 +186,24 @@ int pst_scheme_keep_bytes(const char *name, int dim, int keep);
 
 /* Build an operator: validate the inputs, precompute the per-particle data (one threaded
  * pass), classify every row. The cloud and the list must outlive the operator and must not
- * change (pst_op_use_half_list replaces the list). The list must be whole (not a half list)
- * and its support must cover the kernel's (pst_kernel_support), else PST_EINVAL.
+ * change between its calls, except as pst_op_refresh allows (pst_op_use_half_list replaces
+ * the list). The list must be whole (not a half list) and its support must cover the
+ * kernel's (pst_kernel_support), else PST_EINVAL.
  * No output of an operator is ever NaN: degenerate rows fall back and are counted. */
 int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o,
                   char *err);
 void pst_op_destroy(pst_op *op);
+
+/* Compute op again after its particles moved: the positions (h, volumes, mobility) of its
+ * cloud changed in place and its list was brought up to date (pst_nlist_update). The scheme,
+ * kernel and options stay; the precompute runs again on the same handle, which keeps its row
+ * status and packed positions; stored weights are stored again in their precision (the
+ * scheme's data and the weights are allocated afresh); the rows are those pst_op_create would
+ * give now, bit for bit. Handles built on op (pst_krylov) must be created again. PST_EINVAL (an
+ * operator on a half list: create it again; a cloud or list of another size), the errors of
+ * pst_op_create's precompute; on failure op keeps no rows and every apply refuses it (destroy
+ * it). */
+int pst_op_refresh(pst_op *op, char *err);
 
 /* Replace op's progress hook (pst_op_opts.progress) by *progress, or remove it (NULL). Not
  * while another thread calls op. */

@@ -142,7 +142,9 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
 static int pack_positions(pst_op *op)
 {
     const pst_cloud *c = op->cloud;
-    double *p = op->xyzu = pst_alloc(op->n * 4 * sizeof *op->xyzu);
+    if (!op->xyzu) /* a refresh packs into the array the operator kept */
+        op->xyzu = pst_alloc(op->n * 4 * sizeof *op->xyzu);
+    double *p = op->xyzu;
     if (!p)
         return PST_ENOMEM;
 #pragma omp parallel for schedule(static)
@@ -178,6 +180,52 @@ static int refuse_degenerate(const pst_op *op, char *err)
     return PST_ENUMERIC;
 }
 
+/* The precompute of a created or refreshed operator: the packed positions, the scheme's
+ * rows, the flat-row check, the rows' status and counts (op->status zeroed on entry), the
+ * refusal of degenerate rows when asked. */
+static int precompute(pst_op *op, char *err)
+{
+    const pst_op_opts *o = &op->opts;
+    const pst_scheme *scheme = op->scheme;
+    const pst_cloud *c = op->cloud;
+    const pst_nlist *nl = op->nl;
+    /* Derivatives only: the rows are skipped when the scheme's derivative estimates do not
+     * read them (the planner's "model only what a scene needs"). */
+    op->rows = o->laplacian || !scheme->derivatives_standalone;
+    if ((scheme->lanes || (op->rows && scheme->degrade)) && pack_positions(op) != PST_OK) {
+        pst_set_err(err, "cannot allocate the packed positions of %zu particles", c->n);
+        return PST_ENOMEM;
+    }
+    if (!scheme->wide_pattern) { /* a wide pattern is built only where it is read */
+        op->poff = pst_nlist_offsets(nl);
+        op->pidx = pst_nlist_indices(nl);
+    }
+    double t0 = omp_get_wtime();
+    pst_tally tally;
+    op->tally = op->rows ? pst_tally_start(&tally, &o->progress, c->n) : NULL;
+    int st = op->rows ? scheme->precompute(op, err) : PST_OK;
+    if (st == PST_OK && op->rows)
+        pst_op_check_flat_rows(op);
+    if (!scheme->lanes) { /* only the flat-row check read it */
+        pst_free(op->xyzu);
+        op->xyzu = NULL;
+    }
+    if (st == PST_OK)
+        pst_tally_finish(op->tally);
+    op->tally = NULL;
+    op->phase[PST_PHASE_PRECOMPUTE] = omp_get_wtime() - t0;
+    if (st != PST_OK)
+        return st;
+    for (size_t i = 0; i < c->n; ++i)
+        if (op->kind[i] == PST_DIRICHLET)
+            op->status[i] = PST_ROW_OK; /* identity rows need nothing */
+    for (size_t i = 0; i < c->n; ++i)
+        op->counts[op->status[i]]++;
+    if (o->on_degenerate == PST_DEGENERATE_REFUSE)
+        return refuse_degenerate(op, err);
+    return PST_OK;
+}
+
 int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const pst_op_opts *o,
                   char *err)
 {
@@ -208,47 +256,60 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
         pst_set_err(err, "cannot allocate the row status of %zu particles", c->n);
         return PST_ENOMEM;
     }
-    /* Derivatives only: the rows are skipped when the scheme's derivative estimates do not
-     * read them (the planner's "model only what a scene needs"). */
-    op->rows = o->laplacian || !scheme->derivatives_standalone;
-    if ((scheme->lanes || (op->rows && scheme->degrade)) && pack_positions(op) != PST_OK) {
-        pst_op_destroy(op);
-        pst_set_err(err, "cannot allocate the packed positions of %zu particles", c->n);
-        return PST_ENOMEM;
-    }
-    if (!scheme->wide_pattern) { /* a wide pattern is built only where it is read */
-        op->poff = pst_nlist_offsets(nl);
-        op->pidx = pst_nlist_indices(nl);
-    }
-    double t0 = omp_get_wtime();
-    pst_tally tally;
-    op->tally = op->rows ? pst_tally_start(&tally, &o->progress, c->n) : NULL;
-    int st = op->rows ? scheme->precompute(op, err) : PST_OK;
-    if (st == PST_OK && op->rows)
-        pst_op_check_flat_rows(op);
-    if (!scheme->lanes) { /* only the flat-row check read it */
-        pst_free(op->xyzu);
-        op->xyzu = NULL;
-    }
-    if (st == PST_OK)
-        pst_tally_finish(op->tally);
-    op->tally = NULL;
-    op->phase[PST_PHASE_PRECOMPUTE] = omp_get_wtime() - t0;
+    int st = precompute(op, err);
     if (st != PST_OK) {
-        pst_op_destroy(op);
-        return st;
-    }
-    for (size_t i = 0; i < c->n; ++i)
-        if (op->kind[i] == PST_DIRICHLET)
-            op->status[i] = PST_ROW_OK; /* identity rows need nothing */
-    for (size_t i = 0; i < c->n; ++i)
-        op->counts[op->status[i]]++;
-    if (o->on_degenerate == PST_DEGENERATE_REFUSE && (st = refuse_degenerate(op, err)) != PST_OK) {
         pst_op_destroy(op);
         return st;
     }
     *out = op;
     return PST_OK;
+}
+
+/* What the precompute and a store made, released for a refresh: the scheme's data, the stored
+ * weights and a wide pattern (the operator's status, packed positions and handle stay). */
+static void release_rows(pst_op *op)
+{
+    if (op->data && op->scheme->free_data)
+        op->scheme->free_data(op->data);
+    op->data = NULL;
+    pst_free(op->w);
+    pst_free(op->w32);
+    pst_free(op->own_poff);
+    pst_free(op->own_pidx);
+    op->w = NULL;
+    op->w32 = NULL;
+    op->own_poff = NULL;
+    op->own_pidx = NULL;
+    op->poff = NULL;
+    op->pidx = NULL;
+    memset(op->status, 0, op->n);
+    memset(op->counts, 0, sizeof op->counts);
+}
+
+int pst_op_refresh(pst_op *op, char *err)
+{
+    PST_CHECK(!op, PST_EINVAL, err, "pst_op_refresh needs an operator");
+    PST_CHECK(op->half, PST_EINVAL, err,
+              "operator refresh: the operator runs on a half list (pst_op_use_half_list); "
+              "create it again on the updated whole list");
+    PST_CHECK(op->cloud->n != op->n || pst_nlist_rows(op->nl) != op->n, PST_EINVAL, err,
+              "operator refresh: the operator has %zu rows, the cloud %zu particles and the "
+              "list %zu rows",
+              op->n, op->cloud->n, pst_nlist_rows(op->nl));
+    const pst_scheme *scheme;
+    PST_TRY(check_opts(&op->opts, op->cloud, op->nl, &scheme, err));
+    pst_op_store_opts store;
+    pst_op_store_defaults(&store);
+    store.precision = pst_op_store_precision(op);
+    release_rows(op);
+    int st = precompute(op, err);
+    if (st == PST_OK && store.precision != PST_STORE_NONE)
+        st = pst_op_store_with(op, &store, err);
+    if (st != PST_OK) { /* an operator without rows: every apply refuses it */
+        release_rows(op);
+        op->rows = 0;
+    }
+    return st;
 }
 
 void pst_op_destroy(pst_op *op)
@@ -650,9 +711,14 @@ static const pst_op *progress_view(const pst_op *op, uint64_t total, pst_op *cop
     return copy;
 }
 
+/* 1 when the scheme's derivatives read the rows' data and op has none: after a failed
+ * pst_op_refresh (a created operator skips the rows only where the derivatives do not read
+ * them). */
+static int rows_lost(const pst_op *op) { return !op->rows && !op->scheme->derivatives_standalone; }
+
 int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
 {
-    if (!op->scheme->gradient || op->half)
+    if (!op->scheme->gradient || op->half || rows_lost(op))
         return PST_EINVAL;
     if (op->xyzu)
         pack_values(op, u);
@@ -666,7 +732,7 @@ int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
 
 int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6])
 {
-    if (!op->scheme->hessian || op->half)
+    if (!op->scheme->hessian || op->half || rows_lost(op))
         return PST_EINVAL;
     if (op->xyzu)
         pack_values(op, u);
@@ -685,6 +751,8 @@ int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, c
               op->scheme->name);
     PST_CHECK(op->half, PST_EINVAL, err,
               "the operator uses a half list: interpolation needs the whole one");
+    PST_CHECK(rows_lost(op), PST_EINVAL, err,
+              "the operator has no rows (its refresh failed): create it again");
     size_t none = 0;
     pst_op copy;
     pst_tally tally;
