@@ -88,9 +88,9 @@ typedef struct {
  * the wide list is built again. Either way the result is, entry for entry, the list
  * pst_nlist_build would give now, for every thread count. Without a skin: a fresh build. The
  * list's handle stays valid; its offsets and indices may move (read them again). Operators
- * built on nl must be refreshed (pst_op_refresh) before their next use. info may be NULL. PST_EINVAL (a half or
- * cut list, a cloud of another size), PST_EINPUT (a non-finite position, h out of range),
- * PST_ENOMEM; on failure nl is unusable until an update succeeds. */
+ * built on nl must be refreshed (pst_op_refresh) before their next use. info may be NULL.
+ * PST_EINVAL (a half or cut list, a cloud of another size), PST_EINPUT (a non-finite
+ * position, h out of range), PST_ENOMEM; on failure nl is unusable until an update succeeds. */
 int pst_nlist_update(pst_nlist *nl, const pst_cloud *c, pst_nlist_update_info *info, char *err);
 
 /* The skin a list keeps for its updates (0 for a plain list). */
