@@ -272,15 +272,8 @@ static void release_rows(pst_op *op)
     if (op->data && op->scheme->free_data)
         op->scheme->free_data(op->data);
     op->data = NULL;
-    pst_free(op->w);
-    pst_free(op->w32);
-    pst_free(op->own_poff);
-    pst_free(op->own_pidx);
-    op->w = NULL;
-    op->w32 = NULL;
-    op->own_poff = NULL;
-    op->own_pidx = NULL;
-    op->poff = NULL;
+    pst_op_drop_store(op);
+    op->poff = NULL; /* the list's arrays may have moved (pst_nlist_update) */
     op->pidx = NULL;
     memset(op->status, 0, op->n);
     memset(op->counts, 0, sizeof op->counts);

@@ -135,6 +135,9 @@ struct pst_op {
 /* Set the apply timer (PST_PHASE_APPLY) to the time since t0 (omp_get_wtime). */
 void pst_op_record_apply(const pst_op *op, double t0);
 
+/* Free op's stored weights and the wide pattern built for them (operator_store.c). */
+void pst_op_drop_store(pst_op *op);
+
 /* 1 when op holds stored weights of either precision (operator_store.c). */
 int pst_op_has_store(const pst_op *op);
 

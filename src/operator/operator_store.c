@@ -45,6 +45,15 @@ static void drop_own_pattern(pst_op *op)
     op->pidx = NULL;
 }
 
+void pst_op_drop_store(pst_op *op)
+{
+    pst_free(op->w);
+    pst_free(op->w32);
+    op->w = NULL;
+    op->w32 = NULL;
+    drop_own_pattern(op);
+}
+
 static int store_double(pst_op *op)
 {
     const int64_t *off = op->poff;
