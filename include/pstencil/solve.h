@@ -103,6 +103,13 @@ typedef struct {
     int stored;            /* 1: apply the stored weights (pst_op_store, or pst_op_store_with
                               in either precision), 0: matrix-free                           */
     int history;           /* 1: keep the relative residual of every iteration                */
+    int fix_mean;          /* 1: a problem without Dirichlet rows (a periodic box, a pure
+                              Neumann problem), whose L has the constants in its nullspace:
+                              the u with sum_I V_I u_I = 0 of L u = b - lambda 1, lambda the
+                              part of b outside L's range (0 for a compatible b; reported in
+                              the result). Solved as (L + c 1 V^T) u = b, which is regular,
+                              by GMRES or BiCGSTAB (docs/solving.md, "Singular problems").
+                              Engine operators only; refused with Dirichlet rows. Default 0. */
     /* Called after every iteration with the iteration count and the estimated relative
      * residual, from the calling thread outside any parallel region (progress bars); NULL
      * (the default) for none. */
@@ -145,6 +152,8 @@ typedef struct {
     double seconds;
     double setup_seconds;  /* the part of seconds spent setting up (the method's workspace and
                               the preconditioner: the AMG hierarchy); 0 for pst_krylov_solve */
+    double mean_shift;     /* fix_mean: lambda, the constant taken off b (0 otherwise); the
+                              residuals are those of L u = b - lambda 1                      */
     char message[PST_ERRLEN]; /* why it stopped, in words, with the numbers                  */
 } pst_solve_result;
 /* Free the history of r and reset it (NULL allowed); the other fields stay readable. */

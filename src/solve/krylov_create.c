@@ -115,25 +115,33 @@ static int symmetrisable(const pst_op *op, size_t neumann)
 }
 
 /* The method for op: AUTO resolved, CG refused where the scaling does not exist, and no
- * Dirichlet row refused (the constants would be in L's nullspace). */
-static int choose_method(const pst_op *op, int asked, int *solver, char *err)
+ * Dirichlet row refused (the constants would be in L's nullspace) unless the mean is fixed,
+ * which in turn needs a problem without Dirichlet rows and a method other than CG. */
+static int choose_method(const pst_op *op, const pst_solve_opts *o, int *solver, char *err)
 {
     size_t ndir = 0, nneu = 0;
     for (size_t i = 0; i < op->n; ++i) {
         ndir += op->kind[i] == PST_DIRICHLET;
         nneu += op->kind[i] == PST_NEUMANN;
     }
-    PST_CHECK(ndir == 0, PST_EINVAL, err,
+    int asked = o->solver;
+    PST_CHECK(ndir == 0 && !o->fix_mean, PST_EINVAL, err,
               "no Dirichlet particle: with only interior and Neumann rows L u = b determines u "
               "only up to a constant (L has the constants in its nullspace); mark at least one "
-              "particle Dirichlet");
+              "particle Dirichlet, or fix the mean (fix_mean)");
+    PST_CHECK(ndir > 0 && o->fix_mean, PST_EINVAL, err,
+              "fix_mean is for problems without Dirichlet rows; this one has %zu, which "
+              "already fix the constant",
+              ndir);
+    PST_CHECK(o->fix_mean && asked == PST_SOLVER_CG, PST_EINVAL, err,
+              "fix_mean solves L + c 1 V^T, which is not symmetric: use GMRES or BiCGSTAB");
     PST_CHECK(asked == PST_SOLVER_CG && !symmetrisable(op, nneu), PST_EINVAL, err,
               "CG needs a symmetrisable operator (brookshaw or cb, gradient G1, no Neumann "
               "rows); %s%s is not: use GMRES or BiCGSTAB",
               op->scheme->name, nneu ? " with Neumann rows" : "");
-    *solver = asked != PST_SOLVER_AUTO ? asked
-              : symmetrisable(op, nneu) ? PST_SOLVER_CG
-                                        : PST_SOLVER_GMRES;
+    *solver = asked != PST_SOLVER_AUTO               ? asked
+              : symmetrisable(op, nneu) && !o->fix_mean ? PST_SOLVER_CG
+                                                        : PST_SOLVER_GMRES;
     return PST_OK;
 }
 
@@ -162,6 +170,8 @@ static int cg_scaling(const pst_op *op, double *S, char *err)
 static int op_setup(pst_krylov *s, int *stop, char *err)
 {
     PST_TRY(handle_workspace(s, err));
+    if (s->o.fix_mean)
+        PST_TRY(pst_fix_mean_wrap(s, err));
     if (s->solver == PST_SOLVER_CG) {
         s->S = pst_alloc(s->A.n * sizeof *s->S);
         PST_CHECK_ALLOC(s->S, err, "cannot allocate the solver's vectors for %zu particles",
@@ -195,7 +205,7 @@ int pst_krylov_build(pst_krylov **out, const pst_op *op, const pst_solve_opts *o
     PST_TRY(pst_solve_check_opts(o, op, err));
     pst_linop A;
     PST_TRY(pst_op_linop(op, o->stored, &A, err));
-    PST_TRY(choose_method(op, o->solver, solver, err));
+    PST_TRY(choose_method(op, o, solver, err));
     pst_krylov *s;
     PST_TRY(handle_new(&s, &A, o, err));
     s->op = op;
@@ -244,6 +254,9 @@ int pst_krylov_create_linop(pst_krylov **out, const pst_linop *A, const pst_lino
                   M->n, A->n);
     }
     PST_TRY(pst_solve_check_opts(o, NULL, err));
+    PST_CHECK(o->fix_mean, PST_EINVAL, err,
+              "fix_mean needs an engine operator (pst_krylov_create): its volumes weight the "
+              "mean");
     PST_CHECK(!M && o->precond == PST_PREC_AMG, PST_EINVAL, err,
               "the AMG preconditioner needs an engine operator (pst_krylov_create); for a user "
               "operator give a preconditioner, or use JACOBI (from its diagonal) or NONE");

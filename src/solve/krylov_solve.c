@@ -137,6 +137,8 @@ int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result
 #pragma omp parallel for schedule(static)
         for (size_t i = 0; i < k->n; ++i)
             u[i] = kind[i] == PST_DIRICHLET ? b[i] : k->x[i];
+        if (s->o.fix_mean)
+            r->mean_shift = pst_fix_mean_finish(s, u);
     }
     r->converged = k->converged;
     r->stop = k->stop;

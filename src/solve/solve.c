@@ -22,6 +22,7 @@ void pst_solve_defaults(pst_solve_opts *o)
     o->rtol = 1e-10;
     o->stored = 0;
     o->history = 0;
+    o->fix_mean = 0;
     o->monitor = NULL;
     o->monitor_ctx = NULL;
 }

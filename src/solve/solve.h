@@ -149,7 +149,17 @@ struct pst_krylov {
     double *bp, *x;        /* an engine operator's b' and iterate (n each), or NULL           */
     pst_ksp k;             /* the method's workspace; k.A = &A, k.M = &prec.lin, &user_M or NULL */
     int precond_setups, solves;
+    /* o.fix_mean: A is L + c 1 V^T around the engine operator's view L (fix_mean.c) */
+    pst_linop L;
+    const double *V;
+    double c, vsum;
 };
+
+/* o.fix_mean (src/solve/fix_mean.c): wrap s->A (the engine operator's view) into
+ * L + c 1 V^T, c = -(mean |diag L|) / sum V, before the preconditioner is set up; after a
+ * solve, shift u to sum V u = 0 and return lambda = c V^T u (the constant taken off b). */
+int pst_fix_mean_wrap(pst_krylov *s, char *err);
+double pst_fix_mean_finish(pst_krylov *s, double *u);
 
 /* The checks of a request that come before the set-up: the options (also the engine
  * operator's stored path) and, when b is not NULL, b and u finite (u only where it is an
