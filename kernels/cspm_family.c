@@ -123,7 +123,7 @@ PST_KHOT void cs_gather(const cs_ctx *k, int D, int withV, const double xi[3],
 {
     for (int c = 0; c < n; ++c) {
         for (int a = 0; a < D; ++a)
-            g->r[a][c] = k->c.x[a][idx[c]] - xi[a];
+            g->r[a][c] = pst_offset(&k->c, a, k->c.x[a][idx[c]], xi[a]);
         if (withV)
             g->b[c] = k->V[idx[c]];
     }

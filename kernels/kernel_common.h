@@ -24,6 +24,7 @@ typedef struct {
     const uint32_t *idx;
     double pair_eps;    /* opts.min_pair_distance: closer pairs (in units of h) are degenerate */
     const double *xyzu; /* op->xyzu: the packed rows of a lane apply (kernels/lanes.h), or NULL */
+    pst_image im;       /* the cloud's periodic box: every offset is its minimum image       */
 } pst_kctx;
 
 static inline pst_kctx pst_kctx_of(const pst_op *op)
@@ -32,7 +33,8 @@ static inline pst_kctx pst_kctx_of(const pst_op *op)
     pst_kctx k = {.dim = c->dim, .ncomp = c->mob_ncomp, .kernel = op->kernel, .V = c->V,
                   .h = c->h, .h_uniform = c->h_uniform, .kind = op->kind,
                   .off = pst_nlist_offsets(op->nl), .idx = pst_nlist_indices(op->nl),
-                  .pair_eps = op->opts.min_pair_distance, .xyzu = op->xyzu};
+                  .pair_eps = op->opts.min_pair_distance, .xyzu = op->xyzu,
+                  .im = pst_cloud_image(c)};
     for (int a = 0; a < 3; ++a) {
         k.x[a] = c->x[a];
         k.mob[a] = c->mob[a];
@@ -50,12 +52,20 @@ static inline double pst_mob(const pst_kctx *k, int comp, size_t i)
     return k->ncomp ? k->mob[k->ncomp == 1 ? 0 : comp][i] : 1.0;
 }
 
+/* x_j - x_i along axis a, for x_j and x_i given: the minimum image in a periodic box
+ * (docs/periodic.md), the plain difference bit for bit on an axis that is not periodic. Every
+ * pair offset of every kernel comes from here or from pst_pair_offset. */
+PST_KHOT double pst_offset(const pst_kctx *k, int a, double xj, double xi)
+{
+    return pst_min_image(xj - xi, k->im.P[a], k->im.hP[a]);
+}
+
 /* The offset x = r_j - r_i of a pair (D components); returns |x|^2. */
 PST_KHOT double pst_pair_offset(const pst_kctx *k, int D, size_t i, size_t j, double x[3])
 {
     double d2 = 0;
     for (int a = 0; a < D; ++a) {
-        x[a] = k->x[a][j] - k->x[a][i];
+        x[a] = pst_offset(k, a, k->x[a][j], k->x[a][i]);
         d2 += x[a] * x[a];
     }
     return d2;

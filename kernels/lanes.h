@@ -20,25 +20,29 @@
 
 #include <string.h>
 
-/* One row in lanes: its centre and value, 1/h, and the partial sums. */
+/* One row in lanes: its centre and value, 1/h, the partial sums, and the periodic box
+ * (im.any = 0: none). */
 typedef struct {
     const double *xyzu;
     size_t i;
     pst_v8 xi, yi, zi, ui, ih, acc;
+    pst_image im;
 } pst_lanes;
 
-PST_KHOT pst_lanes pst_lanes_row(const double *xyzu, size_t i, double ih)
+/* Row i of the kernel context k's packed rows, scaled by ih. */
+PST_KHOT pst_lanes pst_lanes_row(const pst_kctx *k, size_t i, double ih)
 {
-    const double *p = xyzu + 4 * i;
-    return (pst_lanes){.xyzu = xyzu, .i = i, .xi = pst_v8_splat(p[0]), .yi = pst_v8_splat(p[1]),
-                       .zi = pst_v8_splat(p[2]), .ui = pst_v8_splat(p[3]),
-                       .ih = pst_v8_splat(ih), .acc = pst_v8_splat(0.0)};
+    const double *p = k->xyzu + 4 * i;
+    return (pst_lanes){.xyzu = k->xyzu, .i = i, .xi = pst_v8_splat(p[0]),
+                       .yi = pst_v8_splat(p[1]), .zi = pst_v8_splat(p[2]),
+                       .ui = pst_v8_splat(p[3]), .ih = pst_v8_splat(ih),
+                       .acc = pst_v8_splat(0.0), .im = k->im};
 }
 
 /* The pairs idx[e .. e + 8) of the row (fewer before e1: the missing lanes are the row's own
  * particle, a pair at distance 0, which every scheme's rule counts as degenerate with weight
  * 0 and whose u_J - u_I is 0): the scaled offsets (x_J - x_I) / h_I as the rows' gathers form
- * them, and u_J - u_I. Returns the 8 neighbours (idx + e, or pad filled). */
+ * them (minimum images in a periodic box, as pst_offset), and u_J - u_I. Returns the 8 neighbours (idx + e, or pad filled). */
 PST_KHOT const uint32_t *pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx, int64_t e,
                                          int64_t e1, uint32_t pad[PST_LANES], pst_v8 *x,
                                          pst_v8 *y, pst_v8 *z, pst_v8 *du)
@@ -51,9 +55,15 @@ PST_KHOT const uint32_t *pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx
     }
     pst_v8 X, Y, Z, U;
     pst_v8_rows4(L->xyzu, j, &X, &Y, &Z, &U);
-    *x = (X - L->xi) * L->ih;
-    *y = (Y - L->yi) * L->ih;
-    *z = (Z - L->zi) * L->ih;
+    pst_v8 dx = X - L->xi, dy = Y - L->yi, dz = Z - L->zi;
+    if (L->im.any) { /* pst_offset's minimum images; a cloud without a box skips them */
+        dx = pst_v8_min_image(dx, L->im.P[0], L->im.hP[0]);
+        dy = pst_v8_min_image(dy, L->im.P[1], L->im.hP[1]);
+        dz = pst_v8_min_image(dz, L->im.P[2], L->im.hP[2]);
+    }
+    *x = dx * L->ih;
+    *y = dy * L->ih;
+    *z = dz * L->ih;
     *du = U - L->ui;
     return j;
 }

@@ -240,7 +240,7 @@ PST_KHOT void chunk_geometry(const lv_ctx *k, int D, int needW, size_t i, const 
     else
         for (int c = 0; c < n; ++c)
             for (int b = 0; b < D; ++b)
-                ch->x[b][c] = k->c.x[b][idx[c]] - k->c.x[b][i];
+                ch->x[b][c] = pst_offset(&k->c, b, k->c.x[b][idx[c]], k->c.x[b][i]);
     for (int c = 0; c < n; ++c) {
         double d2 = 0;
         for (int b = 0; b < D; ++b)
@@ -321,7 +321,7 @@ PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, si
         if (w) {
             chunk_weights(k, D, G, T, H, i, idx + c0, n, w + (c0 - off[i]), NULL, NULL);
         } else {
-            pst_lanes L = pst_lanes_row(k->c.xyzu, i, 1.0);
+            pst_lanes L = pst_lanes_row(&k->c, i, 1.0);
             chunk_weights(k, D, G, T, H, i, idx + c0, n, t, &L, du);
             pst_lanes_dot(n, t, du, acc);
         }
@@ -445,7 +445,7 @@ PST_KHOT void chunk_pairs(const lv_ctx *k, int D, int G, size_t i, const uint32_
                           lv_pairs *p)
 {
     double du[LV_CHUNK];
-    pst_lanes L = pst_lanes_row(k->c.xyzu, i, 1.0); /* its u (0 or an apply's) is not read */
+    pst_lanes L = pst_lanes_row(&k->c, i, 1.0); /* its u (0 or an apply's) is not read */
     chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, ic, n, &p->ch, &L, du);
 #pragma omp simd
     for (int c = 0; c < n; ++c) {

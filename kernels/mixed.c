@@ -417,7 +417,7 @@ PST_KHOT void mx_gather(const mx_ctx *k, int D, const double xi[3], double h, do
     double d[MX_CHUNK];
     for (int c = 0; c < n; ++c)
         for (int a = 0; a < D; ++a)
-            r[a][c] = k->c.x[a][idx[c]] - xi[a];
+            r[a][c] = pst_offset(&k->c, a, k->c.x[a][idx[c]], xi[a]);
     for (int c = 0; c < n; ++c) /* pst_pair_offset's sum, in its order */
         d[c] = sqrt(r[0][c] * r[0][c] + r[1][c] * r[1][c] + (D == 3 ? r[2][c] * r[2][c] : 0.0));
     const double eh = k->c.pair_eps * h;

@@ -2,6 +2,7 @@
  * is one pass over each selected row's neighbours with one kernel derivative per pair; it runs
  * once per solve set-up on boundary particles only, so it is not tuned. */
 #include "check.h"
+#include "min_image.h"
 
 #include "pstencil.h"
 
@@ -15,6 +16,13 @@ static double shepard_gradient(const pst_cloud *c, const pst_nlist *nl, pst_kern
     const double *x[3] = {NULL, NULL, NULL};
     for (int d = 0; d < dim; ++d)
         x[d] = pst_cloud_coord_const(c, d);
+    int per[3];
+    double lo[3], hi[3], P[3], hP[3];
+    pst_cloud_periodic(c, per, lo, hi);
+    for (int d = 0; d < 3; ++d) { /* offsets through a periodic box's faces: minimum images */
+        P[d] = per[d] ? hi[d] - lo[d] : 0;
+        hP[d] = per[d] ? 0.5 * P[d] : INFINITY;
+    }
     const double *V = pst_cloud_volume_const(c), *harr = pst_cloud_h_array(c);
     double h = harr ? harr[i] : pst_cloud_h_uniform(c);
     double reach = pst_kernel_support(kernel) * h, scale = 0;
@@ -25,7 +33,7 @@ static double shepard_gradient(const pst_cloud *c, const pst_nlist *nl, pst_kern
         uint32_t j = idx[q];
         double dx[3] = {0, 0, 0}, r2 = 0;
         for (int d = 0; d < dim; ++d) {
-            dx[d] = x[d][i] - x[d][j];
+            dx[d] = pst_min_image(x[d][i] - x[d][j], P[d], hP[d]);
             r2 += dx[d] * dx[d];
         }
         double r = sqrt(r2);

@@ -295,7 +295,7 @@ PST_KHOT void qs_lane_rows(const qs_ctx *k, const qs_data *d, int D, pst_kernel 
         if (k->c.kind[i] == PST_DIRICHLET)
             continue;
         const double *kap = d->kap + (size_t)QS_NK(D) * i;
-        pst_lanes L = pst_lanes_row(k->c.xyzu, i, 1.0 / pst_h(&k->c, i));
+        pst_lanes L = pst_lanes_row(&k->c, i, 1.0 / pst_h(&k->c, i));
         PST_LANES_ROW(L, idx, off[i], off[i + 1], j, x, yy, z,
                       qs_lane_weights(K, D, k->supp, k->c.pair_eps, x, yy, z, kap));
         y[i] = pst_v8_sum(L.acc);

@@ -83,7 +83,7 @@ PST_KHOT void qs_data_moments(const qs_ctx *k, int D, pst_kernel K, size_t i, do
     const pst_v8 zero = pst_v8_splat(0.0);
     qs_dsums s = {zero, zero, zero, zero, zero, zero, zero, zero,
                   zero, zero, zero, zero, zero, zero, zero};
-    pst_lanes L = pst_lanes_row(k->c.xyzu, i, ih);
+    pst_lanes L = pst_lanes_row(&k->c, i, ih);
     int64_t e = off[i];
     for (; e + 2 * PST_LANES <= off[i + 1]; e += 2 * PST_LANES) {
         qs_data_block(k, D, K, &L, idx, e, off[i + 1], &s);
@@ -286,8 +286,10 @@ int pst_qsfdi_interpolate(const pst_op *op, const double *const pts[3], size_t m
             for (size_t t = 0; t < cand; ++t) {
                 size_t j = e0 < e1 ? idx[e0 + (int64_t)t] : t;
                 double d2 = 0;
-                for (int a = 0; a < D; ++a)
-                    d2 += (k.c.x[a][j] - p[a]) * (k.c.x[a][j] - p[a]);
+                for (int a = 0; a < D; ++a) {
+                    double t = pst_offset(&k.c, a, k.c.x[a][j], p[a]);
+                    d2 += t * t;
+                }
                 if (d2 < best) {
                     best = d2;
                     near = j;

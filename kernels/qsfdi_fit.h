@@ -87,7 +87,7 @@ PST_KHOT int qs_pair(const qs_ctx *k, int D, const double xi[3], double ih, size
 {
     double d2 = 0;
     for (int a = 0; a < D; ++a) {
-        r[a] = (k->c.x[a][j] - xi[a]) * ih;
+        r[a] = pst_offset(&k->c, a, k->c.x[a][j], xi[a]) * ih;
         d2 += r[a] * r[a];
     }
     return qs_omega(k->c.kernel, D, k->supp, k->c.pair_eps, d2, o2, o4) > 0;
@@ -162,7 +162,7 @@ PST_KHOT int qs_gather(const qs_ctx *k, int D, const double xi[3], double ih, co
     double d2[QS_CHUNK];
     for (int c = 0; c < n; ++c)
         for (int a = 0; a < D; ++a)
-            r[a][c] = (k->c.x[a][idx[c]] - xi[a]) * ih;
+            r[a][c] = pst_offset(&k->c, a, k->c.x[a][idx[c]], xi[a]) * ih;
     for (int c = 0; c < n; ++c)
         d2[c] = r[0][c] * r[0][c] + r[1][c] * r[1][c] + (D == 3 ? r[2][c] * r[2][c] : 0.0);
     switch (k->c.kernel) { /* one vectorised instantiation per kernel */

@@ -103,7 +103,7 @@ PST_KHOT double pair_weight(const wls_ctx *k, int D, pst_kernel K, const double 
 {
     double q2 = 0;
     for (int a = 0; a < D; ++a) {
-        xh[a] = (k->c.x[a][j] - xc[a]) * ih;
+        xh[a] = pst_offset(&k->c, a, k->c.x[a][j], xc[a]) * ih;
         q2 += xh[a] * xh[a];
     }
     double q = sqrt(q2);
@@ -128,7 +128,7 @@ PST_KHOT void gather(const wls_ctx *k, int D, pst_kernel K, const double *xc, do
     double q[WLS_CHUNK];
     for (int c = 0; c < n; ++c)
         for (int a = 0; a < D; ++a)
-            r[a][c] = (k->c.x[a][idx[c]] - xc[a]) * ih;
+            r[a][c] = pst_offset(&k->c, a, k->c.x[a][idx[c]], xc[a]) * ih;
     for (int c = 0; c < n; ++c)
         w[c] = r[0][c] * r[0][c] + r[1][c] * r[1][c] + (D == 3 ? r[2][c] * r[2][c] : 0.0);
     for (int c = 0; c < n; ++c)
@@ -313,7 +313,7 @@ PST_KHOT void lane_rows_t(const wls_ctx *k, size_t i0, size_t i1, double *y, int
         if (k->c.kind[i] == PST_DIRICHLET)
             continue;
         const double *lam = k->d->lam + (size_t)nb * i;
-        pst_lanes L = pst_lanes_row(k->c.xyzu, i, 1.0 / pst_h(&k->c, i));
+        pst_lanes L = pst_lanes_row(&k->c, i, 1.0 / pst_h(&k->c, i));
         PST_LANES_ROW(L, k->c.idx, k->c.off[i], k->c.off[i + 1], j, x, yy, z,
                       lane_weights(k, D, B, K, x, yy, z, lam));
         y[i] = pst_v8_sum(L.acc);
@@ -893,6 +893,11 @@ int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,
     *fallbacks = 0;
     PST_CHECK(op->n == 0, PST_EINVAL, err,
               "%s: cannot interpolate on an empty cloud", op->scheme->name);
+    /* its cell search around a point does not wrap through a periodic box's faces */
+    PST_CHECK(k.c.im.any, PST_EINVAL, err,
+              "%s: interpolation at points in a periodic box is not available (qsfdi's is); "
+              "the operator, gradient and Hessian at the particles are",
+              op->scheme->name);
     int st = pst_cells_build(&g, op->cloud, pst_sph_support[k.d->kernel] * h, err);
     if (st != PST_OK)
         return st;

@@ -101,6 +101,29 @@ void pst_cloud_to_input_order(const pst_cloud *c, const double *in, double *out)
  * PST_EINVAL (message in err) when the ids are not a permutation of 0..n-1. Free with free(). */
 int pst_cloud_input_inverse(const pst_cloud *c, size_t **inv, char *err);
 
+/* --- Periodic boxes (docs/periodic.md) ---------------------------------------------------- */
+
+/* Make axis d (d < dim) periodic where periodic[d] != 0, with period hi[d] - lo[d]: positions
+ * along a periodic axis must lie in [lo[d], hi[d]) (pst_cloud_validate checks it,
+ * pst_cloud_wrap folds moved particles back), and every neighbour list, operator and solve on
+ * the cloud then takes the minimum image of each pair offset along it. lo and hi are read
+ * only on the periodic axes; all periodic[d] 0 makes the cloud non-periodic again. The lists
+ * built on the cloud also need each period longer than twice their largest neighbour radius
+ * (checked when they are built). PST_EINVAL (reason in err) for a box that is not finite with
+ * lo < hi on a periodic axis. */
+int pst_cloud_set_periodic(pst_cloud *c, const int periodic[3], const double lo[3],
+                           const double hi[3], char *err);
+
+/* Which axes are periodic (periodic[d] 0 or 1 for d < 3; 0 above dim) and their box (lo[d],
+ * hi[d]; 0 on the other axes). Any pointer may be NULL. Returns the number of periodic axes. */
+int pst_cloud_periodic(const pst_cloud *c, int periodic[3], double lo[3], double hi[3]);
+
+/* Fold every position along a periodic axis into [lo, hi) (x - P floor((x - lo) / P), with a
+ * result that rounds onto hi taken as lo, the same point of the torus): what a particle code
+ * calls after moving its particles. Positions that are not finite are left for
+ * pst_cloud_validate to report. */
+void pst_cloud_wrap(pst_cloud *c);
+
 /* --- Generators ---------------------------------------------------------------------------- */
 
 /* Lattice generator options. The lattice is x_i = lo + i*s0 for i = 0..n_d along each axis,
@@ -116,6 +139,10 @@ typedef struct {
     double h_ratio;          /* h = h_ratio * s0 (uniform)                                      */
     double angle;            /* rotation of the lattice about the box centre, radians (2D: in
                                 the x-y plane; 3D: about the z axis). 0 for none.               */
+    int periodic[3];         /* periodic axes: the lattice leaves out the hi end along them
+                                (n_d points, lo + i s0 for i < n_d), jittered positions are
+                                folded into [lo, hi), no boundary layer on their faces, and the
+                                cloud gets the box (pst_cloud_set_periodic). Needs angle 0.      */
 } pst_lattice_opts;
 
 /* Fill `o` with defaults: 2D unit box, s0 = 0.1, no jitter, seed 1, no boundary layer,

@@ -27,7 +27,10 @@ typedef struct pst_nlist pst_nlist;
 /* Build the CSR neighbour list of choice 1 (docs/choices.md): j is a neighbour of i iff j != i and
  * |x_j - x_i| < support * (h_i + h_j)/2 (strict), with `support` the kernel's support radius
  * in units of h (pst_kernel_support). Rows are sorted by neighbour index. Works on any order
- * of the cloud; a Morton-sorted cloud is faster. */
+ * of the cloud; a Morton-sorted cloud is faster. In a periodic cloud (pst_cloud_set_periodic)
+ * x_j - x_i is the minimum image along the periodic axes: positions must lie in the box and
+ * each period must exceed 2 support h_max, so that a pair has one image within reach
+ * (PST_EINPUT otherwise, with the numbers in err). */
 int pst_nlist_build(pst_nlist **out, const pst_cloud *c, double support, char *err);
 
 /* pst_nlist_build with a progress hook (pstencil/core.h; NULL or a NULL fn: none). The work
@@ -84,8 +87,10 @@ typedef struct {
  * particles: c is the cloud nl was built on, or one of the same size and order). With a skin,
  * when 2 moved + support * grown <= skin * min h (h as at the wide build, less a rounding
  * allowance) the list is the wide list's pairs filtered by the true radius, an O(pairs) pass;
- * otherwise, or when the cloud was permuted (pst_cloud_permute, pst_cloud_morton_sort) since,
- * the wide list is built again. Either way the result is, entry for entry, the list
+ * otherwise, or when the cloud was permuted (pst_cloud_permute, pst_cloud_morton_sort) or its
+ * periodic box changed since, the wide list is built again. In a periodic box a displacement
+ * is its minimum image, so particles folded back by pst_cloud_wrap count as moved by their
+ * step. Either way the result is, entry for entry, the list
  * pst_nlist_build would give now, for every thread count. Without a skin: a fresh build. The
  * list's handle stays valid; its offsets and indices may move (read them again). Operators
  * built on nl must be refreshed (pst_op_refresh) before their next use. info may be NULL.

@@ -344,6 +344,7 @@ int pst_cloud_validate(pst_cloud *c, char *err)
     for (size_t i = 0; i < c->n; ++i)
         PST_TRY(validate_particle(c, i, err));
     PST_TRY(pst_cloud_check_extent_normals(c, err));
+    PST_TRY(pst_cloud_check_box(c, err));
     size_t a, b;
     int dup = pst_cloud_find_duplicate(c, &a, &b);
     PST_CHECK(dup < 0, dup, err, "out of memory for the duplicate check of %zu particles", c->n);

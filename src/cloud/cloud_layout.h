@@ -3,7 +3,10 @@
 #ifndef PSTENCIL_CLOUD_LAYOUT_H
 #define PSTENCIL_CLOUD_LAYOUT_H
 
+#include "min_image.h"
 #include "pstencil.h"
+
+#include <math.h>
 
 struct pst_cloud {
     int dim;
@@ -19,6 +22,8 @@ struct pst_cloud {
     int64_t *id;         /* original input index                                             */
     uint64_t permutations; /* pst_cloud_permute calls so far: a list kept for an update
                               (pst_nlist_update) notices a reordered cloud                    */
+    uint8_t periodic[3];   /* axis d is periodic (pst_cloud_set_periodic)                      */
+    double box_lo[3], box_hi[3]; /* the periodic box along the periodic axes                 */
     size_t nfields;
     char (*field_name)[PST_MAX_NAME];
     double **field;
@@ -44,6 +49,29 @@ int pst_cloud_add_fields(pst_cloud *c, const char *const *names, size_t n, doubl
  * a finite extent along every axis, a non-zero normal on every Neumann particle. PST_EINPUT
  * with the axis or the particle (by id) in err. */
 int pst_cloud_check_extent_normals(const pst_cloud *c, char *err);
+
+/* The pair geometry of a periodic box (docs/periodic.md): per axis the period P and P/2, or
+ * P = 0 and P/2 = infinity on an axis that is not periodic. any: some axis is periodic. */
+typedef struct {
+    double P[3], hP[3];
+    int any;
+} pst_image;
+
+static inline pst_image pst_cloud_image(const pst_cloud *c)
+{
+    pst_image m = {.any = 0};
+    for (int d = 0; d < 3; ++d) {
+        int per = d < c->dim && c->periodic[d];
+        m.P[d] = per ? c->box_hi[d] - c->box_lo[d] : 0.0;
+        m.hP[d] = per ? 0.5 * m.P[d] : INFINITY;
+        m.any |= per;
+    }
+    return m;
+}
+
+/* PST_EINPUT (the particle and the box in err) when a position along a periodic axis lies
+ * outside [lo, hi). */
+int pst_cloud_check_box(const pst_cloud *c, char *err);
 
 /* h of particle i whatever the layout. */
 static inline double pst_cloud_h_at(const pst_cloud *c, size_t i)

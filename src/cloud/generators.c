@@ -15,6 +15,7 @@ typedef struct {
     double s0, jitter;
     uint64_t seed;
     int boundary_layer;
+    int periodic[3];        /* periodic axes: no hi end, no faces, positions folded */
     int rotate;             /* angle != 0: rotating by 0 would still round        */
     double centre[2], cosa, sina;
 } grid;
@@ -36,6 +37,14 @@ static int setup_grid(grid *g, const pst_lattice_opts *o, const char *who, char 
               who, o->angle);
     PST_CHECK(o->boundary_layer != 0 && o->boundary_layer != 1, PST_EINVAL, err,
               "%s: boundary_layer must be 0 or 1 (got %d)", who, o->boundary_layer);
+    int periodic = 0;
+    for (int d = 0; d < 3; ++d) {
+        g->periodic[d] = d < o->dim && o->periodic[d] != 0;
+        periodic |= g->periodic[d];
+    }
+    PST_CHECK(periodic && o->angle != 0, PST_EINVAL, err,
+              "%s: a periodic box cannot be rotated (angle %g): its axes are the box's", who,
+              o->angle);
     g->dim = o->dim;
     for (int d = 0; d < o->dim; ++d) {
         double lo = o->lo[d], hi = o->hi[d];
@@ -155,8 +164,23 @@ static void fill(pst_cloud *c, const grid *g, point_fn point, size_t ninterior)
     }
 }
 
-/* Node p of the lattice, x fastest: p = i + (n_x+1)*(j + (n_y+1)*k). There are no interior
- * particles listed first, so ninterior is not used. */
+/* Nodes of the lattice along axis d: n_d + 1, or n_d on a periodic axis (hi is lo again). */
+static size_t nodes(const grid *g, int d) { return (size_t)g->n[d] + !g->periodic[d]; }
+
+/* Fold the periodic coordinates of x into [lo, hi) after a jitter (as pst_cloud_wrap). */
+static void fold(const grid *g, double x[3])
+{
+    for (int d = 0; d < g->dim; ++d) {
+        if (!g->periodic[d] || (x[d] >= g->lo[d] && x[d] < g->hi[d]))
+            continue;
+        double P = g->hi[d] - g->lo[d], t = x[d] - g->lo[d];
+        double w = g->lo[d] + (t - P * floor(t / P));
+        x[d] = w >= g->hi[d] || w < g->lo[d] ? g->lo[d] : w;
+    }
+}
+
+/* Node p of the lattice, x fastest: p = i + m_x*(j + m_y*k), m_d = nodes(g, d). There are no
+ * interior particles listed first, so ninterior is not used. */
 static void lattice_point(const grid *g, size_t p, size_t ninterior, double x[3], double nrm[3],
                           int *kind)
 {
@@ -164,11 +188,11 @@ static void lattice_point(const grid *g, size_t p, size_t ninterior, double x[3]
     size_t rest = p;
     int faces = 0;
     for (int d = 0; d < g->dim; ++d) {
-        size_t m = (size_t)g->n[d] + 1, i = rest % m;
+        size_t m = nodes(g, d), i = rest % m;
         rest /= m;
         /* the far node is hi itself, so a boundary layer lies exactly on the box */
         x[d] = i == g->n[d] ? g->hi[d] : g->lo[d] + (double)i * g->s0;
-        nrm[d] = i == 0 ? -1.0 : i == g->n[d] ? 1.0 : 0.0;
+        nrm[d] = g->periodic[d] ? 0.0 : i == 0 ? -1.0 : i == g->n[d] ? 1.0 : 0.0;
         faces += nrm[d] != 0;
     }
     if (g->boundary_layer && faces > 0) {
@@ -181,10 +205,17 @@ static void lattice_point(const grid *g, size_t p, size_t ninterior, double x[3]
         for (int d = 0; d < g->dim; ++d)
             nrm[d] = 0;
         jitter(g, p, x);
+        fold(g, x);
         *kind = PST_INTERIOR;
     }
     if (g->rotate)
         rotate_xy(g, x, nrm);
+}
+
+/* The generated cloud gets the grid's periodic box. */
+static void set_box(pst_cloud *c, const grid *g)
+{
+    pst_cloud_set_periodic(c, g->periodic, g->lo, g->hi, NULL); /* lo < hi: checked */
 }
 
 int pst_cloud_lattice(pst_cloud **out, const pst_lattice_opts *o, char *err)
@@ -196,16 +227,20 @@ int pst_cloud_lattice(pst_cloud **out, const pst_lattice_opts *o, char *err)
     uint64_t count = 1;
     int ok = 1;
     for (int d = 0; d < g.dim; ++d)
-        ok = ok && mul_count(&count, (uint64_t)g.n[d] + 1);
+        ok = ok && mul_count(&count, (uint64_t)nodes(&g, d));
     pst_cloud *c;
     PST_TRY(make_cloud(&c, &g, ok ? count : UINT64_MAX, o, who, err));
     fill(c, &g, lattice_point, 0);
+    set_box(c, &g);
     *out = c;
     return PST_OK;
 }
 
+/* Face particles on one face normal to axis (none on a periodic axis). */
 static uint64_t face_size(const grid *g, int axis)
 {
+    if (g->periodic[axis])
+        return 0;
     uint64_t s = 1;
     for (int e = 0; e < g->dim; ++e)
         if (e != axis)
@@ -228,6 +263,7 @@ static void cell_point(const grid *g, size_t p, size_t ninterior, double x[3], d
             nrm[d] = 0;
         }
         jitter(g, p, x);
+        fold(g, x);
         *kind = PST_INTERIOR;
     } else {
         size_t q = p - ninterior;
@@ -270,6 +306,7 @@ int pst_cloud_cell_centred(pst_cloud **out, const pst_lattice_opts *o, char *err
     pst_cloud *c;
     PST_TRY(make_cloud(&c, &g, ok ? count : UINT64_MAX, o, who, err));
     fill(c, &g, cell_point, (size_t)ninterior);
+    set_box(c, &g);
     *out = c;
     return PST_OK;
 }

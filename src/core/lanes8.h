@@ -7,6 +7,8 @@
 #ifndef PSTENCIL_LANES8_H
 #define PSTENCIL_LANES8_H
 
+#include "min_image.h"
+
 #include <stdint.h>
 #include <string.h>
 
@@ -24,6 +26,14 @@ typedef double pst_v4 __attribute__((vector_size(32)));
 typedef int64_t pst_v8i __attribute__((vector_size(64))); /* a comparison's lanes: 0 or -1 */
 
 PST_V8_INLINE pst_v8 pst_v8_splat(double a) { return (pst_v8){a, a, a, a, a, a, a, a}; }
+
+/* pst_min_image (cloud_layout.h) in every lane: the same operations, so the same bits. */
+PST_V8_INLINE pst_v8 pst_v8_min_image(pst_v8 d, double P, double hP)
+{
+    for (int l = 0; l < 8; ++l)
+        d[l] = pst_min_image(d[l], P, hP);
+    return d;
+}
 
 /* The lanes' sum in one fixed order (kernels/wls.h's pst_dot_sum has the same). */
 PST_V8_INLINE double pst_v8_sum(pst_v8 a)

@@ -38,6 +38,52 @@ static inline uint32_t pst_cell_coord(double x, double lo, double inv, uint32_t 
     return (uint32_t)u;
 }
 
+/* A run of cells along one axis, coordinates [l, u], whose bounds a search shifts by `shift`
+ * (the image across a periodic face) when it prunes; prune 0: the search must not prune
+ * along this axis. */
+typedef struct {
+    uint32_t l, u;
+    double shift;
+    int prune;
+} pst_cell_run;
+
+/* The runs of cells along axis d that hold every particle whose offset from a reach [lo, hi]
+ * (coordinates along d) can be within it: one run on an axis that is not periodic; on a
+ * periodic axis (im->P[d] > 0, box [blo[d], bhi[d]), particles inside it) up to three: the
+ * part of the reach below the box seen at its upper face (shift -P), the middle, the part
+ * above seen at the lower face (shift +P); and where those share a cell (a reach nearly as long
+ * as the period) every cell of the axis once, unpruned, so that no cell is visited twice.
+ * Returns the number of runs. */
+static inline int pst_cell_runs(const pst_cells *g, const pst_image *im, const double blo[3],
+                                const double bhi[3], int d, double lo, double hi,
+                                pst_cell_run run[3])
+{
+    uint32_t top = g->dims[d] - 1;
+#define PST_COORD_(x) pst_cell_coord(x, g->lo[d], g->inv, g->dims[d])
+    if (im->P[d] == 0) {
+        run[0] = (pst_cell_run){PST_COORD_(lo), PST_COORD_(hi), 0.0, 1};
+        return 1;
+    }
+    double P = im->P[d];
+    int m = 0;
+    if (hi - lo < P) {
+        if (lo < blo[d])
+            run[m++] = (pst_cell_run){PST_COORD_(lo + P), top, -P, 1};
+        run[m++] = (pst_cell_run){PST_COORD_(fmax(lo, blo[d])), PST_COORD_(fmin(hi, bhi[d])),
+                                  0.0, 1};
+        if (hi >= bhi[d])
+            run[m++] = (pst_cell_run){0, PST_COORD_(hi - P), P, 1};
+        for (int a = 0; a < m; ++a) /* runs that share a cell would visit it twice */
+            for (int b = a + 1; b < m; ++b)
+                if (run[a].l <= run[b].u && run[b].l <= run[a].u)
+                    m = 0;
+    }
+    if (m == 0)
+        run[m++] = (pst_cell_run){0, top, 0.0, 0};
+#undef PST_COORD_
+    return m;
+}
+
 /* Exclusive prefix sum in place: v[b] becomes v[0] + .. + v[b-1]. The block sums of the
  * parallel scans (cells and neighbour lists), in a fixed order. */
 static inline void pst_exclusive_scan(int64_t *v, size_t nblocks)

@@ -12,6 +12,13 @@
  * cursors. A thread owns whole cells, a static partition balanced by particle count; every entry
  * goes to a fixed place, so the list is identical for any thread count.
  *
+ * Periodic axes (docs/periodic.md): the distance tests take the minimum image of each offset,
+ * and a cell's candidates along such an axis wrap around the box: the cells the reach covers
+ * past a face are those at the other face, their bounds shifted by the period so that the
+ * pruning sees the image. Where the images of the reach overlap (a period of a few cells)
+ * the axis's cells are taken once each, unpruned: with the period above twice the radius only
+ * the minimum image of a pair can be within it, so no pair is counted twice.
+ *
  * Row order: row s receives, in this order, the lower neighbours p < s (in increasing slot
  * order: thread u's before thread u+1's, each thread's in its processing order) and then the
  * upper ones (candidate cells in increasing slot order, increasing inside each). So rows are
@@ -56,6 +63,8 @@ typedef struct {
     double huni, hmax;
     double r2uni;       /* (support*h)^2 for uniform h                        */
     double margin;      /* bound on the rounding of positions vs cell bounds  */
+    pst_image im;       /* the periodic box (im.any = 0: none)                */
+    double blo[3], bhi[3]; /* its bounds on the periodic axes                 */
     const int64_t *offset; /* fill pass: the row offsets (by cloud index)     */
     uint32_t *index;       /* fill pass: the list                             */
     pst_tally *tally;      /* the progress hook's counter, or NULL            */
@@ -70,41 +79,53 @@ static inline double reach(const ctx *k, size_t p)
 }
 
 /* Candidate cells of the cell of rank r: every non-empty cell within the reach of one of its
- * particles, sorted by slot. Returns their number. */
+ * particles (through the periodic faces too), sorted by slot. Returns their number. */
 static size_t cell_candidates(const ctx *k, size_t r, cand *out)
 {
     const pst_cells *g = k->g;
-    uint32_t kl[3] = {0, 0, 0}, kh[3] = {0, 0, 0};
-    for (int d = 0; d < k->dim; ++d)
-        kl[d] = UINT32_MAX;
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (int d = 0; d < k->dim; ++d) {
+        lo[d] = INFINITY;
+        hi[d] = -INFINITY;
+    }
     for (size_t p = g->start[r]; p < g->start[r + 1]; ++p) {
         double rp = reach(k, p);
         for (int d = 0; d < k->dim; ++d) {
-            uint32_t l = pst_cell_coord(k->x[d][p] - rp, g->lo[d], g->inv, g->dims[d]);
-            uint32_t u = pst_cell_coord(k->x[d][p] + rp, g->lo[d], g->inv, g->dims[d]);
-            kl[d] = l < kl[d] ? l : kl[d];
-            kh[d] = u > kh[d] ? u : kh[d];
+            lo[d] = fmin(lo[d], k->x[d][p] - rp);
+            hi[d] = fmax(hi[d], k->x[d][p] + rp);
         }
     }
+    pst_cell_run runs[3][3];
+    int nr[3] = {1, 1, 1};
+    runs[2][0] = (pst_cell_run){0, 0, 0.0, 0};
+    for (int d = 0; d < k->dim; ++d)
+        nr[d] = pst_cell_runs(g, &k->im, k->blo, k->bhi, d, lo[d], hi[d], runs[d]);
     size_t m = 0;
-    for (uint32_t iz = kl[2]; iz <= kh[2]; ++iz)
-        for (uint32_t iy = kl[1]; iy <= kh[1]; ++iy)
-            for (uint32_t ix = kl[0]; ix <= kh[0]; ++ix) {
-                size_t rc = g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
-                uint32_t a = g->start[rc], b = g->start[rc + 1];
-                if (a == b)
-                    continue;
-                cand e = {.a = a, .b = b};
-                uint32_t ic[3] = {ix, iy, iz};
-                for (int d = 0; d < 3; ++d) {
-                    e.lo[d] = d < k->dim ? g->lo[d] + ic[d] * g->size - k->margin : 0;
-                    e.hi[d] = d < k->dim ? g->lo[d] + (ic[d] + 1.0) * g->size + k->margin : 0;
-                }
-                size_t j = m++;
-                for (; j > 0 && out[j - 1].a > e.a; --j)
-                    out[j] = out[j - 1];
-                out[j] = e;
-            }
+    for (int rz = 0; rz < nr[2]; ++rz)
+        for (uint32_t iz = runs[2][rz].l; iz <= runs[2][rz].u; ++iz)
+            for (int ry = 0; ry < nr[1]; ++ry)
+                for (uint32_t iy = runs[1][ry].l; iy <= runs[1][ry].u; ++iy)
+                    for (int rx = 0; rx < nr[0]; ++rx)
+                        for (uint32_t ix = runs[0][rx].l; ix <= runs[0][rx].u; ++ix) {
+                            size_t rc = g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
+                            uint32_t a = g->start[rc], b = g->start[rc + 1];
+                            if (a == b)
+                                continue;
+                            cand e = {.a = a, .b = b};
+                            const uint32_t ic[3] = {ix, iy, iz};
+                            const pst_cell_run *ar[3] = {&runs[0][rx], &runs[1][ry], &runs[2][rz]};
+                            for (int d = 0; d < 3; ++d) {
+                                double c0 = g->lo[d] + ic[d] * g->size + ar[d]->shift;
+                                double c1 = g->lo[d] + (ic[d] + 1.0) * g->size + ar[d]->shift;
+                                int used = d < k->dim && ar[d]->prune;
+                                e.lo[d] = used ? c0 - k->margin : d < k->dim ? -INFINITY : 0;
+                                e.hi[d] = used ? c1 + k->margin : d < k->dim ? INFINITY : 0;
+                            }
+                            size_t j = m++;
+                            for (; j > 0 && out[j - 1].a > e.a; --j)
+                                out[j] = out[j - 1];
+                            out[j] = e;
+                        }
     return m;
 }
 
@@ -117,14 +138,15 @@ static size_t cell_candidates(const ctx *k, size_t r, cand *out)
  * per-particle box pruning (expected volumes of the visited cells over the ball's, uniform
  * density), halved by testing each pair once. */
 static inline __attribute__((always_inline)) size_t
-scan_range(const ctx *k, int dim, int varh, int fill, size_t a, size_t b, const double *xp,
-           double hi, uint32_t *restrict cur, uint32_t *row, uint32_t self)
+scan_range(const ctx *k, int dim, int varh, int per, int fill, size_t a, size_t b,
+           const double *xp, double hi, uint32_t *restrict cur, uint32_t *row, uint32_t self)
 {
     double xi[3] = {xp[0], xp[1], xp[2]}; /* in registers: no aliasing with the outputs */
     const double *restrict X = k->x[0], *restrict Y = k->x[1], *restrict Z = k->x[2];
     const double *restrict H = k->h;
     const uint32_t *restrict pid = k->pid;
     double halfs = k->halfs, r2u = k->r2uni;
+    const pst_image im = k->im;
     if (!fill) {
         /* count: bound by the flops and compare latency of the distance tests (vectorised,
          * AVX-512 under dispatch: about a quarter of the 3D scene's 1.6 s of user time at 1
@@ -132,7 +154,7 @@ scan_range(const ctx *k, int dim, int varh, int fill, size_t a, size_t b, const 
          * caller */
         size_t cnt = 0;
         for (size_t q = a; q < b; ++q) {
-            size_t hit = pair_hit(X, Y, Z, H, xi, hi, halfs, r2u, dim, varh, q);
+            size_t hit = pair_hit(X, Y, Z, H, xi, hi, halfs, r2u, dim, varh, per, &im, q);
             cnt += hit;
             cur[q] += (uint32_t)hit;
         }
@@ -147,7 +169,7 @@ scan_range(const ctx *k, int dim, int varh, int fill, size_t a, size_t b, const 
         size_t len = b - q0 < FILL_BLOCK ? b - q0 : FILL_BLOCK;
         /* fill, tests: the same vectorised tests as the count, into a block of 0/1 flags */
         for (size_t e = 0; e < len; ++e) {
-            hit[e] = pair_hit(X, Y, Z, H, xi, hi, halfs, r2u, dim, varh, q0 + e);
+            hit[e] = pair_hit(X, Y, Z, H, xi, hi, halfs, r2u, dim, varh, per, &im, q0 + e);
         }
         /* fill, compaction: branch-free list of the hit slots (bound by the chain of adds on m,
          * one per flag) */
@@ -171,8 +193,8 @@ scan_range(const ctx *k, int dim, int varh, int fill, size_t a, size_t b, const 
 /* The neighbours of slot p in later slots: counted (credited to both rows in `cur`) or
  * written (row p from `row` on, row q through `cur`). Returns their number. */
 static inline __attribute__((always_inline)) size_t
-particle_row(const ctx *k, int dim, int varh, int fill, size_t p, const cand *cl, size_t m,
-             uint32_t *restrict cur, uint32_t *row)
+particle_row(const ctx *k, int dim, int varh, int per, int fill, size_t p, const cand *cl,
+             size_t m, uint32_t *restrict cur, uint32_t *row)
 {
     double xi[3] = {k->x[0][p], k->x[1][p], dim == 3 ? k->x[2][p] : 0};
     double hi = varh ? k->h[p] : k->huni;
@@ -193,7 +215,8 @@ particle_row(const ctx *k, int dim, int varh, int fill, size_t p, const cand *cl
         if (g2 >= r2)
             continue;
         size_t a = c->a > p ? c->a : p + 1;
-        w += scan_range(k, dim, varh, fill, a, c->b, xi, hi, cur, fill ? row + w : NULL, self);
+        w += scan_range(k, dim, varh, per, fill, a, c->b, xi, hi, cur, fill ? row + w : NULL,
+                        self);
     }
     return w;
 }
@@ -239,7 +262,7 @@ static void sort_row(uint32_t *row, uint32_t *tmp, size_t len)
 PST_ISA_DISPATCH static void pass(const ctx *k, size_t c0, size_t c1, cand *cl, uint32_t *cur)
 {
     const pst_cells *g = k->g;
-    int fill = k->index != NULL, varh = k->h != NULL;
+    int fill = k->index != NULL, varh = k->h != NULL, per = k->im.any;
     size_t counted = g->start[c0]; /* the slots before it are counted: one test per cell */
     for (size_t r = c0; r < c1; ++r) {
         if (k->tally && g->start[r] - counted >= PROGRESS_SLOTS) {
@@ -253,13 +276,14 @@ PST_ISA_DISPATCH static void pass(const ctx *k, size_t c0, size_t c1, cand *cl, 
             /* fill: row p's own part starts after this thread's writes of lower neighbours */
             uint32_t *row = fill ? k->index + k->offset[k->pid[p]] + cur[p] : NULL;
             size_t len;
-#define ROW(D, V, F) particle_row(k, D, V, F, p, cl, m, cur, row)
+#define ROW(D, V, P, F) particle_row(k, D, V, P, F, p, cl, m, cur, row)
+#define ROWS(D, V) (per ? (fill ? ROW(D, V, 1, 1) : ROW(D, V, 1, 0))                            \
+                        : (fill ? ROW(D, V, 0, 1) : ROW(D, V, 0, 0)))
             if (k->dim == 3)
-                len = varh ? (fill ? ROW(3, 1, 1) : ROW(3, 1, 0))
-                           : (fill ? ROW(3, 0, 1) : ROW(3, 0, 0));
+                len = varh ? ROWS(3, 1) : ROWS(3, 0);
             else
-                len = varh ? (fill ? ROW(2, 1, 1) : ROW(2, 1, 0))
-                           : (fill ? ROW(2, 0, 1) : ROW(2, 0, 0));
+                len = varh ? ROWS(2, 1) : ROWS(2, 0);
+#undef ROWS
 #undef ROW
             cur[p] += (uint32_t)len;
         }
@@ -316,6 +340,14 @@ int pst_nlist_check_cloud(const pst_cloud *c, double support, char *err)
     double hmax = pst_cloud_h_max(c), rmax = support * hmax;
     PST_CHECK(!isfinite(rmax * rmax) || !isfinite(2 * hmax), PST_EINVAL, err,
               "neighbour list: support radius %g * %g is too large", support, hmax);
+    PST_TRY(pst_cloud_check_box(c, err));
+    for (int d = 0; d < c->dim; ++d) {
+        double P = c->box_hi[d] - c->box_lo[d];
+        PST_CHECK(c->periodic[d] && !(2 * rmax < P), PST_EINPUT, err,
+                  "neighbour list: the period %g along %c must exceed twice the neighbour "
+                  "radius %g * h_max %g = %g (a pair would have two images within reach)",
+                  P, "xyz"[d], support, hmax, rmax);
+    }
     return PST_OK;
 }
 
@@ -357,7 +389,15 @@ static ctx search_ctx(const pst_cloud *c, const pst_cells *g, double *copy, doub
         maxabs = fmax(maxabs, fabs(g->lo[d]) + ext);
         span = fmax(span, ext);
     }
-    k.margin = 64 * DBL_EPSILON * (maxabs + span);
+    k.im = pst_cloud_image(c);
+    double period = 0;
+    for (int d = 0; d < dim; ++d) {
+        k.blo[d] = c->box_lo[d];
+        k.bhi[d] = c->box_hi[d];
+        period = fmax(period, k.im.P[d]);
+    }
+    /* a minimum image rounds once more, by an ulp of the period */
+    k.margin = 64 * DBL_EPSILON * (maxabs + span + period);
     return k;
 }
 
@@ -368,7 +408,8 @@ static size_t max_candidates(const ctx *k, double support)
     double rmax = support * k->hmax * (1.0 + 64 * DBL_EPSILON) + k->margin;
     size_t maxcand = 1;
     for (int d = 0; d < k->dim; ++d) {
-        double per_axis = floor((2 * rmax + g->size) * g->inv) + 3;
+        /* a periodic axis splits the reach into up to three runs: two more partial cells */
+        double per_axis = floor((2 * rmax + g->size) * g->inv) + 3 + 2 * (k->im.P[d] > 0);
         maxcand *= per_axis < g->dims[d] ? (size_t)per_axis : g->dims[d];
     }
     return maxcand;

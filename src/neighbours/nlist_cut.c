@@ -13,12 +13,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The cut rule of pair (i, j): d_ij < cut * support * (h_i + h_j) / 2, written with squares. */
+/* The cut rule of pair (i, j): d_ij < cut * support * (h_i + h_j) / 2, written with squares
+ * (d_ij through the periodic faces as the list's). */
 static int within(const pst_cloud *c, double reach, size_t i, size_t j)
 {
     double d2 = 0;
     for (int d = 0; d < c->dim; ++d) {
-        double t = c->x[d][j] - c->x[d][i];
+        double P = c->periodic[d] ? c->box_hi[d] - c->box_lo[d] : 0; /* minimum image */
+        double t = pst_min_image(c->x[d][j] - c->x[d][i], P, P > 0 ? 0.5 * P : INFINITY);
         d2 += t * t;
     }
     double r = reach * 0.5 * (pst_cloud_h_at(c, i) + pst_cloud_h_at(c, j));

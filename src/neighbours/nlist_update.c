@@ -34,6 +34,7 @@ struct pst_verlet {
     uint8_t *keep;          /* the filter's mark per wide pair                           */
     int64_t keep_capacity;
     uint64_t permutations;  /* the cloud's pst_cloud_permute count then                  */
+    pst_image box;          /* the cloud's periodic box then                             */
     uint64_t rebuilds, filters;
     int dim;
 };
@@ -95,7 +96,18 @@ static int snapshot(struct pst_verlet *v, const pst_cloud *c, double support, ch
     double allowance = 1024 * DBL_EPSILON * (maxabs + (support + v->skin) * hmax);
     v->budget = n ? v->skin * hmin - allowance : 0;
     v->permutations = c->permutations;
+    v->box = pst_cloud_image(c);
     return PST_OK;
+}
+
+/* The cloud is as the last wide build saw it: not permuted since, the same periodic box. */
+static int same_layout(const struct pst_verlet *v, const pst_cloud *c)
+{
+    pst_image now = pst_cloud_image(c);
+    int same = v->permutations == c->permutations;
+    for (int d = 0; d < 3; ++d)
+        same = same && now.P[d] == v->box.P[d];
+    return same;
 }
 
 /* The largest displacement since the snapshot and the largest growth of h (0 if none). */
@@ -104,12 +116,14 @@ static void movement(const struct pst_verlet *v, const pst_cloud *c, double *mov
 {
     size_t n = c->n;
     int dim = c->dim;
+    const pst_image im = pst_cloud_image(c);
     double m2 = 0, g = 0;
 #pragma omp parallel for schedule(static) reduction(max : m2, g)
     for (size_t i = 0; i < n; ++i) {
         double s = 0;
         for (int d = 0; d < dim; ++d) {
-            double t = c->x[d][i] - v->x0[(size_t)d * n + i];
+            /* a particle folded back into a periodic box moved by its minimum image */
+            double t = pst_min_image(c->x[d][i] - v->x0[(size_t)d * n + i], im.P[d], im.hP[d]);
             s += t * t;
         }
         m2 = fmax(m2, s);
@@ -133,6 +147,7 @@ PST_ISA_DISPATCH static void mark_rows(const pst_cloud *c, const pst_nlist *wide
     const double *X = c->x[0], *Y = c->x[1], *Z = c->x[2], *H = c->h;
     double hu = c->h_uniform, r2u = (support * hu) * (support * hu), halfs = 0.5 * support;
     int dim = c->dim, varh = H != NULL;
+    const pst_image im = pst_cloud_image(c);
     double gx[MARK_CHUNK], gy[MARK_CHUNK], gz[MARK_CHUNK], gh[MARK_CHUNK];
     for (size_t i = i0; i < i1; ++i) {
         double xi[3] = {X[i], Y[i], dim == 3 ? Z[i] : 0}, hi = pst_cloud_h_at(c, i);
@@ -148,18 +163,24 @@ PST_ISA_DISPATCH static void mark_rows(const pst_cloud *c, const pst_nlist *wide
                 gh[e] = varh ? H[idx[e]] : 0;
             }
             size_t hits = 0;
-            if (dim == 3)
-                for (int e = 0; e < len; ++e) {
-                    size_t hit = pair_hit(gx, gy, gz, gh, xi, hi, halfs, r2u, 3, varh, (size_t)e);
-                    keep[q0 + e] = (uint8_t)hit;
-                    hits += hit;
-                }
-            else
-                for (int e = 0; e < len; ++e) {
-                    size_t hit = pair_hit(gx, gy, gz, gh, xi, hi, halfs, r2u, 2, varh, (size_t)e);
-                    keep[q0 + e] = (uint8_t)hit;
-                    hits += hit;
-                }
+#define MARK(D, PER)                                                                           \
+    for (int e = 0; e < len; ++e) {                                                            \
+        size_t hit = pair_hit(gx, gy, gz, gh, xi, hi, halfs, r2u, D, varh, PER, &im, (size_t)e); \
+        keep[q0 + e] = (uint8_t)hit;                                                           \
+        hits += hit;                                                                           \
+    }
+            if (dim == 3) {
+                if (im.any)
+                    MARK(3, 1)
+                else
+                    MARK(3, 0)
+            } else {
+                if (im.any)
+                    MARK(2, 1)
+                else
+                    MARK(2, 0)
+            }
+#undef MARK
             k += (int64_t)hits;
         }
         count[i + 1] = k;
@@ -303,10 +324,11 @@ int pst_nlist_update(pst_nlist *nl, const pst_cloud *c, pst_nlist_update_info *i
         st = rebuild_plain(nl, c, err);
     } else {
         PST_TRY(pst_nlist_check_cloud(c, nl->support + v->skin, err));
-        if (v->permutations == c->permutations && v->x0)
+        int same = same_layout(v, c);
+        if (same && v->x0)
             movement(v, c, &r.moved, &r.grown);
         /* the negation rebuilds on a NaN too */
-        r.rebuilt = v->permutations != c->permutations ||
+        r.rebuilt = !same ||
                     !(2 * r.moved + nl->support * r.grown <= v->budget);
         r.budget = v->budget;
         st = r.rebuilt ? rebuild_wide(nl, c, err) : filter(nl, c, err);

@@ -10,41 +10,65 @@
 #include <stdlib.h>
 
 /* Visit the particles within `radius` of point k of pts: count them (row == NULL) or write
- * them into row. The cell range per axis is monotone in the coordinate (pst_cell_coord clamps), so every
- * cell that can hold a neighbour is visited. Bound by the distance tests, ~3^dim cells of
- * ~(3h/s0)^dim particles each. */
-static size_t visit(const pst_cells *g, const pst_cloud *c, const double *const pts[3], size_t k,
-                    double radius, uint32_t *row)
+ * them into row. The cell range per axis is monotone in the coordinate (pst_cell_coord clamps),
+ * so every cell that can hold a neighbour is visited; along a periodic axis the range wraps
+ * through the faces (pst_cell_runs) and the offsets are minimum images. Bound by the distance
+ * tests, ~3^dim cells of ~(3h/s0)^dim particles each. */
+static size_t visit(const pst_cells *g, const pst_cloud *c, const pst_image *im,
+                    const double *const pts[3], size_t k, double radius, uint32_t *row)
 {
     double p[3] = {0, 0, 0};
     for (int d = 0; d < c->dim; ++d)
         p[d] = pts[d][k];
-    uint32_t lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    for (int d = 0; d < g->dim; ++d) {
-        lo[d] = pst_cell_coord(p[d] - radius, g->lo[d], g->inv, g->dims[d]);
-        hi[d] = pst_cell_coord(p[d] + radius, g->lo[d], g->inv, g->dims[d]);
-    }
+    pst_cell_run runs[3][3];
+    int nr[3] = {1, 1, 1};
+    runs[2][0] = (pst_cell_run){0, 0, 0.0, 0};
+    for (int d = 0; d < g->dim; ++d)
+        nr[d] = pst_cell_runs(g, im, c->box_lo, c->box_hi, d, p[d] - radius, p[d] + radius,
+                              runs[d]);
     double r2 = radius * radius;
     size_t count = 0;
-    for (uint32_t iz = lo[2]; iz <= hi[2]; ++iz)
-        for (uint32_t iy = lo[1]; iy <= hi[1]; ++iy)
-            for (uint32_t ix = lo[0]; ix <= hi[0]; ++ix) {
-                size_t r = g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
-                for (uint32_t s = g->start[r]; s < g->start[r + 1]; ++s) {
-                    uint32_t j = g->order[s];
-                    double d2 = 0;
-                    for (int d = 0; d < g->dim; ++d) {
-                        double t = c->x[d][j] - p[d];
-                        d2 += t * t;
-                    }
-                    if (d2 < r2) {
-                        if (row)
-                            row[count] = j;
-                        ++count;
-                    }
-                }
-            }
+    for (int rz = 0; rz < nr[2]; ++rz)
+        for (uint32_t iz = runs[2][rz].l; iz <= runs[2][rz].u; ++iz)
+            for (int ry = 0; ry < nr[1]; ++ry)
+                for (uint32_t iy = runs[1][ry].l; iy <= runs[1][ry].u; ++iy)
+                    for (int rx = 0; rx < nr[0]; ++rx)
+                        for (uint32_t ix = runs[0][rx].l; ix <= runs[0][rx].u; ++ix) {
+                            size_t r = g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
+                            for (uint32_t s = g->start[r]; s < g->start[r + 1]; ++s) {
+                                uint32_t j = g->order[s];
+                                double d2 = 0;
+                                for (int d = 0; d < g->dim; ++d) {
+                                    double t = pst_min_image(c->x[d][j] - p[d], im->P[d],
+                                                             im->hP[d]);
+                                    d2 += t * t;
+                                }
+                                if (d2 < r2) {
+                                    if (row)
+                                        row[count] = j;
+                                    ++count;
+                                }
+                            }
+                        }
     return count;
+}
+
+/* Points along a periodic axis must lie in the box, and the radius below half the period. */
+static int check_points(const pst_cloud *c, const pst_image *im, const double *const pts[3],
+                        size_t m, double radius, char *err)
+{
+    for (int d = 0; d < c->dim; ++d) {
+        if (im->P[d] == 0)
+            continue;
+        PST_CHECK(!(2 * radius < im->P[d]), PST_EINPUT, err,
+                  "point neighbours: the period %g along %c must exceed twice the radius %g",
+                  im->P[d], "xyz"[d], radius);
+        for (size_t k = 0; k < m; ++k)
+            PST_CHECK(!(pts[d][k] >= c->box_lo[d] && pts[d][k] < c->box_hi[d]), PST_EINPUT, err,
+                      "point %zu: %c = %g lies outside the periodic box [%g, %g)", k, "xyz"[d],
+                      pts[d][k], c->box_lo[d], c->box_hi[d]);
+    }
+    return PST_OK;
 }
 
 int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t m,
@@ -52,6 +76,8 @@ int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t
 {
     *off_out = NULL;
     *idx_out = NULL;
+    const pst_image im = pst_cloud_image(c);
+    PST_TRY(check_points(c, &im, pts, m, radius, err));
     int64_t *off = pst_calloc(m + 1, sizeof *off);
     PST_CHECK_ALLOC(off, err, "point neighbours: cannot allocate %zu rows", m);
     if (c->n == 0 || m == 0) {
@@ -67,7 +93,7 @@ int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t
     }
 #pragma omp parallel for schedule(dynamic, 256)
     for (size_t k = 0; k < m; ++k)
-        off[k + 1] = (int64_t)visit(&g, c, pts, k, radius, NULL);
+        off[k + 1] = (int64_t)visit(&g, c, &im, pts, k, radius, NULL);
     for (size_t k = 0; k < m; ++k)
         off[k + 1] += off[k];
     uint32_t *idx = pst_alloc((size_t)off[m] * sizeof *idx);
@@ -80,7 +106,7 @@ int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t
 #pragma omp parallel for schedule(dynamic, 256)
     for (size_t k = 0; k < m; ++k) {
         uint32_t *row = idx + off[k];
-        size_t len = visit(&g, c, pts, k, radius, row);
+        size_t len = visit(&g, c, &im, pts, k, radius, row);
         for (size_t a = 1; a < len; ++a) { /* insertion sort: rows are short */
             uint32_t v = row[a];
             size_t b = a;

@@ -82,6 +82,7 @@ static inline __attribute__((always_inline)) void moments(const pst_op *op, int 
     const double hi = pst_cloud_h_at(c, i), ih = 1.0 / hi, supp = pst_kernel_support(op->kernel);
     const double eps2 = op->opts.min_pair_distance * op->opts.min_pair_distance, *h = c->h;
     const double *p = op->xyzu + 4 * i;
+    const pst_image im = pst_cloud_image(c);
     const pst_v8 xi = pst_v8_splat(p[0]), yi = pst_v8_splat(p[1]), zi = pst_v8_splat(p[2]);
     const pst_v8 zero = pst_v8_splat(0.0);
     pst_v8 acc[10];
@@ -97,7 +98,13 @@ static inline __attribute__((always_inline)) void moments(const pst_op *op, int 
         }
         pst_v8 X, Y, Z, U, r = pst_v8_splat(supp);
         pst_v8_rows4(op->xyzu, j, &X, &Y, &Z, &U);
-        const pst_v8 dx = (X - xi) * ih, dy = (Y - yi) * ih, dz = D == 3 ? (Z - zi) * ih : zero;
+        pst_v8 ox = X - xi, oy = Y - yi, oz = Z - zi;
+        if (im.any) { /* minimum images in a periodic box, as the kernels' offsets */
+            ox = pst_v8_min_image(ox, im.P[0], im.hP[0]);
+            oy = pst_v8_min_image(oy, im.P[1], im.hP[1]);
+            oz = pst_v8_min_image(oz, im.P[2], im.hP[2]);
+        }
+        const pst_v8 dx = ox * ih, dy = oy * ih, dz = D == 3 ? oz * ih : zero;
         const pst_v8 d2 = dx * dx + dy * dy + dz * dz;
         if (PH) /* the larger h's support, in h_I */
             for (int l = 0; l < PST_LANES; ++l)
