@@ -97,6 +97,10 @@ typedef struct {
     pst_amg_interp amg_interp; /* default EXT_I                                               */
     int amg_pmax;          /* interpolation entries kept per row, 0-100; 0 = no truncation
                               (default 4)                                                    */
+    int amg_reuse;         /* pst_krylov_refresh: refreshes an AMG hierarchy serves before it
+                              is set up again, 0-1000 (0: at every refresh; default 8); it is
+                              set up sooner when a solve needs more than 1.5x the iterations
+                              of the first solve after its set-up (docs/solving.md)          */
     int restart;           /* GMRES restart length m (default 50)                             */
     int max_iter;          /* iteration limit (default 5000)                                  */
     double rtol;           /* stop when ||b - L u|| <= rtol ||b|| (2-norms, default 1e-10)      */
@@ -198,6 +202,17 @@ int pst_krylov_create(pst_krylov **out, const pst_op *op, const pst_solve_opts *
 int pst_krylov_create_linop(pst_krylov **out, const pst_linop *A, const pst_linop *M,
                             const pst_solve_opts *o, char *err);
 
+/* Bring a handle of an engine operator up to date after pst_op_refresh changed the operator's
+ * weights (the particles moved; the same particles and kinds): Jacobi's diagonal, CG's
+ * symmetric scaling and fix_mean's constant are computed again from the new weights (one pass
+ * over the rows each); an AMG hierarchy is kept while it has served fewer than o.amg_reuse
+ * refreshes and the last solve needed at most 1.5x the iterations of the first solve after its
+ * set-up, else it is set up again (docs/solving.md, "Refreshing a solver"). The workspace is
+ * kept. A stored solve (o.stored) needs the operator stored again (pst_op_refresh does it).
+ * PST_EINVAL for a user operator's handle or an operator without rows, or the failures of a
+ * set-up (pst_krylov_create); after a failure every pst_krylov_solve refuses the handle. */
+int pst_krylov_refresh(pst_krylov *s, char *err);
+
 /* Solve with a new right-hand side b and initial guess u (solution on return), n values each,
  * not aliased, as pst_solve describes; r (NULL allowed) receives the result, with r->seconds
  * the time of this solve only. Returns PST_OK, PST_ENUMERIC (not converged: r->stop says why),
@@ -214,6 +229,8 @@ typedef struct {
     int user_precond;      /* 1 when the preconditioner is the caller's M                     */
     int precond_setups;    /* preconditioner set-ups (AMG hierarchies, Jacobi diagonals) done */
     int solves;            /* pst_krylov_solve calls that iterated (or found b = 0)           */
+    int refreshes;         /* pst_krylov_refresh calls                                        */
+    int amg_reuses;        /* refreshes that kept the AMG hierarchy                           */
     /* AMG only (0 otherwise): */
     long long amg_entries; /* entries of the matrix handed to hypre                           */
     size_t amg_full_rows;  /* rows of the cut proxy that had no pair within amg_radius and

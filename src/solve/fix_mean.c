@@ -32,24 +32,31 @@ static int mean_diagonal(void *ctx, double *d)
     return PST_OK;
 }
 
-int pst_fix_mean_wrap(pst_krylov *s, char *err)
+int pst_fix_mean_update(pst_krylov *s, char *err)
 {
-    size_t n = s->A.n;
+    size_t n = s->L.n;
     double *d = pst_alloc(n * sizeof *d);
     PST_CHECK_ALLOC(d, err, "cannot allocate the solver's vectors for %zu particles", n);
-    int st = s->A.diagonal(s->A.ctx, d);
+    int st = s->L.diagonal(s->L.ctx, d);
     double dsum = 0;
     for (size_t i = 0; st == PST_OK && i < n; ++i)
         dsum += fabs(d[i]);
     pst_free(d);
     PST_CHECK(st != PST_OK, st, err, "fix_mean: the operator's diagonal failed");
+    double scale = dsum > 0 && isfinite(dsum) ? dsum / (double)n : 1.0;
+    s->c = -scale / s->vsum; /* sum V > 0: the volumes are checked positive */
+    return PST_OK;
+}
+
+int pst_fix_mean_wrap(pst_krylov *s, char *err)
+{
+    size_t n = s->A.n;
     s->V = pst_cloud_volume_const(s->op->cloud);
     s->vsum = 0;
     for (size_t i = 0; i < n; ++i)
         s->vsum += s->V[i];
-    double scale = dsum > 0 && isfinite(dsum) ? dsum / (double)n : 1.0;
-    s->c = -scale / s->vsum; /* sum V > 0: the volumes are checked positive */
     s->L = s->A;
+    PST_TRY(pst_fix_mean_update(s, err));
     s->A = (pst_linop){.n = n, .apply = mean_apply, .diagonal = mean_diagonal, .ctx = s};
     return PST_OK;
 }

@@ -32,6 +32,9 @@ int pst_solve_check_opts(const pst_solve_opts *o, const pst_op *op, char *err)
               "amg_radius must be in [-1, 1000] (in units of h; 0 for the whole list, -1 for "
               "the automatic choice; got %g)",
               o->amg_radius);
+    PST_CHECK(o->amg_reuse < 0 || o->amg_reuse > 1000, PST_EINVAL, err,
+              "amg_reuse must be in [0, 1000] (refreshes an AMG hierarchy serves; got %d)",
+              o->amg_reuse);
     PST_CHECK(o->amg_aggressive < 0 || o->amg_aggressive > 10, PST_EINVAL, err,
               "amg_aggressive must be in [0, 10] (levels of aggressive coarsening; got %d)",
               o->amg_aggressive);
@@ -166,27 +169,78 @@ static int cg_scaling(const pst_op *op, double *S, char *err)
     return PST_OK;
 }
 
-/* Workspace, CG's scaling, then the preconditioner of o->precond (*stop set when it fails). */
-static int op_setup(pst_krylov *s, int *stop, char *err)
+/* CG's symmetric scaling of the operator's current weights (S allocated once). */
+static int scaling(pst_krylov *s, char *err)
 {
-    PST_TRY(handle_workspace(s, err));
-    if (s->o.fix_mean)
-        PST_TRY(pst_fix_mean_wrap(s, err));
-    if (s->solver == PST_SOLVER_CG) {
+    if (s->solver != PST_SOLVER_CG)
+        return PST_OK;
+    if (!s->S)
         s->S = pst_alloc(s->A.n * sizeof *s->S);
-        PST_CHECK_ALLOC(s->S, err, "cannot allocate the solver's vectors for %zu particles",
-                        s->A.n);
-        PST_TRY(cg_scaling(s->op, s->S, err));
-    }
+    PST_CHECK_ALLOC(s->S, err, "cannot allocate the solver's vectors for %zu particles", s->A.n);
+    return cg_scaling(s->op, s->S, err);
+}
+
+/* The preconditioner of o->precond from the operator's current weights, replacing any earlier
+ * one (*stop set when it fails). */
+static int precond_setup(pst_krylov *s, int *stop, char *err)
+{
+    pst_prec_free(&s->prec);
+    s->k.M = NULL;
     if (s->o.precond == PST_PREC_NONE)
         return PST_OK;
     s->precond_setups++;
+    s->amg_age = s->amg_first_iters = 0;
     int st = s->o.precond == PST_PREC_JACOBI ? pst_prec_jacobi(&s->prec, &s->A, err)
                                              : pst_prec_amg(&s->prec, s->op, &s->o, err);
     if (st != PST_OK)
         *stop = PST_STOP_PRECOND_SETUP;
     s->k.M = st == PST_OK ? &s->prec.lin : NULL;
     return st;
+}
+
+/* Workspace, fix_mean's operator, CG's scaling, then the preconditioner. */
+static int op_setup(pst_krylov *s, int *stop, char *err)
+{
+    PST_TRY(handle_workspace(s, err));
+    if (s->o.fix_mean)
+        PST_TRY(pst_fix_mean_wrap(s, err));
+    PST_TRY(scaling(s, err));
+    return precond_setup(s, stop, err);
+}
+
+/* The AMG reuse rule of pst_krylov_refresh: the hierarchy has served fewer than amg_reuse
+ * refreshes and the last solve needed at most 1.5x the iterations of the first one after its
+ * set-up (a hierarchy of the old positions that slows the solves down is set up again). */
+static int amg_still_good(const pst_krylov *s)
+{
+    return s->o.precond == PST_PREC_AMG && s->k.M && s->amg_age < s->o.amg_reuse &&
+           !(s->amg_first_iters > 0 && 2 * s->last_iters > 3 * s->amg_first_iters);
+}
+
+int pst_krylov_refresh(pst_krylov *s, char *err)
+{
+    PST_CHECK(!s, PST_EINVAL, err, "pst_krylov_refresh needs a handle");
+    PST_CHECK(!s->op, PST_EINVAL, err,
+              "pst_krylov_refresh: a handle of a user operator has nothing of the engine's to "
+              "refresh; create it again");
+    s->unusable = 1; /* until every step below succeeds */
+    PST_CHECK(!pst_op_has_rows(s->op), PST_EINVAL, err,
+              "pst_krylov_refresh: the operator has no rows (its refresh failed)");
+    PST_CHECK(s->o.stored && !pst_op_has_store(s->op), PST_EINVAL, err,
+              "pst_krylov_refresh: the handle solves with the stored weights; store them again");
+    s->refreshes++;
+    if (s->o.fix_mean)
+        PST_TRY(pst_fix_mean_update(s, err));
+    PST_TRY(scaling(s, err));
+    if (amg_still_good(s)) {
+        s->amg_age++;
+        s->amg_reuses++;
+    } else {
+        int stop;
+        PST_TRY(precond_setup(s, &stop, err));
+    }
+    s->unusable = 0;
+    return PST_OK;
 }
 
 int pst_krylov_build(pst_krylov **out, const pst_op *op, const pst_solve_opts *o, int *solver,
@@ -292,6 +346,8 @@ void pst_krylov_get_stats(const pst_krylov *s, pst_krylov_stats *st)
     st->user_precond = s->user_precond;
     st->precond_setups = s->precond_setups;
     st->solves = s->solves;
+    st->refreshes = s->refreshes;
+    st->amg_reuses = s->amg_reuses;
     if (st->precond == PST_PREC_AMG)
         pst_prec_amg_stats(&s->prec, st);
 }

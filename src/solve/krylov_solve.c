@@ -78,6 +78,9 @@ static int start(pst_krylov *s, const double *b, double *u, char *message, char 
 static int check_solve(const pst_krylov *s, const double *b, const double *u, char *err)
 {
     PST_CHECK(!s || !b || !u, PST_EINVAL, err, "pst_krylov_solve needs a handle, b and u");
+    PST_CHECK(s->unusable, PST_EINVAL, err,
+              "the solver handle's last refresh failed (pst_krylov_refresh): refresh it again "
+              "or create a new one");
     PST_TRY(pst_solve_check_finite(s->op, s->A.n, b, u, err));
     if (s->op && s->o.precond == PST_PREC_AMG)
         PST_TRY(pst_prec_amg_ready(err));
@@ -131,6 +134,9 @@ int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result
     st = iterate(s);
     s->solves++;
     pst_ksp *k = &s->k;
+    s->last_iters = k->iterations; /* the AMG reuse rule's measure (pst_krylov_refresh) */
+    if (s->amg_first_iters == 0)
+        s->amg_first_iters = k->iterations;
     if (s->op) {
         /* u = x + u_D; x is finite (the methods keep the last finite iterate). */
         const uint8_t *kind = s->op->kind;

@@ -17,6 +17,7 @@ void pst_solve_defaults(pst_solve_opts *o)
     o->amg_coarsen = PST_AMG_HMIS;
     o->amg_interp = PST_AMG_EXT_I;
     o->amg_pmax = 4;
+    o->amg_reuse = 8;
     o->restart = 50;
     o->max_iter = 5000;
     o->rtol = 1e-10;

@@ -148,7 +148,11 @@ struct pst_krylov {
     double *S;             /* CG's symmetric scaling of an engine operator, or NULL           */
     double *bp, *x;        /* an engine operator's b' and iterate (n each), or NULL           */
     pst_ksp k;             /* the method's workspace; k.A = &A, k.M = &prec.lin, &user_M or NULL */
-    int precond_setups, solves;
+    int precond_setups, solves, refreshes, amg_reuses;
+    /* the AMG reuse rule (pst_krylov_refresh): refreshes the hierarchy has served, the
+     * iterations of the first solve after its set-up (0: none yet) and of the last solve */
+    int amg_age, amg_first_iters, last_iters;
+    int unusable;          /* a refresh failed: every solve refuses the handle                */
     /* o.fix_mean: A is L + c 1 V^T around the engine operator's view L (fix_mean.c) */
     pst_linop L;
     const double *V;
@@ -159,6 +163,8 @@ struct pst_krylov {
  * L + c 1 V^T, c = -(mean |diag L|) / sum V, before the preconditioner is set up; after a
  * solve, shift u to sum V u = 0 and return lambda = c V^T u (the constant taken off b). */
 int pst_fix_mean_wrap(pst_krylov *s, char *err);
+/* c again from the refreshed operator's diagonal (pst_krylov_refresh). */
+int pst_fix_mean_update(pst_krylov *s, char *err);
 double pst_fix_mean_finish(pst_krylov *s, double *u);
 
 /* The checks of a request that come before the set-up: the options (also the engine
