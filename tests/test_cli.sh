@@ -160,6 +160,13 @@ for f in qsfdi_test_a lv_table2 lv_mixed heat_3d_divergence spe10_layer85 qsfdi_
   expect 0 "run scenes/$f.json" -- sh -c "cd '$work' && '$(readlink -f "$exe")' run '$scenes/$f.json'"
 done
 contains out "rows: none (derivatives only)" "interpolation and Hessian need no Laplacian rows"
+expect 0 "run scenes/periodic_poisson_2d.json" -- \
+  sh -c "cd '$work' && '$(readlink -f "$exe")' run '$scenes/periodic_poisson_2d.json'"
+# The periodic example: no boundary, so the mean of u is fixed and the exact solution (mean 2)
+# moved to u's mean 0; the error is then the discretisation's.
+contains out "mean of u fixed (periodic, no Dirichlet particle), lambda" "the fixed mean is said"
+check "periodic example: GMRES, lambda small, exact shifted by about -2, rel_l2 < 1e-2" \
+  "python3 -c 'import json,sys; t=json.load(open(sys.argv[1]))[\"tasks\"][0]; s=t[\"solver\"]; assert s[\"fix_mean\"] and s[\"method\"]==\"gmres\" and abs(s[\"mean_shift\"])<0.05 and abs(t[\"exact_shift\"]+2)<1e-2 and t[\"norms\"][\"rel_l2\"]<1e-2, t' '$work/periodic_poisson_2d.report.json'"
 expect 0 "run scenes/lv_patch_2d.json" -- "$exe" run "$scenes/lv_patch_2d.json"
 contains out "max_abs [0-9.]*e-1[1-6]" "the heterogeneous patch test holds to rounding"
 expect 2 "run: missing scene file" -- "$exe" run "$work/none.json"
