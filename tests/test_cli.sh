@@ -160,6 +160,13 @@ for f in qsfdi_test_a lv_table2 lv_mixed heat_3d_divergence spe10_layer85 qsfdi_
   expect 0 "run scenes/$f.json" -- sh -c "cd '$work' && '$(readlink -f "$exe")' run '$scenes/$f.json'"
 done
 contains out "rows: none (derivatives only)" "interpolation and Hessian need no Laplacian rows"
+expect 0 "run scenes/periodic_poisson_2d.json" -- \
+  sh -c "cd '$work' && '$(readlink -f "$exe")' run '$scenes/periodic_poisson_2d.json'"
+# The periodic example: no boundary, so the mean of u is fixed and the exact solution (mean 2)
+# moved to u's mean 0; the error is then the discretisation's.
+contains out "mean of u fixed (periodic, no Dirichlet particle), lambda" "the fixed mean is said"
+check "periodic example: GMRES, lambda small, exact shifted by about -2, rel_l2 < 1e-2" \
+  "python3 -c 'import json,sys; t=json.load(open(sys.argv[1]))[\"tasks\"][0]; s=t[\"solver\"]; assert s[\"fix_mean\"] and s[\"method\"]==\"gmres\" and abs(s[\"mean_shift\"])<0.05 and abs(t[\"exact_shift\"]+2)<1e-2 and t[\"norms\"][\"rel_l2\"]<1e-2, t' '$work/periodic_poisson_2d.report.json'"
 expect 0 "run scenes/lv_patch_2d.json" -- "$exe" run "$scenes/lv_patch_2d.json"
 contains out "max_abs [0-9.]*e-1[1-6]" "the heterogeneous patch test holds to rounding"
 expect 2 "run: missing scene file" -- "$exe" run "$work/none.json"
@@ -641,6 +648,113 @@ EOF2
 expect 0 "run a grouped solve" -- bash -c 'cd "$1" && exec "$2" --quiet run sv.json' _ "$work" "$exe"
 check "the grouped solve's VTU has status, u_exact and u_error" \
   'grep -aq "Name=\"status\"" "$work/sv.vtu" && grep -aq "Name=\"u_error\"" "$work/sv.vtu"'
+
+# Periodic boxes on the command line (--periodic, --box). A 17 x 17 lattice of s0 = 1/16 on
+# [0, 1]^2 tiles the torus of period 17/16 = 1.0625 exactly, in the box [-s0/2, 1 + s0/2).
+box=-0.03125,-0.03125,1.03125,1.03125
+expect 0 "cloud for the periodic box" -- "$exe" cloud --dim 2 --lo 0,0 --hi 1,1 --s0 0.0625 \
+  --h-ratio 1 -o "$work/per.csv"
+# cubic support 2h = 2 s0: every particle of the torus has the 8 lattice points closer than 2 s0
+expect 0 "neighbours --periodic xy" -- "$exe" neighbours "$work/per.csv" --kernel cubic \
+  --periodic xy --box "$box"
+contains out "neighbours           min 8, mean 8.00, max 8, isolated 0" "no particle has a face"
+expect 0 "stencil --periodic xy" -- "$exe" stencil --scheme brookshaw --kernel cubic \
+  --in "$work/per.csv" --out "$work/per.mtx" --periodic xy --box "$box"
+contains out "wrote 289 x 289 matrix, 2601 entries" "every row has 8 neighbours + its diagonal"
+# The same lattice jittered, with u = sin(kx) cos(ky), k = 2 pi / 1.0625: L u = -2 k^2 u on
+# every row, the rows at the faces included.
+expect 0 "jittered cloud for the periodic box" -- "$exe" cloud --dim 2 --lo 0,0 --hi 1,1 \
+  --s0 0.0625 --jitter 0.3 --seed 5 --h-ratio 1.2 -o "$work/perj.csv"
+k_awk='k = 2 * 3.14159265358979324 / 1.0625'
+awk -F, "NR == 1 { print \$0 \",u\"; next } { $k_awk; printf \"%s,%.17g\\n\", \$0, sin(k * \$1) * cos(k * \$2) }" \
+  "$work/perj.csv" > "$work/peru.csv"
+# translated by 0.3 along x and folded back into the box, u unchanged: the same torus
+awk -F, -v OFS=, 'NR == 1 { print; next } { x = $1 + 0.3; if (x >= 1.03125) x -= 1.0625;
+  $1 = sprintf("%.17g", x); print }' "$work/peru.csv" > "$work/pert.csv"
+expect 0 "apply --periodic xy" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" --field u \
+  --out "$work/per_lu.csv" --periodic xy --box "$box"
+contains out "periodic             xy" "apply prints the periodic axes"
+expect 0 "apply --periodic xy, translated cloud" -- "$exe" --quiet apply --scheme qsfdi \
+  --in "$work/pert.csv" --field u --out "$work/per_lt.csv" --periodic=xy --box="$box"
+expect 0 "apply without --periodic" -- "$exe" --quiet apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/per_l0.csv"
+# max |Au - exact| / max |exact| over every row
+rel_err() {
+  paste -d, "$work/peru.csv" "$1" | awk -F, "NR > 1 { $k_awk; e = -2 * k * k * \$8; d = \$10 - e;
+    if (d < 0) d = -d; if (e < 0) e = -e; if (d > m) m = d; if (e > big) big = e }
+    END { printf \"%.6g\\n\", m / big }"
+}
+per_err=$(rel_err "$work/per_lu.csv")
+open_err=$(rel_err "$work/per_l0.csv")
+check "periodic apply: L u = -2 k^2 u on every row ($per_err < 0.1)" \
+  "awk 'BEGIN { exit !($per_err < 0.1) }'"
+check "without --periodic the face rows are off ($open_err > 0.2)" \
+  "awk 'BEGIN { exit !($open_err > 0.2) }'"
+check "apply is invariant under a translation through the faces (same ids, to rounding)" \
+  "paste -d, '$work/per_lu.csv' '$work/per_lt.csv' | awk -F, 'NR > 1 { d = \$3 - \$7;
+    if (d < 0) d = -d; a = \$3; if (a < 0) a = -a; if (d > m) m = d; if (a > big) big = a;
+    if (\$3 != \$3 + 0 || \$1 != \$5) bad = 1 } END { exit bad || !(m < 1e-10 * big) }'"
+check "periodic apply: every value finite" \
+  "! awk -F, 'NR > 1' '$work/per_lu.csv' | grep -qi 'nan\|inf'"
+# refusals: exit 1 for the options themselves, 2 for what does not fit the cloud
+expect 1 "--periodic: unknown axis" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic xw --box "$box"
+contains err "option --periodic: unknown axis 'w' (the axes are x, y and z) (got 'xw')" \
+  "the bad axis is named"
+expect 1 "--periodic: repeated axis" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic xyx --box "$box"
+contains err "axis 'x' is given twice" "the repeated axis is named"
+expect 1 "--periodic: empty" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic= --box "$box"
+expect 2 "--periodic z on a 2D cloud" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic xz --box "$box"
+contains err "is 2D, it has no z axis" "the missing axis is named"
+expect 1 "--box: three numbers" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic xy --box 0,0,1
+contains err "option --box: 4 (2D: x0,y0,x1,y1) or 6 (3D: x0,y0,z0,x1,y1,z1) comma-separated" \
+  "the box's form is given"
+expect 1 "--box: not a number" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic xy --box 0,0,1,one
+expect 1 "--box: an empty number" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic xy --box 0,,1,1
+expect 2 "--box: 3D box on a 2D cloud" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic xy --box 0,0,0,1,1,1
+contains err "is 2D: 4 numbers expected (x0,y0,x1,y1), got 6" "the count is explained"
+expect 1 "--box: hi not above lo" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic x --box 0,0,0,1
+contains err "hi must exceed lo along x" "the empty box is refused"
+expect 1 "--periodic without --box" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic xy
+contains err "apply: --periodic needs --box" "the missing box is named"
+expect 1 "--box without --periodic" -- "$exe" stencil --scheme qsfdi --in "$work/peru.csv" \
+  --out "$work/x.mtx" --box "$box"
+contains err "stencil: --box needs --periodic" "the missing axes are named"
+expect 2 "a particle outside the box" -- "$exe" apply --scheme qsfdi --in "$work/peru.csv" \
+  --field u --out "$work/x.csv" --periodic xy --box 0,0,1,1
+contains err "lies outside the periodic box" "the particle outside is named"
+expect 2 "a period within twice the neighbour radius" -- "$exe" apply --scheme qsfdi \
+  --in "$work/peru.csv" --field u --out "$work/x.csv" --periodic x --box "$box" --h 0.2
+contains err "must exceed twice the neighbour radius" "the short period is explained"
+check "no refused command wrote its output" '[ ! -e "$work/x.csv" ] && [ ! -e "$work/x.mtx" ]'
+# A scene on the same file cloud: cloud.box gives the periodic box the file does not record.
+cat > "$work/per_scene.json" <<EOF2
+{ "cloud": { "source": "file", "file": "peru.csv", "periodic": true,
+             "box": { "lo": [-0.03125, -0.03125], "hi": [1.03125, 1.03125] } },
+  "tasks": [ { "type": "solve", "name": "p", "precond": "jacobi",
+               "rhs": "-2*(2*pi/1.0625)^2*sin(2*pi*x/1.0625)*cos(2*pi*y/1.0625)",
+               "exact": "5 + sin(2*pi*x/1.0625)*cos(2*pi*y/1.0625)" } ],
+  "outputs": { "report": "$work/per_scene.report.json" } }
+EOF2
+expect 0 "run a scene on a periodic file cloud" -- "$exe" run "$work/per_scene.json"
+contains out "exact shifted by -[0-9.]* to u's mean" "the shift of the exact solution is said"
+check "periodic file scene: exact moved by about -5, rel_l2 against it < 0.1" \
+  "python3 -c 'import json,sys; t=json.load(open(sys.argv[1]))[\"tasks\"][0]; assert t[\"solver\"][\"fix_mean\"] and abs(t[\"exact_shift\"]+5)<1e-2 and t[\"norms\"][\"rel_l2\"]<0.1, t' '$work/per_scene.report.json'"
+expect 2 "a file cloud outside its cloud.box" -- "$exe" run "$work/per_scene.json" \
+  'cloud.box.lo=[0,0]' 'cloud.box.hi=[1,1]'
+contains err "cloud.box: particle [0-9]*: [xy] = .* lies outside the periodic box" \
+  "a particle outside cloud.box is refused"
+expect 2 "cloud.box on a lattice" -- "$exe" run 'cloud.box={"lo":[0,0,0],"hi":[1,1,1]}'
+contains err "key 'cloud.box': applies only when 'cloud.source' is file" "cloud.box refused"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -1,7 +1,8 @@
 /* The planner and the scene runner: a run computes what its scene asks for and nothing more
  * (the counters), the answers do not change when unneeded work is skipped, the plan's
  * decisions (stored weights, solver, mobility factor, derivatives-only operator), a run that
- * cannot fit is refused before allocating, and bad expressions are clear errors. */
+ * cannot fit is refused before allocating, bad expressions are clear errors, and periodic
+ * clouds fix the mean of a solve without Dirichlet particles. */
 #include "check.h"
 #include "plan.h"
 #include "run.h"
@@ -212,6 +213,126 @@ static void test_solve_plan(void)
     CHECK(worst <= 1e-8); /* lv is exact for linear fields, Neumann rows included */
     free(u);
     free(xi);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+}
+
+/* Task 0's report object of a run of s, which must succeed (NULL otherwise); *rep is the whole
+ * report, for cJSON_Delete. */
+static const cJSON *run_report(const pst_scene *s, cJSON **rep, pst_cloud **c)
+{
+    pst_run_opts o = {.quiet = 1, .report = rep};
+    char err[1024];
+    int st = pst_run_scene(s, &o, NULL, NULL, c, err, sizeof err);
+    if (st != PST_OK)
+        printf("run: status %d (%s)\n", st, err);
+    CHECK_INT(st, PST_OK);
+    return st == PST_OK ? cJSON_GetArrayItem(cJSON_GetObjectItem(*rep, "tasks"), 0) : NULL;
+}
+
+static double number(const cJSON *o, const char *a, const char *b)
+{
+    const cJSON *v = cJSON_GetObjectItem(o, a);
+    if (b)
+        v = cJSON_GetObjectItem(v, b);
+    return cJSON_IsNumber(v) ? v->valuedouble : NAN;
+}
+
+/* Periodic clouds (cloud.periodic): the plan counts the particles the generators make; a solve
+ * without Dirichlet particles fixes the mean of u by itself (GMRES, also where auto would take
+ * CG), reports lambda and compares with the exact solution moved to u's mean; cg is refused
+ * there; a partly periodic box keeps its Dirichlet sides and solves as before. */
+static void test_periodic(void)
+{
+    static const struct {
+        const char *source, *periodic;
+        size_t n;
+    } sizes[] = {{"lattice", "[true, false]", 20 * 21},
+                 {"lattice", "true", 20 * 20},
+                 {"cell_centred", "[false, true]", 400 + 2 * 20},
+                 {"cell_centred", "true", 400}};
+    for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; ++k) {
+        char text[256], why[1024];
+        snprintf(text, sizeof text, "{\"cloud\": {\"source\": \"%s\", \"spacing\": 0.05, "
+                 "\"periodic\": %s}}", sizes[k].source, sizes[k].periodic);
+        pst_scene s;
+        CHECK_INT(pst_scene_parse(&s, text, "test.json", NULL, 0, why, sizeof why), PST_OK);
+        pst_run_counters cnt;
+        pst_plan p;
+        pst_cloud *c = run(&s, &cnt, &p, PST_OK);
+        CHECK(pst_plan_particles(&s) == sizes[k].n);
+        CHECK(c && pst_cloud_size(c) == sizes[k].n);
+        CHECK_INT(c ? pst_cloud_periodic(c, NULL, NULL, NULL) : -1, 1 + (int)(k % 2));
+        pst_cloud_destroy(c);
+        pst_scene_free(&s);
+    }
+
+    const char *solve[] = {
+        "cloud.periodic=true",
+        "tasks=[{\"type\":\"solve\",\"rhs\":\"-8*pi^2*sin(2*pi*x)*cos(2*pi*y)\","
+        "\"exact\":\"3 + sin(2*pi*x)*cos(2*pi*y)\",\"precond\":\"jacobi\"}]"};
+    pst_scene s = scene(solve, 2);
+    cJSON *rep = NULL;
+    pst_cloud *c = NULL;
+    const cJSON *t = run_report(&s, &rep, &c);
+    const cJSON *sv = cJSON_GetObjectItem(t, "solver");
+    CHECK(cJSON_IsTrue(cJSON_GetObjectItem(sv, "fix_mean")));
+    CHECK(strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(sv, "method")), "gmres") == 0);
+    double lambda = number(sv, "mean_shift", NULL), shift = number(t, "exact_shift", NULL);
+    double rel = number(t, "norms", "rel_l2");
+    printf("periodic Poisson in a scene: lambda %.3g, exact shift %.6g, rel_l2 %.3g\n", lambda,
+           shift, rel);
+    CHECK(fabs(lambda) < 0.5);        /* compatible up to the truncation error */
+    CHECK(fabs(shift + 3) < 1e-2);    /* u has mean 0, the exact solution 3 */
+    CHECK(rel < 0.05);                /* against the unshifted exact it would be about 1 */
+    if (c) { /* u's V-weighted mean is 0, and NAME_error is u - the shifted exact */
+        size_t n = pst_cloud_size(c);
+        const double *u = pst_cloud_field_by_name(c, "solve");
+        const double *e = pst_cloud_field_by_name(c, "solve_error");
+        const double *V = pst_cloud_volume_const(c);
+        double mu = 0, me = 0, vol = 0;
+        for (size_t i = 0; i < n; ++i) {
+            mu += V[i] * u[i];
+            me += V[i] * e[i];
+            vol += V[i];
+        }
+        CHECK(fabs(mu / vol) < 1e-10);
+        CHECK(fabs(me / vol) < 1e-12);
+    }
+    cJSON_Delete(rep);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+
+    /* cb's auto solver is CG; a fully periodic box takes GMRES, and cg is refused */
+    const char *cb[] = {solve[0], solve[1], "operator.scheme=cb"};
+    s = scene(cb, 3);
+    pst_run_counters cnt;
+    pst_plan p;
+    c = run(&s, &cnt, &p, PST_OK);
+    CHECK_INT(p.task_solver[0], PST_SOLVER_GMRES);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+    const char *cg[] = {solve[0], solve[1], "operator.scheme=cb", "tasks.0.solver=cg"};
+    s = scene(cg, 4);
+    char err[1024];
+    pst_run_opts o = {.quiet = 1};
+    CHECK_INT(pst_run_scene(&s, &o, NULL, NULL, NULL, err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "the mean of u is fixed, which CG cannot do") != NULL);
+    pst_scene_free(&s);
+
+    /* periodic along x only: the y sides stay Dirichlet, nothing is shifted */
+    const char *part[] = {
+        "cloud.periodic=[true,false]",
+        "tasks=[{\"type\":\"solve\",\"rhs\":\"-4*pi^2*sin(2*pi*x)*(1 + y)\","
+        "\"exact\":\"sin(2*pi*x)*(1 + y)\",\"precond\":\"jacobi\"}]"};
+    s = scene(part, 2);
+    c = NULL;
+    t = run_report(&s, &rep, &c);
+    sv = cJSON_GetObjectItem(t, "solver");
+    CHECK(cJSON_IsFalse(cJSON_GetObjectItem(sv, "fix_mean")));
+    CHECK(!cJSON_GetObjectItem(sv, "mean_shift") && !cJSON_GetObjectItem(t, "exact_shift"));
+    CHECK(number(t, "norms", "rel_l2") < 0.05);
+    cJSON_Delete(rep);
     pst_cloud_destroy(c);
     pst_scene_free(&s);
 }
@@ -556,5 +677,6 @@ int main(void)
     test_half_list();
     test_amg_matrix_memory();
     test_amg_source_to_fit();
+    test_periodic();
     return check_summary("test_plan");
 }

@@ -735,6 +735,78 @@ static void test_docs(void)
     free(have);
 }
 
+/* cloud.periodic (every axis, a list, the default), a file cloud's cloud.box, and their
+ * refusals: wrong shapes, a rotated periodic lattice, a box on a generated cloud, a periodic
+ * file cloud without one, a box without a periodic axis, a boundary side of a periodic axis. */
+static void test_periodic(void)
+{
+    pst_scene s;
+    CHECK_INT(parse(&s, "{\"cloud\": {\"periodic\": [true, false]}}", NULL, 0), PST_OK);
+    CHECK(s.cloud.periodic[0] == 1 && s.cloud.periodic[1] == 0 && s.cloud.periodic[2] == 0);
+    CHECK_INT(pst_scene_periodic_axes(&s), 1);
+    pst_scene_free(&s);
+    CHECK_INT(parse(&s, "{\"dim\": 3, \"cloud\": {\"periodic\": true}}", NULL, 0), PST_OK);
+    CHECK(s.cloud.periodic[0] && s.cloud.periodic[1] && s.cloud.periodic[2]);
+    pst_scene_free(&s);
+    CHECK_INT(parse(&s, "{\"cloud\": {\"periodic\": true}}", NULL, 0), PST_OK);
+    CHECK(s.cloud.periodic[0] && s.cloud.periodic[1] && !s.cloud.periodic[2]); /* 2D */
+    pst_scene_free(&s);
+    CHECK_INT(parse(&s, "{}", NULL, 0), PST_OK);
+    CHECK_INT(pst_scene_periodic_axes(&s), 0);
+    pst_scene_free(&s);
+    /* a file cloud with its box, given by overrides too */
+    const char *ov[] = {"cloud.periodic=[false,true]", "cloud.box.lo=[0,-1]", "cloud.box.hi=[2,1]"};
+    CHECK_INT(parse(&s, "{\"cloud\": {\"source\": \"file\", \"file\": \"c.csv\"}}", ov, 3),
+              PST_OK);
+    CHECK(!s.cloud.periodic[0] && s.cloud.periodic[1]);
+    CHECK(s.cloud.box_lo[0] == 0 && s.cloud.box_lo[1] == -1 && s.cloud.box_hi[0] == 2 &&
+          s.cloud.box_hi[1] == 1);
+    pst_scene_free(&s);
+    /* fully periodic, a generated cloud has no boundary: a solve needs no exact values */
+    CHECK_INT(parse(&s, "{\"cloud\": {\"periodic\": true}, \"tasks\": [{\"type\": "
+                        "\"solve\", \"rhs\": \"sin(2*pi*x)\"}]}", NULL, 0), PST_OK);
+    pst_scene_free(&s);
+    EXPECT_ERROR("{\"cloud\": {\"periodic\": [true, false]}, \"tasks\": [{\"type\": "
+                 "\"solve\", \"rhs\": \"0\"}]}",
+                 "t.json:1:50: key 'tasks.0': a solve without 'boundary' needs 'exact' (its "
+                 "Dirichlet values)");
+
+    EXPECT_ERROR("{\"cloud\": {\"periodic\": [true]}}",
+                 "t.json:1:12: key 'cloud.periodic': expected 2 booleans (dim = 2), got 1");
+    EXPECT_ERROR("{\"cloud\": {\"periodic\": [true, 1]}}",
+                 "t.json:1:31: key 'cloud.periodic.1': expected true or false, got a number");
+    EXPECT_ERROR("{\"cloud\": {\"periodic\": \"xy\"}}",
+                 "t.json:1:12: key 'cloud.periodic': expected true, false or a list of 2 "
+                 "booleans (one per axis), got a string");
+    EXPECT_ERROR("{\"cloud\": {\"periodic\": true, \"angle\": 30}}",
+                 "t.json:1:30: key 'cloud.angle': a periodic lattice cannot be rotated "
+                 "(cloud.periodic): its axes are the box's");
+    EXPECT_ERROR("{\"cloud\": {\"periodic\": true, \"box\": {\"lo\": [0, 0], \"hi\": [1, 1]}}}",
+                 "t.json:1:30: key 'cloud.box': applies only when 'cloud.source' is file");
+    EXPECT_ERROR("{\"cloud\": {\"source\": \"file\", \"file\": \"c.csv\", \"periodic\": true}}",
+                 "t.json:1:2: key 'cloud.box': missing: a file cloud with periodic axes "
+                 "(cloud.periodic) needs its periodic box {lo, hi}");
+    EXPECT_ERROR("{\"cloud\": {\"source\": \"file\", \"file\": \"c.csv\",\n"
+                 "  \"box\": {\"lo\": [0, 0], \"hi\": [1, 1]}}}",
+                 "t.json:2:3: key 'cloud.box': no axis is periodic (cloud.periodic): the box "
+                 "applies only to periodic axes");
+    EXPECT_ERROR("{\"cloud\": {\"source\": \"file\", \"file\": \"c.csv\", \"periodic\": true,\n"
+                 "  \"box\": {\"lo\": [0, 0], \"hi\": [1, 0]}}}",
+                 "t.json:2:25: key 'cloud.box.hi': must exceed lo along y (lo 0, hi 0)");
+    EXPECT_ERROR("{\"cloud\": {\"source\": \"file\", \"file\": \"c.csv\", \"periodic\": true,\n"
+                 "  \"box\": {\"lo\": [0, 0]}}}",
+                 "t.json:2:3: key 'cloud.box.hi': missing required key");
+    EXPECT_ERROR("{\"cloud\": {\"source\": \"file\", \"file\": \"c.csv\", \"periodic\": true,\n"
+                 "  \"box\": {\"lo\": [0, 0], \"hi\": [1, 1, 1]}}}",
+                 "t.json:2:25: key 'cloud.box.hi': expected 2 numbers (dim = 2), got 3");
+    EXPECT_ERROR("{\"cloud\": {\"periodic\": [false, true]},\n"
+                 " \"tasks\": [{\"type\": \"solve\", \"rhs\": \"0\", \"boundary\": [\n"
+                 "   {\"where\": \"xlo\", \"value\": \"0\"}, {\"where\": \"yhi\", \"value\": "
+                 "\"0\"}]}]}",
+                 "t.json:3:37: key 'tasks.0.boundary.1.where': the y axis is periodic "
+                 "(cloud.periodic): it has no sides");
+}
+
 /* Two outputs on one file would overwrite each other: refused, both keys named, the paths
  * compared after normalisation ("./x" is "x", "/tmp/../tmp/x" is "/tmp/x"). */
 static void test_output_paths(void)
@@ -782,6 +854,7 @@ int main(int argc, char **argv)
     test_fuzz();
     test_docs();
     test_output_paths();
+    test_periodic();
     printf("test_scene: %.2f s\n", omp_get_wtime() - t0);
     return check_summary("test_scene");
 }

@@ -4,7 +4,8 @@
  *   - an operator that only feeds gradients, Hessians or interpolation gets no Laplacian rows
  *     (for schemes whose derivative estimates do not use them);
  *   - stored weights only for solves (many applies), and only when they fit in memory;
- *   - CG only for a symmetrisable scheme without flux rows, GMRES otherwise;
+ *   - CG only for a symmetrisable scheme without flux rows on a cloud not periodic along
+ *     every axis, GMRES otherwise;
  *   - the memory estimate is checked before the cloud is generated. */
 #include "plan.h"
 
@@ -37,13 +38,15 @@ size_t pst_plan_particles(const pst_scene *s)
     for (int d = 0; d < s->dim; ++d) {
         double cells = round((c->hi[d] - c->lo[d]) / c->spacing);
         n[d] = cells < 0 ? 0 : (size_t)cells;
-        if (c->source == SC_CLOUD_LATTICE)
-            n[d] += 1; /* nodes, both ends included */
+        if (c->source == SC_CLOUD_LATTICE && !c->periodic[d])
+            n[d] += 1; /* nodes, both ends included (a periodic axis's hi end is its lo) */
         total *= n[d];
     }
-    if (c->source == SC_CLOUD_CELL_CENTRED) /* one face particle per boundary cell face */
-        total += s->dim == 2 ? 2 * (n[0] + n[1]) : 2 * (n[0] * n[1] + n[1] * n[2] + n[0] * n[2]);
-    return total;
+    size_t faces = 0; /* cell-centred: one particle per boundary cell face, none periodic */
+    for (int a = 0; a < s->dim && c->source == SC_CLOUD_CELL_CENTRED; ++a)
+        if (!c->periodic[a] && n[a])
+            faces += 2 * (total / n[a]);
+    return total + faces;
 }
 
 /* Outputs a task adds to the cloud, in doubles per particle. */
@@ -332,8 +335,10 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
             int neumann = 0;
             for (int g = 0; g < t->ngroups; ++g)
                 neumann |= t->groups[g].neumann;
+            /* periodic along every axis, the mean is most likely fixed, which CG cannot do */
             int symmetric = pst_scheme_supports(s->op.scheme, PST_SUPPORTS_SYMMETRIC) &&
-                            (s->op.gradient == PST_GRAD_G1 || s->op.gradient == 0) && !neumann;
+                            (s->op.gradient == PST_GRAD_G1 || s->op.gradient == 0) && !neumann &&
+                            pst_scene_periodic_axes(s) < dim;
             p->task_solver[k] = t->solver != PST_SOLVER_AUTO ? t->solver
                                 : symmetric                  ? PST_SOLVER_CG
                                                              : PST_SOLVER_GMRES;
@@ -449,6 +454,13 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
     else if (p->particles)
         fprintf(f, "  cloud      %dD, %zu particles from %s, h = %.3g s0 (mean h / V^(1/%d))\n",
                 s->dim, p->particles, s->cloud.file, p->h_ratio, s->dim);
+    if (pst_scene_periodic_axes(s)) {
+        fprintf(f, "  periodic  ");
+        for (int d = 0; d < s->dim; ++d)
+            if (s->cloud.periodic[d])
+                fprintf(f, " %c", "xyz"[d]);
+        fprintf(f, " (a solve without Dirichlet particles fixes the mean of u)\n");
+    }
     if (p->mobility_ncomp)
         fprintf(f, "  mobility   %s per particle\n",
                 p->mobility_ncomp == 1 ? "scalar" : "diagonal tensor");

@@ -87,7 +87,7 @@ void report_task_header(cJSON *task, const sc_task *t)
         cJSON_AddStringToObject(task, "field", t->field);
 }
 
-void report_solve(cJSON *task, const pst_solve_result *res)
+void report_solve(cJSON *task, const pst_solve_result *res, int fix_mean)
 {
     static const char *const solvers[] = {"auto", "cg", "gmres", "bicgstab"};
     cJSON *s = cJSON_AddObjectToObject(task, "solver");
@@ -97,6 +97,9 @@ void report_solve(cJSON *task, const pst_solve_result *res)
     cJSON_AddNumberToObject(s, "relative_residual", res->rel_residual);
     cJSON_AddStringToObject(s, "message", res->message);
     cJSON_AddNumberToObject(s, "setup_seconds", res->setup_seconds);
+    cJSON_AddBoolToObject(s, "fix_mean", fix_mean);
+    if (fix_mean)
+        cJSON_AddNumberToObject(s, "mean_shift", res->mean_shift);
     if (res->history)
         cJSON_AddItemToObject(s, "history", cJSON_CreateDoubleArray(res->history, res->nhistory));
 }
@@ -366,6 +369,13 @@ void report_summary(FILE *f, const cJSON *report)
         const cJSON *sv = cJSON_GetObjectItem(t, "solver"), *nv;
         if (sv)
             fprintf(f, ": %s", cJSON_GetStringValue(cJSON_GetObjectItem(sv, "message")));
+        const cJSON *shift = cJSON_GetObjectItem(sv, "mean_shift");
+        if (shift)
+            fprintf(f, "; mean of u fixed (periodic, no Dirichlet particle), lambda %.3e",
+                    shift->valuedouble);
+        const cJSON *es = cJSON_GetObjectItem(t, "exact_shift");
+        if (es)
+            fprintf(f, "; exact shifted by %.6g to u's mean", es->valuedouble);
         cJSON_ArrayForEach(nv, cJSON_GetObjectItem(t, "norms"))
             fprintf(f, ", %s %.3e", nv->string, nv->valuedouble);
         const cJSON *rp = cJSON_GetObjectItem(t, "region_particles");

@@ -25,8 +25,9 @@ void report_operator(cJSON *report, const pst_op *op);
 cJSON *report_parameters(const pst_op_opts *oo);
 /* A task's name and type. */
 void report_task_header(cJSON *task, const sc_task *t);
-/* A solve's outcome: solver, converged, iterations, residual, message, residual history. */
-void report_solve(cJSON *task, const pst_solve_result *res);
+/* A solve's outcome: solver, converged, iterations, residual, message, residual history;
+ * fix_mean (the solve fixed the mean of u) and, when it did, mean_shift (lambda). */
+void report_solve(cJSON *task, const pst_solve_result *res, int fix_mean);
 /* The plan's decisions and estimates, the counters and the cloud's size, at the end. */
 void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt,
                    const pst_cloud *c);

@@ -14,12 +14,14 @@ typedef struct {
     size_t claimed, from_file, from_face, estimated, degenerate;
 } group_count;
 
-/* The box side a particle lies nearest to (of the cloud's box). */
+/* The box side a particle lies nearest to (of the cloud's box; a periodic axis has none). */
 static sc_side nearest_side(run_state *r, size_t i)
 {
     double best = INFINITY;
     sc_side side = SC_SIDE_ALL;
     for (int d = 0; d < r->s->dim; ++d) {
+        if (r->s->cloud.periodic[d])
+            continue;
         double x = pst_cloud_coord_const(r->c, d)[i];
         double dl = fabs(x - r->s->cloud.lo[d]), dh = fabs(r->s->cloud.hi[d] - x);
         if (dl < best) {
@@ -82,10 +84,12 @@ static int in_region(run_state *r, const sc_shape *sh, const double *level, size
     return 0;
 }
 
-/* The outward normal of box side `side` into particle i's normal. */
+/* The outward normal of box side `side` into particle i's normal (zero for no side: a cloud
+ * periodic along every axis has none, and the operator refuses the Neumann row). */
 static void face_normal(run_state *r, sc_side side, run_boundary *bnd, size_t i)
 {
-    int axis = (side - SC_SIDE_XLO) / 2, high = (side - SC_SIDE_XLO) % 2;
+    int axis = side == SC_SIDE_ALL ? -1 : ((int)side - SC_SIDE_XLO) / 2;
+    int high = ((int)side - SC_SIDE_XLO) % 2;
     for (int d = 0; d < r->s->dim; ++d)
         bnd->normal[d][i] = d == axis ? (high ? 1.0 : -1.0) : 0.0;
 }

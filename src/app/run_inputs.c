@@ -69,6 +69,22 @@ static int set_file_h(pst_cloud *c, const sc_cloud *sc, char *msg)
     return PST_OK;
 }
 
+/* cloud.box on a file cloud: its periodic axes, and every particle inside the box along
+ * them (the files record no box; a particle outside is refused here, naming the scene key,
+ * rather than folded in silently). */
+static int file_box(run_state *r)
+{
+    const pst_scene *s = r->s;
+    char msg[PST_ERRLEN];
+    int st = pst_cloud_set_periodic(r->c, s->cloud.periodic, s->cloud.box_lo, s->cloud.box_hi,
+                                    msg);
+    if (st == PST_OK)
+        st = pst_cloud_validate(r->c, msg);
+    if (st != PST_OK)
+        return run_fail(r, st, "%s: cloud.box: %s", s->path, msg);
+    return PST_OK;
+}
+
 int run_make_cloud(run_state *r)
 {
     const pst_scene *s = r->s;
@@ -85,6 +101,8 @@ int run_make_cloud(run_state *r)
                             sc->file, pst_cloud_dim(r->c), s->dim);
         if (st == PST_OK && sc->h_ratio_set)
             st = set_file_h(r->c, sc, msg);
+        if (st == PST_OK && pst_scene_periodic_axes(s))
+            return file_box(r);
     } else {
         pst_lattice_opts lo;
         pst_lattice_defaults(&lo);
@@ -99,6 +117,8 @@ int run_make_cloud(run_state *r)
         lo.boundary_layer = sc->boundary_layer;
         lo.h_ratio = sc->h_ratio;
         lo.angle = sc->angle * (3.14159265358979323846 / 180.0);
+        for (int d = 0; d < 3; ++d)
+            lo.periodic[d] = sc->periodic[d];
         st = sc->source == SC_CLOUD_LATTICE ? pst_cloud_lattice(&r->c, &lo, msg)
                                             : pst_cloud_cell_centred(&r->c, &lo, msg);
     }

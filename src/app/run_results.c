@@ -1,5 +1,5 @@
 /* What a task leaves behind: its output fields on the cloud and its error norms against the
- * exact expressions, over the task's region. */
+ * exact expressions (moved to u's mean where a solve fixed it), over the task's region. */
 #include "run_state.h"
 
 #include <stdio.h>
@@ -95,6 +95,25 @@ static int add_exact_fields(run_state *r, const sc_task *t, int ncomp,
     return st;
 }
 
+/* A solve that fixed the mean found u only up to a constant (sum_I V_I u_I = 0): the exact
+ * solution is moved by one constant to u's V-weighted mean, over every particle as the
+ * constraint is, so that the errors measure u's shape; the shift goes into the report. */
+static void shift_exact(run_state *r, cJSON *tj, const double *u, double *exact)
+{
+    size_t n = pst_cloud_size(r->c);
+    const double *V = pst_cloud_volume_const(r->c);
+    double vu = 0, ve = 0, vol = 0;
+    for (size_t i = 0; i < n; ++i) {
+        vu += V[i] * u[i];
+        ve += V[i] * exact[i];
+        vol += V[i];
+    }
+    double shift = vol > 0 ? (vu - ve) / vol : 0;
+    for (size_t i = 0; i < n; ++i)
+        exact[i] += shift;
+    cJSON_AddNumberToObject(tj, "exact_shift", shift);
+}
+
 int run_keep_status(run_state *r, const pst_op *op)
 {
     size_t n = pst_cloud_size(r->c);
@@ -132,6 +151,8 @@ int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *app
             st = pts ? run_eval_at_points(r, key, t->exact[a], pts, m, exact[a])
                      : run_eval_at_particles(r, key, t->exact[a], exact[a]);
     }
+    if (st == PST_OK && !pts && r->task_mean_fixed)
+        shift_exact(r, tj, approx[0], exact[0]);
     if (st == PST_OK && !pts)
         st = add_exact_fields(r, t, ncomp, approx, exact);
     if (st == PST_OK && t->nnorms)

@@ -1,5 +1,6 @@
 /* The solve tasks: the right-hand side, the boundary values (boundary groups, else the exact
- * solution), the operator the boundary asks for, and the solver the plan chose. */
+ * solution), the operator the boundary asks for, and the solver the plan chose, with the mean
+ * of u fixed where nothing else fixes it (a periodic cloud without Dirichlet particles). */
 #include "run_state.h"
 
 #include "progress.h"
@@ -93,12 +94,33 @@ static int boundary_outputs(run_state *r, const sc_task *t, const run_boundary *
     return PST_OK;
 }
 
+/* 1 when a solve on the boundary `kind` must fix the mean of u: on a periodic cloud without
+ * Dirichlet particles the constants are in L's nullspace (docs/periodic.md). A non-periodic
+ * cloud without them (pure Neumann) is left to the solver, which refuses it. */
+static int needs_fixed_mean(run_state *r, const uint8_t *kind)
+{
+    if (!pst_cloud_periodic(r->c, NULL, NULL, NULL))
+        return 0;
+    size_t n = pst_cloud_size(r->c);
+    for (size_t i = 0; i < n; ++i)
+        if (kind[i] == PST_DIRICHLET)
+            return 0;
+    return 1;
+}
+
 /* The solve of task k on op (stored weights when the plan says so), its report in tj. A solve
  * that does not converge is not an error here: its outputs are still written, and the run
  * reports it at the end (r->solve_failed). */
-static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *b, double *u)
+static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *b, double *u,
+                      int fix_mean)
 {
     const sc_task *t = &r->s->tasks[k];
+    if (fix_mean && t->solver == PST_SOLVER_CG)
+        return run_fail(r, PST_EINPUT,
+                        "%s: task '%s': the cloud is periodic and the solve has no Dirichlet "
+                        "particle, so the mean of u is fixed, which CG cannot do: use gmres or "
+                        "bicgstab (tasks[%d].solver)",
+                        r->s->path, t->name, k);
     if (r->plan.task_stored[k]) {
         int st = pst_op_store(op);
         r->cnt.stored_weights++;
@@ -109,6 +131,9 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     pst_solve_opts so;
     pst_solve_defaults(&so);
     so.solver = r->plan.task_solver[k];
+    so.fix_mean = fix_mean;
+    if (fix_mean && so.solver == PST_SOLVER_CG) /* auto's choice: the fixed mean is not symmetric */
+        so.solver = PST_SOLVER_GMRES;
     so.precond = r->plan.task_precond[k];
     so.amg_source = r->plan.task_amg_source[k];
     so.amg_radius = r->plan.task_amg_radius[k];
@@ -137,7 +162,7 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     int ss = pst_solve(op, b, u, &so, &res, msg);
     progress_end(&pg);
     r->cnt.solves++;
-    report_solve(tj, &res);
+    report_solve(tj, &res, fix_mean);
     cJSON_AddNumberToObject(tj, "seconds", res.seconds);
     pst_solve_result_free(&res);
     if (ss == PST_ENUMERIC) {
@@ -173,16 +198,20 @@ int run_solve(run_state *r, int k, cJSON *tj)
     pst_op *op = r->base;
     if (st == PST_OK && grouped)
         st = run_make_operator(r, 1, &bnd, &op);
+    int fix_mean = st == PST_OK && needs_fixed_mean(r, grouped ? bnd.kind
+                                                               : pst_cloud_kinds_const(r->c));
     if (st == PST_OK)
-        st = solve_with(r, k, tj, op, b, u[0]);
+        st = solve_with(r, k, tj, op, b, u[0], fix_mean);
     if (st == PST_OK && op != r->base && !r->base) /* outputs.vtu: this solve's rows */
         st = run_keep_status(r, op);
     if (op != r->base)
         pst_op_destroy(op);
     r->task_kinds = bnd.kind;
+    r->task_mean_fixed = fix_mean;
     if (st == PST_OK)
         st = run_task_norms(r, k, tj, 1, u, NULL, 0);
     r->task_kinds = NULL;
+    r->task_mean_fixed = 0;
     run_boundary_free(&bnd);
     free(b);
     free(ue);

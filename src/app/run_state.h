@@ -19,6 +19,8 @@ typedef struct {
     pst_nlist *nl;
     pst_op *base;
     const uint8_t *task_kinds; /* the kinds a task's error region reads; NULL: the cloud's     */
+    int task_mean_fixed;       /* 1: the task's solve fixed the mean of u, so its errors are
+                                  against the exact solution shifted to the same mean         */
     cJSON *report, *tasks;
     int solve_failed;
     uint8_t *status; /* the row status of a solve's own operator, when there is no base one */

@@ -31,6 +31,8 @@ typedef struct {
     double h_ratio;          /* h / s0 (generated clouds; a file keeps its own h unless set)    */
     int h_ratio_set;         /* 1 when the scene gave h_ratio (a file's h is then replaced)     */
     int spacing_set;         /* 1 when the scene gave spacing (a file's h_ratio then scales it) */
+    int periodic[3];         /* 1 on the periodic axes (cloud.periodic; 0 above dim)            */
+    double box_lo[3], box_hi[3]; /* a file cloud's periodic box (cloud.box; with periodic only) */
 } sc_cloud;
 
 typedef enum { SC_MOB_NONE, SC_MOB_CONSTANT, SC_MOB_EXPR, SC_MOB_SPE10 } sc_mobility_type;
@@ -193,7 +195,8 @@ typedef enum {
     SC_T_PATH,      /* a file name                                                          */
     SC_T_OBJECT,
     SC_T_LIST,      /* a list of `item`                                                     */
-    SC_T_ENUM_OR_OBJECT /* a string among `values`, or an object of the keys below it        */
+    SC_T_ENUM_OR_OBJECT, /* a string among `values`, or an object of the keys below it       */
+    SC_T_AXES       /* true / false for every axis, or a list of dim booleans               */
 } sc_type;
 
 enum { SC_F_REQUIRED = 1, /* must be given (where it applies)                               */
@@ -227,6 +230,9 @@ const sc_param *sc_param_find(const char *key);
 /* The word of words[0..n) nearest to a misspelt `word` when it is a likely typo ("did you
  * mean"), else NULL. */
 const char *sc_suggest_word(const char *word, const char *const *words, int n);
+
+/* The number of periodic axes of the scene's cloud (cloud.periodic). */
+int pst_scene_periodic_axes(const pst_scene *s);
 
 /* The complete example scene of docs/scenes.md (the tests check that it loads). */
 const char *pst_scene_example(void);

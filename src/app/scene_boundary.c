@@ -62,7 +62,7 @@ static int read_shape(ctx *c, const cJSON *g, sc_shape *sh)
     return rc;
 }
 
-int scene_read_boundary(ctx *c, const cJSON *task, sc_task *t)
+int scene_read_boundary(ctx *c, const cJSON *task, const int periodic[3], sc_task *t)
 {
     const cJSON *list = scene_enter(c, task, "boundary");
     int rc = PST_OK;
@@ -75,6 +75,11 @@ int scene_read_boundary(ctx *c, const cJSON *task, sc_task *t)
         gr->neumann = scene_get_enum(g, "tasks[].boundary[].type");
         if (c->dim == 2 && (gr->where == SC_SIDE_ZLO || gr->where == SC_SIDE_ZHI))
             rc = scene_error(c, "where", "there is no z side in 2D");
+        /* a periodic axis wraps around: its sides are interior */
+        int axis = gr->where == SC_SIDE_ALL ? -1 : ((int)gr->where - SC_SIDE_XLO) / 2;
+        if (rc == PST_OK && axis >= 0 && periodic[axis])
+            rc = scene_error(c, "where", "the %c axis is periodic (cloud.periodic): it has no "
+                             "sides", "xyz"[axis]);
         if (rc == PST_OK && !gr->neumann && scene_member(g, "normals"))
             rc = scene_error(c, "normals", "only a neumann group has normals");
         if (rc == PST_OK)

@@ -226,6 +226,18 @@ int scene_check_value(ctx *c, const cJSON *v, const sc_param *p, sc_type type)
                                n);
         return check_items(c, v, p, SC_T_REAL, NULL, NULL);
     }
+    case SC_T_AXES: {
+        if (cJSON_IsBool(v))
+            return PST_OK;
+        if (!cJSON_IsArray(v))
+            return scene_error(c, NULL, "expected true, false or a list of %d booleans (one per "
+                               "axis), got %s", c->dim, scene_json_kind(v));
+        int n = cJSON_GetArraySize(v);
+        if (n != c->dim)
+            return scene_error(c, NULL, "expected %d booleans (dim = %d), got %d", c->dim, c->dim,
+                               n);
+        return check_items(c, v, p, SC_T_BOOL, NULL, NULL);
+    }
     case SC_T_LIST:
         if (!cJSON_IsArray(v))
             return scene_error(c, NULL, "expected a list, got %s", scene_json_kind(v));

@@ -126,6 +126,7 @@ const char *scene_expected_kind(sc_type t)
     case SC_T_OBJECT: return "an object";
     case SC_T_LIST: return "a list";
     case SC_T_ENUM_OR_OBJECT: return "a string or an object";
+    case SC_T_AXES: return "true, false or a list of booleans";
     case SC_T_STRING:
     case SC_T_ENUM: break;
     }

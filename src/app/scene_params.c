@@ -30,6 +30,21 @@ const sc_param sc_params[] = {
     {.key = "cloud.hi", .type = SC_T_VEC, .def = "1", .units = "length", .applies = GENERATED,
      .doc = "Upper corner of the box; hi - lo must be a whole number of spacings on every "
             "axis."},
+    {.key = "cloud.periodic", .type = SC_T_AXES, .def = "false",
+     .doc = "Periodic axes: true (every axis), false, or a list of dim booleans (x, y[, z]). "
+            "Along a periodic axis the box wraps around: a generated cloud has no hi end node, "
+            "boundary layer or face particles there (it cannot be rotated), a file cloud needs "
+            "cloud.box, and boundary groups have no side there. A solve without Dirichlet "
+            "particles then fixes the mean of u (docs/periodic.md)."},
+    {.key = "cloud.box", .type = SC_T_OBJECT, .applies = "file",
+     .doc = "The periodic box {lo, hi} of a file cloud, required when an axis is periodic and "
+            "refused otherwise (a generated cloud's box is cloud.lo, cloud.hi). Its periodic "
+            "axes have period hi - lo; every particle must lie in [lo, hi) along them."},
+    {.key = "cloud.box.lo", .type = SC_T_VEC, .units = "length", .flags = SC_F_REQUIRED,
+     .doc = "Lower corner of the periodic box."},
+    {.key = "cloud.box.hi", .type = SC_T_VEC, .units = "length", .flags = SC_F_REQUIRED,
+     .doc = "Upper corner of the periodic box (read on the periodic axes; > lo on every "
+            "axis)."},
     {.key = "cloud.spacing", .type = SC_T_REAL, .def = "0.05", .units = "length",
      .lo_kind = '(', .lo = 0,
      .doc = "Lattice spacing s0; for a file cloud it only scales h_ratio (when both are "
@@ -129,7 +144,9 @@ const sc_param sc_params[] = {
     {.key = "tasks[].exact", .type = SC_T_EXPRS,
      .doc = "The exact result: one expression, dim for a gradient, 3 (xx, yy, xy) or 6 (xx, "
             "yy, zz, xy, xz, yz) for a Hessian. The outputs then also hold NAME_exact and "
-            "NAME_error (approx - exact) with the same components."},
+            "NAME_error (approx - exact) with the same components. A solve that fixes the mean "
+            "of u (cloud.periodic) compares with the exact solution moved by a constant to u's "
+            "V-weighted mean over all particles; the report gives the constant (exact_shift)."},
     {.key = "tasks[].norms", .type = SC_T_LIST, .item = SC_T_ENUM,
      .values = "rel_l2|qsfdi11|qsfdi11_normalised|lv78|lv95|max_abs|max_rel",
      .hi = SC_NNORMS, .hi_kind = ']',
@@ -199,7 +216,9 @@ const sc_param sc_params[] = {
      .doc = "The boundary value."},
     {.key = "tasks[].solver", .type = SC_T_ENUM, .values = "auto|cg|gmres|bicgstab",
      .def = "\"auto\"", .applies = "solve",
-     .doc = "Krylov method; auto is CG when the operator is symmetrisable, else GMRES."},
+     .doc = "Krylov method; auto is CG when the operator is symmetrisable, else GMRES. A "
+            "solve that fixes the mean of u (a periodic cloud without Dirichlet particles) "
+            "takes GMRES for auto and refuses cg."},
     {.key = "tasks[].precond", .type = SC_T_ENUM, .values = "none|jacobi|amg|auto",
      .def = "\"auto\"", .applies = "solve",
      .doc = "Preconditioner; auto is AMG when pstencil is built with hypre, else Jacobi."},
@@ -359,6 +378,7 @@ static const char *type_name(const sc_param *p)
     case SC_T_PATH: return "path";
     case SC_T_OBJECT: return "object";
     case SC_T_ENUM_OR_OBJECT: return "enum or object";
+    case SC_T_AXES: return "bool or list of dim bools";
     case SC_T_LIST: break;
     }
     return p->item == SC_T_OBJECT ? "list of objects"

@@ -22,6 +22,33 @@ int scene_check_box(ctx *c, const double lo[3], const double hi[3], const char *
 
 /* ---- the sections of a scene ---------------------------------------------------------------- */
 
+/* cloud.periodic against the other cloud keys, and a file cloud's cloud.box: a generated
+ * cloud's box is its lattice's, a file records none (docs/io.md), so the scene gives it. */
+static int read_periodic(ctx *c, const cJSON *o, pst_scene *s)
+{
+    sc_cloud *cl = &s->cloud;
+    int periodic = pst_scene_periodic_axes(s);
+    if (periodic && cl->source == SC_CLOUD_LATTICE && cl->angle != 0)
+        return scene_error(c, "angle", "a periodic lattice cannot be rotated (cloud.periodic): "
+                           "its axes are the box's");
+    const cJSON *box = scene_member(o, "box");
+    if (cl->source != SC_CLOUD_FILE || (!box && !periodic))
+        return PST_OK;
+    if (!box)
+        return scene_error(c, "box", "missing: a file cloud with periodic axes (cloud.periodic) "
+                           "needs its periodic box {lo, hi}");
+    scene_enter(c, o, "box");
+    int rc = periodic ? PST_OK
+                      : scene_error(c, NULL, "no axis is periodic (cloud.periodic): the box "
+                                    "applies only to periodic axes");
+    scene_get_vec(c, box, "cloud.box.lo", cl->box_lo);
+    scene_get_vec(c, box, "cloud.box.hi", cl->box_hi);
+    if (rc == PST_OK)
+        rc = scene_check_box(c, cl->box_lo, cl->box_hi, "hi");
+    scene_pop(c);
+    return rc;
+}
+
 int scene_read_cloud(ctx *c, const cJSON *root, pst_scene *s)
 {
     const cJSON *o = scene_enter(c, root, "cloud");
@@ -38,6 +65,7 @@ int scene_read_cloud(ctx *c, const cJSON *root, pst_scene *s)
     cl->h_ratio = scene_get_real(o, "cloud.h_ratio");
     cl->h_ratio_set = scene_member(o, "h_ratio") != NULL;
     cl->spacing_set = scene_member(o, "spacing") != NULL;
+    scene_get_axes(c, o, "cloud.periodic", cl->periodic);
     if (rc == PST_OK && cl->source != SC_CLOUD_FILE) {
         rc = scene_check_box(c, cl->lo, cl->hi, "hi");
         /* the generators' rule (generators.c): a whole number of spacings, to 1e-9 */
@@ -50,8 +78,15 @@ int scene_read_cloud(ctx *c, const cJSON *root, pst_scene *s)
                                  axis_name[d], cl->hi[d] - cl->lo[d], r);
         }
     }
+    if (rc == PST_OK)
+        rc = read_periodic(c, o, s);
     scene_pop(c);
     return rc;
+}
+
+int pst_scene_periodic_axes(const pst_scene *s)
+{
+    return s->cloud.periodic[0] + s->cloud.periodic[1] + s->cloud.periodic[2];
 }
 
 /* An expression or a list of them into out[], with the count the context needs (`need`; 0:
@@ -276,8 +311,11 @@ static int read_task(ctx *c, const cJSON *o, pst_scene *s, sc_task *t)
     if (rc == PST_OK)
         rc = scene_set_str(c, &t->rhs, scene_get_string(o, "tasks[].rhs"));
     if (rc == PST_OK)
-        rc = scene_read_boundary(c, o, t);
-    if (rc == PST_OK && t->type == SC_TASK_SOLVE && t->ngroups == 0 && t->nexact == 0)
+        rc = scene_read_boundary(c, o, s->cloud.periodic, t);
+    /* periodic along every axis, a generated cloud has no boundary to give values to */
+    int boundless = pst_scene_periodic_axes(s) == c->dim && s->cloud.source != SC_CLOUD_FILE;
+    if (rc == PST_OK && t->type == SC_TASK_SOLVE && t->ngroups == 0 && t->nexact == 0 &&
+        !boundless)
         rc =
             scene_error(c, NULL, "a solve without 'boundary' needs 'exact' (its Dirichlet values)");
     t->solver = scene_get_enum(o, "tasks[].solver");

@@ -75,6 +75,16 @@ void scene_get_vec(const ctx *c, const cJSON *obj, const char *key, double out[3
     }
 }
 
+void scene_get_axes(const ctx *c, const cJSON *obj, const char *key, int out[3])
+{
+    const cJSON *v = scene_member(obj, scene_last_segment(key));
+    int all = v ? cJSON_IsTrue(v) : scene_get_bool(NULL, key);
+    for (int d = 0; d < 3; ++d) {
+        const cJSON *e = cJSON_IsArray(v) && d < c->dim ? cJSON_GetArrayItem(v, d) : NULL;
+        out[d] = d < c->dim && (e ? cJSON_IsTrue(e) : all);
+    }
+}
+
 int scene_set_str(ctx *c, char **dst, const char *src)
 {
     if (!src)

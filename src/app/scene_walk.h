@@ -95,6 +95,8 @@ int scene_get_bool(const cJSON *obj, const char *key);
 int scene_get_enum(const cJSON *obj, const char *key);
 const char *scene_get_string(const cJSON *obj, const char *key);
 void scene_get_vec(const ctx *c, const cJSON *obj, const char *key, double out[3]);
+/* A list of dim booleans, or one for every axis, into out[0..3) (0 above dim). */
+void scene_get_axes(const ctx *c, const cJSON *obj, const char *key, int out[3]);
 /* A copy of src into *dst (nothing for NULL); PST_ENOMEM is kept in c->status. */
 int scene_set_str(ctx *c, char **dst, const char *src);
 /* An input file named in the scene, relative to the scene file's folder. */
@@ -110,7 +112,8 @@ int scene_read_operator(ctx *c, const cJSON *root, pst_scene *s);
 int scene_read_fields(ctx *c, const cJSON *root, pst_scene *s);
 int scene_read_tasks(ctx *c, const cJSON *root, pst_scene *s);
 int scene_read_outputs(ctx *c, const cJSON *root, pst_scene *s);
-/* The boundary groups of a task (scene_boundary.c). */
-int scene_read_boundary(ctx *c, const cJSON *task, sc_task *t);
+/* The boundary groups of a task (scene_boundary.c); a group's side must not lie on one of the
+ * cloud's periodic axes. */
+int scene_read_boundary(ctx *c, const cJSON *task, const int periodic[3], sc_task *t);
 
 #endif

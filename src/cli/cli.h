@@ -54,6 +54,27 @@ void cli_cloud_options_help(void);
 /* Generate the cloud the options describe; prints the error and returns an exit code. */
 int cli_generate(const cli_cloud_opts *o, pst_cloud **out);
 
+/* --periodic AXES and --box LO,HI of the commands that read a cloud (periodic_opt.c). */
+typedef struct {
+    const char *axes; /* the --periodic value; NULL when not given                      */
+    int periodic[3];  /* 1 on the axes it names                                         */
+    double box[6];    /* the --box numbers: lo of every axis, then hi of every axis      */
+    int nbox;         /* how many (4 or 6; 0 when not given)                             */
+} cli_periodic;
+
+/* Parse --periodic or --box at argv[*i] for command `cmd`: 1 if consumed, 0 if neither, -1
+ * after printing why the value is bad (an unknown or repeated axis, a malformed box). */
+int cli_parse_periodic_option(int argc, char **argv, int *i, const char *cmd, cli_periodic *p);
+/* After the options: --periodic and --box come together or not at all. CLI_OK or CLI_USAGE,
+ * after printing the reason. */
+int cli_check_periodic(const char *cmd, const cli_periodic *p);
+/* Make the cloud read from `path` periodic as the options say (nothing without them): the
+ * axes within its dimension, 2 dim numbers in the box with lo < hi, every particle inside it
+ * along the periodic axes. An exit code, after printing the reason. */
+int cli_set_periodic(const char *cmd, const cli_periodic *p, pst_cloud *c, const char *path);
+/* Print the two options' help lines. */
+void cli_periodic_help(void);
+
 /* Morton-sort `c`, build its neighbour list for `kernel`, print statistics and timings. */
 int cli_neighbour_report(const cli_ctx *ctx, pst_cloud *c, pst_kernel kernel, double t_make,
                          const char *make_label);

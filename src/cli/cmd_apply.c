@@ -18,6 +18,7 @@ typedef struct {
     int stored;           /* apply: pst_op_store + pst_op_apply_stored */
     const char *timers;   /* --timers FILE.json: the run's timers and counts as JSON, or NULL */
     double h;             /* > 0: uniform h overriding the file's column */
+    cli_periodic periodic; /* --periodic, --box */
     pst_op_opts opts;
 } apply_args;
 
@@ -89,13 +90,14 @@ static void print_help(const char *cmd)
         printf("usage: pstencil apply --scheme NAME --in CLOUD --field COLUMN --out RESULT.csv\n"
                "                      [--mobility COLUMN] [--kernel NAME] [--h VALUE]\n"
                "                      [--gradient G1..G4] [--mean arithmetic|harmonic]\n"
-               "                      [--stored]\n\n"
+               "                      [--periodic AXES --box LO,HI] [--stored]\n\n"
                "Apply the operator L u = div(M grad u) of a scheme to the field COLUMN of a cloud\n"
                "(docs/clouds.md) and write 'id,Lu,Au,status', one row per particle in input order.\n\n");
     else
         printf("usage: pstencil stencil --scheme NAME --in CLOUD --out A.mtx\n"
                "                        [--mobility COLUMN] [--kernel NAME] [--h VALUE]\n"
-               "                        [--gradient G1..G4] [--mean arithmetic|harmonic]\n\n"
+               "                        [--gradient G1..G4] [--mean arithmetic|harmonic]\n"
+               "                        [--periodic AXES --box LO,HI]\n\n"
                "Assemble the matrix of L (with its diagonal) and write it as MatrixMarket\n"
                "'coordinate real general', rows and columns in input order (1-based).\n\n");
     printf("options:\n"
@@ -123,6 +125,7 @@ static void print_help(const char *cmd)
            "  --on-degenerate fall_back|refuse  rank-deficient / too-few-neighbours rows take\n"
            "                      the scheme's fallback chain (default) or stop with exit 3\n"
            "  --timers FILE.json  write the counts and per-phase timers as JSON\n");
+    cli_periodic_help();
     if (strcmp(cmd, "apply") == 0)
         printf("  --stored            store the weights and apply from them (default:\n"
                "                      matrix-free)\n");
@@ -133,7 +136,7 @@ static void print_help(const char *cmd)
 /* Parse the options of either command. Returns -1 to go on, or an exit code. */
 static int parse_args(apply_args *a, int argc, char **argv)
 {
-    int is_apply = strcmp(a->cmd, "apply") == 0;
+    int is_apply = strcmp(a->cmd, "apply") == 0, rc;
     for (int i = 0; i < argc; ++i) {
         const char *v;
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
@@ -211,6 +214,9 @@ static int parse_args(apply_args *a, int argc, char **argv)
             if (!v || !*v)
                 return bad_option(a->cmd, "--timers", v, "a file name");
             a->timers = v;
+        } else if ((rc = cli_parse_periodic_option(argc, argv, &i, a->cmd, &a->periodic))) {
+            if (rc < 0)
+                return CLI_USAGE;
         } else if (is_apply && strcmp(argv[i], "--stored") == 0) {
             a->stored = 1;
         } else {
@@ -231,6 +237,8 @@ static int parse_args(apply_args *a, int argc, char **argv)
     }
     if (!known_scheme(a->opts.scheme))
         return unknown_scheme(a->cmd, a->opts.scheme);
+    if ((rc = cli_check_periodic(a->cmd, &a->periodic)) != CLI_OK)
+        return rc;
     return -1;
 }
 
@@ -263,6 +271,8 @@ static int setup(const cli_ctx *ctx, const apply_args *a, apply_setup *s)
         fprintf(stderr, "pstencil: %s: the cloud has no particles\n", a->in);
         return CLI_BAD_INPUT;
     }
+    if ((st = cli_set_periodic(a->cmd, &a->periodic, c, a->in)) != CLI_OK)
+        return st;
     /* Checked before the sort, so particle i is still data row i (line i + 2 of a file
      * without blank lines). */
     if (a->field && !find_field(c, a->in, a->field))
@@ -331,6 +341,8 @@ static void print_summary(const apply_args *a, const apply_setup *s)
     printf("kernel               %s, support %g h\n", pst_kernel_name((pst_kernel)kernel),
            s->support);
     printf("particles            %zu (%dD)\n", pst_cloud_size(s->c), pst_cloud_dim(s->c));
+    if (a->periodic.axes)
+        printf("periodic             %s\n", a->periodic.axes);
     printf("pairs stored         %lld\n", (long long)pst_nlist_pairs(s->nl));
     printf("thresholds           cond_max %g, rank_tol %g, min_pair_distance %g h\n",
            a->opts.cond_max, a->opts.rank_tol, a->opts.min_pair_distance);

@@ -67,14 +67,19 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv)
 {
     const char *path = NULL;
     pst_kernel kernel = PST_KERNEL_QUINTIC;
+    cli_periodic per = {0};
     for (int i = 0; i < argc; ++i) {
         const char *v;
+        int rc;
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
-            printf("usage: pstencil neighbours CLOUD [--kernel NAME]\n\n"
+            printf("usage: pstencil neighbours CLOUD [--kernel NAME] [--periodic AXES --box "
+                   "LO,HI]\n\n"
                    "Read a cloud (docs/clouds.md), Morton-sort it, build the neighbour list of\n"
                    "docs/choices.md, choice 1 (|x_j - x_i| < support * (h_i + h_j)/2) and print\n"
                    "min/mean/max neighbours, memory and timings. --kernel sets the support\n"
-                   "radius: cubic, wendland_c2, wendland_c4 (2h) or quintic (3h, the default).\n");
+                   "radius: cubic, wendland_c2, wendland_c4 (2h) or quintic (3h, the default).\n\n"
+                   "options:\n");
+            cli_periodic_help();
             return CLI_OK;
         }
         if (cli_option(argc, argv, &i, "--kernel", &v)) {
@@ -84,6 +89,9 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv)
                 return CLI_USAGE;
             }
             kernel = (pst_kernel)k;
+        } else if ((rc = cli_parse_periodic_option(argc, argv, &i, "neighbours", &per))) {
+            if (rc < 0)
+                return CLI_USAGE;
         } else if (argv[i][0] == '-' || path) {
             fprintf(stderr, "pstencil: neighbours: unexpected argument '%s'\n", argv[i]);
             return CLI_USAGE;
@@ -95,6 +103,9 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv)
         fprintf(stderr, "pstencil: neighbours: a cloud file is needed\n");
         return CLI_USAGE;
     }
+    int rc = cli_check_periodic("neighbours", &per);
+    if (rc != CLI_OK)
+        return rc;
     char err[PST_ERRLEN] = "";
     pst_cloud *c = NULL;
     double t0 = omp_get_wtime();
@@ -106,7 +117,9 @@ int cli_neighbours(const cli_ctx *ctx, int argc, char **argv)
         pst_cloud_destroy(c);
         return CLI_BAD_INPUT;
     }
-    int rc = cli_neighbour_report(ctx, c, kernel, omp_get_wtime() - t0, "read");
+    rc = cli_set_periodic("neighbours", &per, c, path);
+    if (rc == CLI_OK)
+        rc = cli_neighbour_report(ctx, c, kernel, omp_get_wtime() - t0, "read");
     pst_cloud_destroy(c);
     return rc;
 }
