@@ -112,5 +112,7 @@ int scene_read_tasks(ctx *c, const cJSON *root, pst_scene *s);
 int scene_read_outputs(ctx *c, const cJSON *root, pst_scene *s);
 /* The boundary groups of a task (scene_boundary.c). */
 int scene_read_boundary(ctx *c, const cJSON *task, sc_task *t);
+/* The keys of a diffuse task (scene_steps.c). */
+int scene_read_steps(ctx *c, const cJSON *task, sc_task *t);
 
 #endif
