@@ -160,6 +160,16 @@ for f in qsfdi_test_a lv_table2 lv_mixed heat_3d_divergence spe10_layer85 qsfdi_
   expect 0 "run scenes/$f.json" -- sh -c "cd '$work' && '$(readlink -f "$exe")' run '$scenes/$f.json'"
 done
 contains out "rows: none (derivatives only)" "interpolation and Hessian need no Laplacian rows"
+expect 0 "run scenes/heat_steps_2d.json" -- \
+  sh -c "cd '$work' && '$(readlink -f "$exe")' run '$scenes/heat_steps_2d.json'"
+contains out "explicit: 379 steps of dt 0.0001319 (limit)" "forward Euler reports its step"
+contains out "implicit: 20 steps of dt 0.0025 (scene)" "backward Euler reports its steps"
+check "the time series and the table are written" \
+  '[ -s "$work/heat_explicit.pvd" ] && [ -s "$work/heat_explicit_000379.vtu" ] &&
+   [ "$(wc -l < "$work/heat_implicit_steps.csv")" -eq 21 ]'
+expect 2 "run: an explicit dt above the step limit" -- "$exe" run "$scenes/heat_steps_2d.json" \
+  tasks.0.dt=0.001
+contains err "exceeds the forward-Euler step limit" "the refusal gives the limit"
 expect 0 "run scenes/lv_patch_2d.json" -- "$exe" run "$scenes/lv_patch_2d.json"
 contains out "max_abs [0-9.]*e-1[1-6]" "the heterogeneous patch test holds to rounding"
 expect 2 "run: missing scene file" -- "$exe" run "$work/none.json"
