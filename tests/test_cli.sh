@@ -167,6 +167,16 @@ expect 0 "run scenes/periodic_poisson_2d.json" -- \
 contains out "mean of u fixed (periodic, no Dirichlet particle), lambda" "the fixed mean is said"
 check "periodic example: GMRES, lambda small, exact shifted by about -2, rel_l2 < 1e-2" \
   "python3 -c 'import json,sys; t=json.load(open(sys.argv[1]))[\"tasks\"][0]; s=t[\"solver\"]; assert s[\"fix_mean\"] and s[\"method\"]==\"gmres\" and abs(s[\"mean_shift\"])<0.05 and abs(t[\"exact_shift\"]+2)<1e-2 and t[\"norms\"][\"rel_l2\"]<1e-2, t' '$work/periodic_poisson_2d.report.json'"
+expect 0 "run scenes/heat_steps_2d.json" -- \
+  sh -c "cd '$work' && '$(readlink -f "$exe")' run '$scenes/heat_steps_2d.json'"
+contains out "explicit: 379 steps of dt 0.0001319 (limit)" "forward Euler reports its step"
+contains out "implicit: 20 steps of dt 0.0025 (scene)" "backward Euler reports its steps"
+check "the time series and the table are written" \
+  '[ -s "$work/heat_explicit.pvd" ] && [ -s "$work/heat_explicit_000379.vtu" ] &&
+   [ "$(wc -l < "$work/heat_implicit_steps.csv")" -eq 21 ]'
+expect 2 "run: an explicit dt above the step limit" -- "$exe" run "$scenes/heat_steps_2d.json" \
+  tasks.0.dt=0.001
+contains err "exceeds the forward-Euler step limit" "the refusal gives the limit"
 expect 0 "run scenes/lv_patch_2d.json" -- "$exe" run "$scenes/lv_patch_2d.json"
 contains out "max_abs [0-9.]*e-1[1-6]" "the heterogeneous patch test holds to rounding"
 expect 2 "run: missing scene file" -- "$exe" run "$work/none.json"

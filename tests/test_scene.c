@@ -137,14 +137,14 @@ static void test_example(void)
     CHECK(strcmp(s.mobility.expr[1], "1 + y") == 0);
     CHECK_INT(s.op.kernel, PST_KERNEL_QUINTIC);
     CHECK_INT(s.nfields, 2);
-    CHECK_INT(s.ntasks, 6);
-    static const char *const names[] = {"laplacian", "flux", "gradient", "hessian",
-                                        "interpolate", "p"};
-    for (int i = 0; i < 6 && i < s.ntasks; ++i) {
+    CHECK_INT(s.ntasks, 7);
+    static const char *const names[] = {"laplacian",   "flux", "gradient", "hessian",
+                                        "interpolate", "p",    "heat"};
+    for (int i = 0; i < 7 && i < s.ntasks; ++i) {
         CHECK(strcmp(s.tasks[i].name, names[i]) == 0);
         CHECK_INT(s.tasks[i].type, i);
     }
-    if (s.ntasks == 6) {
+    if (s.ntasks == 7) {
         sc_task *t = s.tasks;
         CHECK_INT(t[0].nnorms, 2); /* the default pair */
         CHECK_INT(t[1].nnorms, 3);
@@ -264,6 +264,80 @@ static void test_tasks(void)
     CHECK_INT(parse(&s, "{\"operator\": {\"kernel\": \"wendland2\"}}", NULL, 0), PST_OK);
     CHECK_INT(s.op.kernel, PST_KERNEL_WENDLAND_C2);
     pst_scene_free(&s);
+}
+
+/* Diffuse tasks: every key read, the defaults, and the checks between keys the table cannot
+ * make (what the method, the velocity and pvd decide). */
+static void test_steps(void)
+{
+    pst_scene s;
+    const char *moving =
+        "{\"tasks\": [{\"type\": \"diffuse\", \"name\": \"heat\", \"initial\": \"sin(x)\", "
+        "\"exact\": \"t*x\", \"source\": \"t\", \"boundary_value\": \"0\", \"t_end\": 0.5, "
+        "\"method\": \"explicit\", \"velocity\": [\"y\", \"-x\"], \"skin\": 0.4, "
+        "\"pvd\": \"a.pvd\", \"output_every\": 3, \"steps_csv\": \"a.csv\"}]}";
+    CHECK_INT(parse(&s, moving, NULL, 0), PST_OK);
+    const sc_task *t = s.tasks;
+    CHECK_INT(t->type, SC_TASK_DIFFUSE);
+    CHECK_INT(t->method, SC_METHOD_EXPLICIT);
+    CHECK(t->t_end == 0.5 && t->dt == 0 && t->safety == 0.9 && t->skin == 0.4);
+    CHECK_INT(t->nvelocity, 2);
+    CHECK(strcmp(t->velocity[1], "-x") == 0 && strcmp(t->initial, "sin(x)") == 0);
+    CHECK(strcmp(t->source, "t") == 0 && strcmp(t->boundary_value, "0") == 0);
+    CHECK(strcmp(t->pvd, "a.pvd") == 0 && strcmp(t->steps_csv, "a.csv") == 0);
+    CHECK_INT(t->output_every, 3);
+    CHECK_INT(t->max_steps, 100000);
+    CHECK_INT(t->nnorms, 2); /* exact gives the default pair */
+    /* expressions of a diffuse task read t; those of other tasks do not */
+    CHECK_INT(pst_scene_compile_exprs(&s, err, sizeof err), PST_OK);
+    pst_scene_free(&s);
+    CHECK_INT(parse(&s, "{\"tasks\": [{\"type\": \"diffuse\", \"initial\": \"x\", "
+                        "\"t_end\": 2, \"dt\": 0.1}]}", NULL, 0), PST_OK);
+    CHECK_INT(s.tasks[0].method, SC_METHOD_IMPLICIT);
+    CHECK(s.tasks[0].dt == 0.1 && s.tasks[0].rtol == 1e-10 && s.tasks[0].nvelocity == 0);
+    CHECK(strcmp(s.tasks[0].name, "diffuse") == 0 && s.tasks[0].pvd == NULL);
+    pst_scene_free(&s);
+    CHECK_INT(parse(&s, "{\"tasks\": [{\"type\": \"solve\", \"rhs\": \"t\", \"exact\": \"x\"}]}",
+                    NULL, 0), PST_OK);
+    CHECK_INT(pst_scene_compile_exprs(&s, err, sizeof err), PST_EINPUT);
+    CHECK(strstr(err, "t.json: tasks[0].rhs: ") == err);
+    pst_scene_free(&s);
+
+#define DIFFUSE "{\"tasks\": [{\"type\": \"diffuse\", \"initial\": \"x\", \"t_end\": 1, "
+    EXPECT_ERROR(DIFFUSE "\"method\": \"crank_nicolson\"}]}",
+                 "t.json:1:12: key 'tasks.0.dt': missing: the implicit methods need a step (the "
+                 "automatic one is the explicit method's stability limit)");
+    EXPECT_ERROR(DIFFUSE "\"dt\": 0.1, \"safety\": 0.5}]}",
+                 "t.json:1:71: key 'tasks.0.safety': applies only to method explicit");
+    EXPECT_ERROR(DIFFUSE "\"method\": \"explicit\", \"dt\": 0.1, \"safety\": 0.5}]}",
+                 "t.json:1:93: key 'tasks.0.safety': applies only without dt (the step is dt)");
+    EXPECT_ERROR(DIFFUSE "\"method\": \"explicit\", \"rtol\": 1e-6}]}",
+                 "t.json:1:82: key 'tasks.0.rtol': applies only to the implicit methods");
+    EXPECT_ERROR(DIFFUSE "\"dt\": 0.1, \"skin\": 0.5}]}",
+                 "t.json:1:71: key 'tasks.0.skin': applies only with velocity");
+    EXPECT_ERROR(DIFFUSE "\"dt\": 0.1, \"output_every\": 5}]}",
+                 "t.json:1:71: key 'tasks.0.output_every': applies only with pvd");
+    EXPECT_ERROR(DIFFUSE "\"dt\": 0.1, \"pvd\": \"a.vtu\"}]}",
+                 "t.json:1:71: key 'tasks.0.pvd': 'a.vtu': expected a .pvd file name");
+    EXPECT_ERROR(DIFFUSE "\"dt\": 0.1, \"pvd\": \"a.pvd\", \"steps_csv\": \"a.pvd\"}]}",
+                 "t.json:1:87: key 'tasks.0.steps_csv': the same file as pvd");
+    EXPECT_ERROR(DIFFUSE "\"dt\": 0.1, \"velocity\": \"x\"}]}",
+                 "t.json:1:71: key 'tasks.0.velocity': needs a list of 2 expressions (one per "
+                 "axis), got 1");
+    EXPECT_ERROR(DIFFUSE "\"dt\": 0.1, \"max_steps\": 0}]}",
+                 "t.json:1:71: key 'tasks.0.max_steps': must be in [1, 1000000], got 0");
+    EXPECT_ERROR("{\"tasks\": [{\"type\": \"diffuse\", \"initial\": \"x\", \"dt\": 1}]}",
+                 "t.json:1:12: key 'tasks.0.t_end': missing required key (for tasks of type "
+                 "diffuse)");
+    EXPECT_ERROR("{\"tasks\": [{\"type\": \"solve\", \"rhs\": \"0\", \"exact\": \"x\", "
+                 "\"initial\": \"x\"}]}",
+                 "t.json:1:56: key 'tasks.0.initial': applies only to tasks of type diffuse");
+    EXPECT_ERROR("{\"fields\": {\"u\": \"x\"}, \"tasks\": [{\"type\": \"laplacian\", "
+                 "\"field\": \"u\"},\n{\"type\": \"diffuse\", \"initial\": \"x\", \"t_end\": 1, "
+                 "\"dt\": 0.1, \"velocity\": [\"y\", \"x\"]}]}",
+                 "t.json:2:60: key 'tasks.1.velocity': moves the particles, so the task must be "
+                 "the scene's only one (there are 2)");
+#undef DIFFUSE
 }
 
 static void test_overrides(void)
@@ -394,7 +468,8 @@ static void test_errors(void)
     /* keys that do not apply */
     EXPECT_ERROR("{\"fields\": {\"u\": \"x\"},\n \"tasks\": [{\"type\": \"laplacian\", "
                  "\"field\": \"u\", \"rtol\": 1e-8}]}",
-                 "t.json:2:48: key 'tasks.0.rtol': applies only to tasks of type solve");
+                 "t.json:2:48: key 'tasks.0.rtol': applies only to tasks of type solve, "
+                 "diffuse");
     EXPECT_ERROR("{\"tasks\": [{\"type\": \"solve\", \"rhs\": \"0\", \"field\": \"u\"}]}",
                  "t.json:1:42: key 'tasks.0.field': applies only to tasks of type laplacian, "
                  "divergence, gradient, hessian, interpolate");
@@ -846,6 +921,7 @@ int main(int argc, char **argv)
     test_minimal();
     test_example();
     test_tasks();
+    test_steps();
     test_overrides();
     test_errors();
     test_edges();

@@ -56,10 +56,34 @@ static int task_fields(const sc_task *t, int dim)
     case SC_TASK_GRADIENT: return dim;
     case SC_TASK_HESSIAN: return dim == 2 ? 3 : 6;
     case SC_TASK_INTERPOLATE: return 0;
+    case SC_TASK_DIFFUSE: /* u, and the previous step's L u or the solve's right-hand side */
+        return 2;
     case SC_TASK_SOLVE: /* with groups also NAME_kind and NAME_normal_* (docs/boundaries.md) */
         return t->ngroups ? 2 + dim : 1;
     default: return 1;
     }
+}
+
+/* A diffuse task's implicit system I - theta dt L is a linear operator of its own (a pst_linop,
+ * docs/time-stepping.md): neither symmetric (its Dirichlet rows are held) nor an engine
+ * operator, which AMG needs; moving particles re-sample the mobility at their positions,
+ * which a per-cell SPE10 field does not give. */
+static int check_steps(const pst_scene *s, const sc_task *t, char *err, size_t errlen)
+{
+    const char *why = t->solver == PST_SOLVER_CG   ? "CG needs a symmetric operator, and I - "
+                                                     "theta dt L with its held Dirichlet rows is "
+                                                     "not: use gmres or bicgstab"
+                      : t->precond == PST_PREC_AMG ? "AMG needs the engine operator's rows, and "
+                                                     "I - theta dt L is a linear operator of its "
+                                                     "own: use jacobi"
+                      : t->nvelocity && s->mobility.type == SC_MOB_SPE10
+                          ? "moving particles need a mobility of their positions: an SPE10 "
+                            "layer is per cell of the start"
+                          : NULL;
+    if (!why)
+        return PST_OK;
+    snprintf(err, errlen, "task '%s': %s", t->name, why);
+    return PST_EINPUT;
 }
 
 /* A task the scheme or the scene cannot take: bad input (exit 2, docs/cli.md). */
@@ -88,13 +112,16 @@ static int check_task(const pst_scene *s, int k, int mobility, char *err, size_t
                               "div(M grad u): use type 'divergence'", t->name);
         return PST_EINPUT;
     }
-    if (mobility && (t->type == SC_TASK_DIVERGENCE || t->type == SC_TASK_SOLVE) &&
+    if (mobility && (t->type == SC_TASK_DIVERGENCE || t->type == SC_TASK_SOLVE ||
+                     t->type == SC_TASK_DIFFUSE) &&
         !pst_scheme_supports(scheme, PST_SUPPORTS_MOBILITY)) {
         snprintf(err, errlen, "task '%s': scheme '%s' discretises the plain Laplacian only; "
                               "a variable mobility needs another scheme (e.g. lv)",
                  t->name, scheme);
         return PST_EINPUT;
     }
+    if (t->type == SC_TASK_DIFFUSE)
+        return check_steps(s, t, err, errlen);
     if (t->type == SC_TASK_SOLVE && t->solver == PST_SOLVER_CG) {
         int neumann = 0;
         for (int g = 0; g < t->ngroups; ++g)
@@ -171,13 +198,21 @@ static void fit_amg_radius(pst_plan *p, const pst_scene *s, double other, double
             p->task_amg_radius[k] = PLAN_AMG_TIGHT_RADIUS;
 }
 
+/* 1 when task k solves: a solve, or a diffuse task of an implicit method. */
+static int task_solves(const pst_scene *s, int k)
+{
+    const sc_task *t = &s->tasks[k];
+    return t->type == SC_TASK_SOLVE ||
+           (t->type == SC_TASK_DIFFUSE && t->method != SC_METHOD_EXPLICIT);
+}
+
 /* Vectors of n doubles the largest solve holds: GMRES(m) m + 8 (the basis and the solver's
  * own), the other methods 8. */
 static double solver_vectors(const pst_plan *p, const pst_scene *s)
 {
     double v = 0;
     for (int k = 0; k < s->ntasks; ++k)
-        if (s->tasks[k].type == SC_TASK_SOLVE)
+        if (task_solves(s, k))
             v = fmax(v, p->task_solver[k] == PST_SOLVER_GMRES ? p->task_restart[k] + 8 : 8);
     return v;
 }
@@ -273,11 +308,12 @@ static double fit_solves(pst_plan *p, const pst_scene *s, double list, double bu
     fit_restarts(p, s, budget - fixed);
     p->bytes_solver = n * (8.0 * solver_vectors(p, s) + amg);
     double without = fixed + n * 8.0 * solver_vectors(p, s);
-    /* Weights pay off for solves (hundreds of applies); a single apply is cheaper without. */
+    /* Weights pay off for solves and time steps (hundreds of applies); a single apply is
+     * cheaper without. */
     p->bytes_weights = 0;
     for (int k = 0; k < s->ntasks; ++k) {
         const sc_task *t = &s->tasks[k];
-        if (t->type != SC_TASK_SOLVE)
+        if (t->type != SC_TASK_SOLVE && t->type != SC_TASK_DIFFUSE)
             continue;
         double w = 8.0 * n * p->neighbours;
         p->task_stored[k] = half              ? 0
@@ -327,9 +363,15 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
         if (t->type != SC_TASK_SOLVE || t->ngroups == 0) {
             p->base_operator = 1;
             if (t->type == SC_TASK_LAPLACIAN || t->type == SC_TASK_DIVERGENCE ||
-                t->type == SC_TASK_SOLVE ||
+                t->type == SC_TASK_SOLVE || t->type == SC_TASK_DIFFUSE ||
                 !pst_scheme_supports(s->op.scheme, PST_SUPPORTS_DERIVATIVES_ONLY))
                 p->base_laplacian = 1;
+        }
+        if (t->type == SC_TASK_DIFFUSE) {
+            p->task_solver[k] = t->solver != PST_SOLVER_AUTO ? t->solver : PST_SOLVER_GMRES;
+            p->task_precond[k] = t->precond != SC_PRECOND_AUTO ? t->precond : PST_PREC_JACOBI;
+            p->moving |= t->nvelocity > 0;
+            p->skin = t->nvelocity ? t->skin : p->skin;
         }
         if (t->type == SC_TASK_SOLVE) {
             int neumann = 0;
@@ -414,7 +456,7 @@ int pst_plan_make_for_cloud(pst_plan *p, const pst_scene *s, const pst_cloud *c,
 static const char *task_type_name(int type)
 {
     static const char *const names[] = {"laplacian", "divergence", "gradient",
-                                        "hessian",   "interpolate", "solve"};
+                                        "hessian",   "interpolate", "solve", "diffuse"};
     return names[type];
 }
 
@@ -443,6 +485,21 @@ static void print_solve(FILE *f, const pst_plan *p, int k, const sc_task *t)
         fprintf(f, " on pairs within %g h (to fit)", p->task_amg_radius[k]);
     fprintf(f, ", rtol %g, %s operator%s", t->rtol,
             p->task_stored[k] ? "stored" : "matrix-free", t->ngroups ? ", own boundary groups" : "");
+}
+
+static void print_steps(FILE *f, const pst_plan *p, int k, const sc_task *t)
+{
+    static const char *const methods[] = {"forward Euler", "backward Euler", "Crank-Nicolson"};
+    fprintf(f, ": %s to t = %g, ", methods[t->method], t->t_end);
+    if (t->dt > 0)
+        fprintf(f, "dt %g", t->dt);
+    else
+        fprintf(f, "dt %g of the step limit", t->safety);
+    if (t->method != SC_METHOD_EXPLICIT)
+        fprintf(f, ", %s + %s, rtol %g", solver_name(p->task_solver[k]),
+                precond_name(p->task_precond[k]), t->rtol);
+    fprintf(f, ", %s operator%s", p->task_stored[k] ? "stored" : "matrix-free",
+            t->nvelocity ? ", moving particles" : "");
 }
 
 void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
@@ -482,7 +539,9 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
     for (int k = 0; k < s->ntasks; ++k) {
         const sc_task *t = &s->tasks[k];
         fprintf(f, "  task %-6d %s '%s'", k, task_type_name(t->type), t->name);
-        if (t->type == SC_TASK_SOLVE)
+        if (t->type == SC_TASK_DIFFUSE)
+            print_steps(f, p, k, t);
+        else if (t->type == SC_TASK_SOLVE)
             print_solve(f, p, k, t);
         else if (t->field)
             fprintf(f, " of %s", t->field);

@@ -20,6 +20,8 @@ typedef struct {
     long half_lists;          /* operators switched to a half list (pst_op_use_half_list)     */
     long applies;             /* L u outside solves                                           */
     long gradients, hessians, interpolations, solves;
+    long steps;               /* time steps of diffuse tasks                                  */
+    long refreshes;           /* operators refreshed after the particles moved (pst_op_refresh) */
     long norms;
     long files;               /* output files written                                         */
 } pst_run_counters;
@@ -47,6 +49,10 @@ typedef struct {
     /* 1: the one operator switches to a half neighbour list after its precompute
      * (pst_op_use_half_list): matrix-free solves and applies only */
     int half_list;
+    /* 1: a diffuse task moves the particles: the list keeps a Verlet skin of `skin` h
+     * (pst_nlist_build_skin) for its updates */
+    int moving;
+    double skin;
     int task_stored[SC_MAX_TASKS];  /* 1: stored weights, 0: matrix-free                      */
     int task_solver[SC_MAX_TASKS];  /* pst_solver a solve task will use                        */
     int task_precond[SC_MAX_TASKS]; /* pst_precond a solve task will use                       */

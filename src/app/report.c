@@ -80,7 +80,7 @@ void report_operator(cJSON *report, const pst_op *op)
 void report_task_header(cJSON *task, const sc_task *t)
 {
     static const char *const types[] = {"laplacian", "divergence", "gradient",
-                                        "hessian",   "interpolate", "solve"};
+                                        "hessian",   "interpolate", "solve", "diffuse"};
     cJSON_AddStringToObject(task, "name", t->name);
     cJSON_AddStringToObject(task, "type", types[t->type]);
     if (t->field)
@@ -152,6 +152,8 @@ void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt
                                      {"hessians", (double)cnt->hessians},
                                      {"interpolations", (double)cnt->interpolations},
                                      {"solves", (double)cnt->solves},
+                                     {"steps", (double)cnt->steps},
+                                     {"refreshes", (double)cnt->refreshes},
                                      {"norms", (double)cnt->norms}};
     add_numbers(cJSON_AddObjectToObject(report, "counters"), counters,
                 sizeof counters / sizeof counters[0]);
@@ -335,6 +337,29 @@ static void summary_groups(FILE *f, const cJSON *groups)
     fprintf(f, "\n");
 }
 
+/* One line for a diffuse task's steps: the method, the step and its limit, the solver's work. */
+static void summary_steps(FILE *f, const cJSON *sp)
+{
+    if (!sp)
+        return;
+    const cJSON *limit = cJSON_GetObjectItem(sp, "dt_limit");
+    fprintf(f, "    %s: %.0f steps of dt %.4g (%s) to t = %.4g; rho %.4g, forward-Euler limit "
+               "dt <= ",
+            cJSON_GetStringValue(cJSON_GetObjectItem(sp, "method")),
+            cJSON_GetNumberValue(cJSON_GetObjectItem(sp, "steps_done")),
+            cJSON_GetNumberValue(cJSON_GetObjectItem(sp, "dt")),
+            cJSON_GetStringValue(cJSON_GetObjectItem(sp, "dt_from")),
+            cJSON_GetNumberValue(cJSON_GetObjectItem(sp, "t_reached")),
+            cJSON_GetNumberValue(cJSON_GetObjectItem(sp, "rho")));
+    if (limit)
+        fprintf(f, "%.4g", limit->valuedouble);
+    else
+        fprintf(f, "any");
+    fprintf(f, "; %.0f solver iterations, %.0f set-ups\n",
+            cJSON_GetNumberValue(cJSON_GetObjectItem(sp, "iterations")),
+            cJSON_GetNumberValue(cJSON_GetObjectItem(sp, "solver_setups")));
+}
+
 void report_summary(FILE *f, const cJSON *report)
 {
     const cJSON *plan = cJSON_GetObjectItem(report, "plan");
@@ -387,5 +412,6 @@ void report_summary(FILE *f, const cJSON *report)
                     cJSON_GetNumberValue(cJSON_GetObjectItem(sv, "setup_seconds")));
         fprintf(f, "\n");
         summary_groups(f, cJSON_GetObjectItem(t, "boundary_groups"));
+        summary_steps(f, cJSON_GetObjectItem(t, "steps"));
     }
 }

@@ -112,6 +112,7 @@ static int run_tasks(run_state *r)
         switch (s->tasks[k].type) {
         case SC_TASK_INTERPOLATE: st = run_interpolate(r, k, tj); break;
         case SC_TASK_SOLVE: st = run_solve(r, k, tj); break;
+        case SC_TASK_DIFFUSE: st = run_steps(r, k, tj); break;
         default: st = run_estimate(r, k, tj); break;
         }
         if (st != PST_OK)
@@ -139,9 +140,11 @@ static int build(run_state *r)
     cli_progress pg;
     progress_begin(&pg, !r->o->quiet, "neighbours", "rows");
     pst_progress hook = progress_list_hook(&pg);
-    double cell = r->plan.support * pst_cloud_h_max(r->c);
+    double cell = (r->plan.support + r->plan.skin) * pst_cloud_h_max(r->c);
     st = pst_cloud_morton_sort(r->c, cell, msg);
-    if (st == PST_OK)
+    if (st == PST_OK && r->plan.moving) /* the Verlet list the particles' moves update */
+        st = pst_nlist_build_skin(&r->nl, r->c, r->plan.support, r->plan.skin, msg);
+    else if (st == PST_OK)
         st = pst_nlist_build_with(&r->nl, r->c, r->plan.support, &hook, msg);
     progress_end(&pg);
     if (st != PST_OK)

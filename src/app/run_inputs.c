@@ -6,21 +6,36 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* Evaluate expression `text` (scene key `key`) at n positions cols[d][k] into out[]. Its
- * variables are the coordinates x, y (and z in 3D). A non-finite value is an error naming the
- * particle (by its input id, when ids is given) or the point. */
+ * variables are the coordinates x, y (and z in 3D), and t when r->time is set. A non-finite
+ * value is an error naming the particle (by its input id, when ids is given) or the point. */
 static int eval_columns(run_state *r, const char *key, const char *text,
                         const double *const cols[3], size_t n, const int64_t *ids, double *out)
 {
-    static const char *const vars[] = {"x", "y", "z"};
+    const char *vars[4] = {"x", "y", "z", "t"};
+    const double *columns[4] = {cols[0], cols[1], cols[2], NULL};
+    int dim = r->s->dim, nvars = dim + (r->time != NULL);
+    double *tcol = NULL;
+    if (r->time) { /* the expression reads t as one more column */
+        vars[dim] = "t";
+        if (!(tcol = malloc((n ? n : 1) * sizeof *tcol)))
+            return run_fail(r, PST_ENOMEM, "out of memory for %s", key);
+        for (size_t k = 0; k < n; ++k)
+            tcol[k] = *r->time;
+        columns[dim] = tcol;
+    }
     char msg[PST_ERRLEN];
-    pst_expr *e = pst_expr_parse(text, vars, r->s->dim, msg, sizeof msg);
-    if (!e)
+    pst_expr *e = pst_expr_parse(text, vars, nvars, msg, sizeof msg);
+    if (!e) {
+        free(tcol);
         return run_fail(r, PST_EINPUT, "%s: %s: %s", r->s->path, key, msg);
-    pst_expr_eval_many(e, n, cols, out);
+    }
+    pst_expr_eval_many(e, n, columns, out);
     pst_expr_free(e);
+    free(tcol);
     for (size_t k = 0; k < n; ++k)
         if (!isfinite(out[k]))
             return run_fail(r, PST_EINPUT, "%s: %s: '%s' is not finite at %s %lld", r->s->path, key,

@@ -21,6 +21,7 @@ typedef struct {
     const uint8_t *task_kinds; /* the kinds a task's error region reads; NULL: the cloud's     */
     int task_mean_fixed;       /* 1: the task's solve fixed the mean of u, so its errors are
                                   against the exact solution shifted to the same mean         */
+    const double *time; /* the t of a diffuse task's expressions; NULL: expressions have no t */
     cJSON *report, *tasks;
     int solve_failed;
     uint8_t *status; /* the row status of a solve's own operator, when there is no base one */
@@ -65,10 +66,11 @@ int run_add_outputs(run_state *r, const sc_task *t, int ncomp, double *out[6]);
 /* Keep a copy of op's row status for outputs.vtu (r->status). */
 int run_keep_status(run_state *r, const pst_op *op);
 
-/* The three kinds of task (run_estimate.c, run_interpolate.c, run_solve.c). */
+/* The four kinds of task (run_estimate.c, run_interpolate.c, run_solve.c, run_steps.c). */
 int run_estimate(run_state *r, int k, cJSON *tj);
 int run_interpolate(run_state *r, int k, cJSON *tj);
 int run_solve(run_state *r, int k, cJSON *tj);
+int run_steps(run_state *r, int k, cJSON *tj);
 
 /* The boundary of solve task k (which has groups) into bnd, and its group values into b
  * (fluxes divided by a constant mobility's factor); claim[i] becomes the kind its group gave

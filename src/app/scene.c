@@ -187,6 +187,13 @@ void pst_scene_free(pst_scene *s)
             free(t->exact[k]);
         free(t->points_file);
         free(t->rhs);
+        free(t->initial);
+        free(t->source);
+        free(t->boundary_value);
+        for (int k = 0; k < 3; ++k)
+            free(t->velocity[k]);
+        free(t->pvd);
+        free(t->steps_csv);
         for (int g = 0; g < t->ngroups; ++g) {
             free(t->groups[g].value);
             free(t->groups[g].region.expr);

@@ -62,8 +62,12 @@ typedef enum {
     SC_TASK_GRADIENT,
     SC_TASK_HESSIAN,
     SC_TASK_INTERPOLATE,     /* value (and Laplacian) at the points of a CSV file or a lattice  */
-    SC_TASK_SOLVE            /* L u = rhs with the boundary groups below                        */
+    SC_TASK_SOLVE,           /* L u = rhs with the boundary groups below                        */
+    SC_TASK_DIFFUSE          /* du/dt = L u + source, stepped in time (docs/time-stepping.md)   */
 } sc_task_type;
+
+/* tasks[].method of a diffuse task: the theta of the theta-method is 0, 1 and 1/2. */
+typedef enum { SC_METHOD_EXPLICIT, SC_METHOD_IMPLICIT, SC_METHOD_CRANK_NICOLSON } sc_method;
 
 typedef enum { SC_NORM_REL_L2, SC_NORM_QSFDI11, SC_NORM_QSFDI11_NORMALISED, SC_NORM_LV78,
                SC_NORM_LV95, SC_NORM_MAX_ABS, SC_NORM_MAX_REL, SC_NNORMS } sc_norm;
@@ -120,6 +124,15 @@ typedef struct {
     int amg_aggressive, amg_coarsen, amg_interp, amg_pmax; /* pst_solve_opts' fields       */
     double rtol;
     int stored;              /* -1 auto (the planner decides), 0 matrix-free, 1 stored          */
+    /* diffuse: expressions of x, y, z and t (the boundary value NULL: the exact solution's) */
+    char *initial, *source, *boundary_value;
+    char *velocity[3];       /* dim expressions; nvelocity 0: the particles stay             */
+    int nvelocity;
+    sc_method method;
+    double t_end, dt;        /* dt 0: not given (explicit: safety * the step limit)         */
+    double safety, skin;     /* skin: the Verlet skin of moving particles, in h              */
+    int max_steps, output_every;
+    char *pvd, *steps_csv;   /* the time series and the per-step table (NULL: not written)   */
     /* errors */
     int norms[SC_MAX_NORMS];
     int nnorms;

@@ -7,7 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#define ANY_TASK_BUT_SOLVE "laplacian|divergence|gradient|hessian|interpolate"
+#define FIELD_TASKS "laplacian|divergence|gradient|hessian|interpolate"
 #define GENERATED "lattice|cell_centred"
 
 /* Designated initialisers keep each row readable; unnamed members are 0 / NULL. */
@@ -132,21 +132,23 @@ const sc_param sc_params[] = {
     {.key = "tasks", .type = SC_T_LIST, .item = SC_T_OBJECT, .hi = SC_MAX_TASKS,
      .hi_kind = ']', .doc = "What to compute, in order."},
     {.key = "tasks[].type", .type = SC_T_ENUM,
-     .values = "laplacian|divergence|gradient|hessian|interpolate|solve",
+     .values = "laplacian|divergence|gradient|hessian|interpolate|solve|diffuse",
      .flags = SC_F_REQUIRED | SC_F_SELECTOR,
      .doc = "Laplacian, div(M grad u) with the scene's mobility, gradient, Hessian, "
-            "interpolation at points, or a solve of div(M grad u) = rhs."},
+            "interpolation at points, a solve of div(M grad u) = rhs, or du/dt = div(M grad u) "
+            "+ source stepped in time (docs/time-stepping.md)."},
     {.key = "tasks[].name", .type = SC_T_STRING,
      .doc = "Name of the task's output field (a C identifier; default: the type, with _2, _3, "
             "... when repeated)."},
-    {.key = "tasks[].field", .type = SC_T_STRING, .applies = ANY_TASK_BUT_SOLVE,
+    {.key = "tasks[].field", .type = SC_T_STRING, .applies = FIELD_TASKS,
      .flags = SC_F_REQUIRED, .doc = "The input field, declared in fields."},
     {.key = "tasks[].exact", .type = SC_T_EXPRS,
      .doc = "The exact result: one expression, dim for a gradient, 3 (xx, yy, xy) or 6 (xx, "
             "yy, zz, xy, xz, yz) for a Hessian. The outputs then also hold NAME_exact and "
             "NAME_error (approx - exact) with the same components. A solve that fixes the mean "
             "of u (cloud.periodic) compares with the exact solution moved by a constant to u's "
-            "V-weighted mean over all particles; the report gives the constant (exact_shift)."},
+            "V-weighted mean over all particles; the report gives the constant (exact_shift). "
+            "A diffuse task's is of x, y, z and t, compared at t_end."},
     {.key = "tasks[].norms", .type = SC_T_LIST, .item = SC_T_ENUM,
      .values = "rel_l2|qsfdi11|qsfdi11_normalised|lv78|lv95|max_abs|max_rel",
      .hi = SC_NNORMS, .hi_kind = ']',
@@ -215,13 +217,14 @@ const sc_param sc_params[] = {
     {.key = "tasks[].boundary[].value", .type = SC_T_EXPR, .flags = SC_F_REQUIRED,
      .doc = "The boundary value."},
     {.key = "tasks[].solver", .type = SC_T_ENUM, .values = "auto|cg|gmres|bicgstab",
-     .def = "\"auto\"", .applies = "solve",
-     .doc = "Krylov method; auto is CG when the operator is symmetrisable, else GMRES. A "
-            "solve that fixes the mean of u (a periodic cloud without Dirichlet particles) "
-            "takes GMRES for auto and refuses cg."},
+     .def = "\"auto\"", .applies = "solve|diffuse",
+     .doc = "Krylov method; auto is CG when the operator is symmetrisable, else GMRES (a "
+            "diffuse task's: GMRES, and CG is refused). A solve that fixes the mean of u (a "
+            "periodic cloud without Dirichlet particles) takes GMRES for auto and refuses cg."},
     {.key = "tasks[].precond", .type = SC_T_ENUM, .values = "none|jacobi|amg|auto",
-     .def = "\"auto\"", .applies = "solve",
-     .doc = "Preconditioner; auto is AMG when pstencil is built with hypre, else Jacobi."},
+     .def = "\"auto\"", .applies = "solve|diffuse",
+     .doc = "Preconditioner; auto is AMG when pstencil is built with hypre, else Jacobi (a "
+            "diffuse task's: Jacobi, and AMG is refused)."},
     {.key = "tasks[].amg_source", .type = SC_T_ENUM, .values = "brookshaw|own|auto",
      .def = "\"auto\"", .applies = "solve",
      .doc = "The matrix AMG is built on: the Brookshaw M-matrix, the scheme's own stencil, or "
@@ -246,16 +249,58 @@ const sc_param sc_params[] = {
      .hi = 100, .hi_kind = ']', .applies = "solve",
      .doc = "Interpolation entries kept per row (0: no truncation)."},
     {.key = "tasks[].restart", .type = SC_T_INT, .def = "50", .lo_kind = '[', .lo = 1,
-     .hi = 2147483647.0, .hi_kind = ']', .applies = "solve",
+     .hi = 2147483647.0, .hi_kind = ']', .applies = "solve|diffuse",
      .doc = "GMRES restart length."},
     {.key = "tasks[].max_iter", .type = SC_T_INT, .def = "5000", .lo_kind = '[', .lo = 1,
-     .hi = 2147483647.0, .hi_kind = ']', .applies = "solve", .doc = "Iteration limit."},
+     .hi = 2147483647.0, .hi_kind = ']', .applies = "solve|diffuse", .doc = "Iteration limit."},
     {.key = "tasks[].rtol", .type = SC_T_REAL, .def = "1e-10", .lo_kind = '(', .lo = 0,
-     .hi = 1, .hi_kind = ')', .applies = "solve",
+     .hi = 1, .hi_kind = ')', .applies = "solve|diffuse",
      .doc = "Stop when ||b - L u|| <= rtol ||b||."},
     {.key = "tasks[].operator", .type = SC_T_ENUM, .values = "auto|stored|matrix_free",
-     .def = "\"auto\"", .applies = "solve",
+     .def = "\"auto\"", .applies = "solve|diffuse",
      .doc = "Apply stored weights or matrix-free; auto lets the planner decide."},
+    {.key = "tasks[].initial", .type = SC_T_EXPR, .applies = "diffuse", .flags = SC_F_REQUIRED,
+     .doc = "u at t = 0."},
+    {.key = "tasks[].source", .type = SC_T_EXPR, .applies = "diffuse",
+     .doc = "The source f of du/dt = div(M grad u) + f, of x, y, z and t (default 0)."},
+    {.key = "tasks[].boundary_value", .type = SC_T_EXPR, .applies = "diffuse",
+     .doc = "u at the cloud's Dirichlet particles, of x, y, z and t (default: exact)."},
+    {.key = "tasks[].method", .type = SC_T_ENUM, .values = "explicit|implicit|crank_nicolson",
+     .def = "\"implicit\"", .applies = "diffuse",
+     .doc = "Forward Euler, backward Euler or Crank-Nicolson; the implicit ones solve (I - "
+            "theta dt L) u = ... once per step with one solver handle."},
+    {.key = "tasks[].t_end", .type = SC_T_REAL, .units = "time", .lo_kind = '(', .lo = 0,
+     .applies = "diffuse", .flags = SC_F_REQUIRED, .doc = "The final time; steps start at 0."},
+    {.key = "tasks[].dt", .type = SC_T_REAL, .units = "time", .lo_kind = '(', .lo = 0,
+     .applies = "diffuse",
+     .doc = "The time step, shortened so that whole steps end at t_end. Explicit: refused "
+            "above the step limit 2/rho (rho the Gershgorin bound of L), default safety * "
+            "2/rho; required by the implicit methods."},
+    {.key = "tasks[].safety", .type = SC_T_REAL, .def = "0.9", .lo_kind = '(', .lo = 0, .hi = 1,
+     .hi_kind = ']', .applies = "diffuse",
+     .doc = "The explicit method's automatic step as a fraction of the limit 2/rho (not with "
+            "dt)."},
+    {.key = "tasks[].max_steps", .type = SC_T_INT, .def = "100000", .lo_kind = '[', .lo = 1,
+     .hi = 1000000, .hi_kind = ']', .applies = "diffuse",
+     .doc = "A run that needs more steps is refused before the first."},
+    {.key = "tasks[].velocity", .type = SC_T_EXPRS, .applies = "diffuse",
+     .doc = "dim expressions of x, y, z and t: each step moves the interior particles by dt v "
+            "(the field moves with them), folds them into a periodic box and refreshes the "
+            "list and the operator. The scene's only task then."},
+    {.key = "tasks[].skin", .type = SC_T_REAL, .def = "0.3", .units = "h", .lo_kind = '[',
+     .lo = 0, .hi = 3, .hi_kind = ']', .applies = "diffuse",
+     .doc = "The Verlet skin of the moving particles' neighbour list (with velocity; at most "
+            "the kernel's support): the list is rebuilt only when they moved further."},
+    {.key = "tasks[].pvd", .type = SC_T_PATH, .applies = "diffuse",
+     .doc = "The time series: a .pvd listing one VTU of the cloud per output step, named "
+            "STEM_STEP.vtu beside it."},
+    {.key = "tasks[].output_every", .type = SC_T_INT, .def = "10", .lo_kind = '[', .lo = 1,
+     .hi = 1000000, .hi_kind = ']', .applies = "diffuse",
+     .doc = "A VTU of the series every this many steps, and at the first and the last (with "
+            "pvd; at most 10000 files)."},
+    {.key = "tasks[].steps_csv", .type = SC_T_PATH, .applies = "diffuse",
+     .doc = "One row per step: time, step, its timings (neighbours, refresh, apply, solve), "
+            "the list rebuilt or not, iterations, rho, max |u|."},
 
     {.key = "outputs", .type = SC_T_OBJECT,
      .doc = "What to write; paths are relative to the working directory."},
@@ -329,7 +374,10 @@ static const char example[] =
     "        { \"where\": \"all\", \"type\": \"dirichlet\", \"value\": \"x^2 + y^2\" }\n"
     "      ],\n"
     "      \"solver\": \"gmres\", \"precond\": \"jacobi\", \"restart\": 50, \"max_iter\": 2000,\n"
-    "      \"rtol\": 1e-10, \"operator\": \"stored\", \"norms\": [\"rel_l2\", \"max_rel\"] }\n"
+    "      \"rtol\": 1e-10, \"operator\": \"stored\", \"norms\": [\"rel_l2\", \"max_rel\"] },\n"
+    "    { \"type\": \"diffuse\", \"name\": \"heat\", \"initial\": \"sin(pi*x)*sin(pi*y)\",\n"
+    "      \"boundary_value\": \"0\", \"method\": \"crank_nicolson\", \"t_end\": 0.01,\n"
+    "      \"dt\": 0.001, \"pvd\": \"heat.pvd\", \"output_every\": 5 }\n"
     "  ],\n"
     "  \"outputs\": {\n"
     "    \"csv\": \"poisson.csv\",\n"
@@ -346,8 +394,8 @@ const char *pst_scene_example(void) { return example; }
 static const char *const intro[] = {
     "A scene is a JSON file that describes a whole run: the particle cloud and its smoothing "
     "length, the mobility, the scheme and kernel, input fields given by expressions, the tasks "
-    "(operators, interpolation, solves), the error norms against exact solutions, and the "
-    "outputs. The built-in scene is scenes/default.json.",
+    "(operators, interpolation, solves, time steps), the error norms against exact solutions, "
+    "and the outputs. The built-in scene is scenes/default.json.",
     "Every key is declared once in a table (src/app/scene_params.c) from which this page and "
     "`pstencil help scene` are generated. A scene is checked against it before anything runs: "
     "unknown keys, wrong types, out-of-range values, vectors without dim components, missing "
@@ -526,6 +574,10 @@ static void print_markdown(FILE *f)
           "- The solve makes the particles of the x = 0 side Neumann (du/dn = -2x, which is 0 "
           "there) and every other boundary particle Dirichlet: the first matching group "
           "wins.\n"
+          "- The diffuse task steps du/dt = div(M grad u) from sin(pi x) sin(pi y) with u = 0 "
+          "held at the boundary: ten Crank-Nicolson steps of 0.001, each one GMRES solve with "
+          "the same solver handle, and writes heat.pvd with heat_000000.vtu, heat_000005.vtu "
+          "and heat_000010.vtu (docs/time-stepping.md).\n"
           "- outputs.fields picks the columns of poisson.csv and poisson.vtu; poisson.json "
           "holds the timings, the solver's result and the norms.\n",
           f);

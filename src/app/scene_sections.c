@@ -280,7 +280,8 @@ static int read_task(ctx *c, const cJSON *o, pst_scene *s, sc_task *t)
 {
     static const char *const what[] = {"a laplacian task", "a divergence task",
                                        "a gradient task", "a hessian task",
-                                       "an interpolate task", "a solve task"};
+                                       "an interpolate task", "a solve task",
+                                       "a diffuse task"};
     static const int stored[] = {-1, 1, 0};
     t->type = (sc_task_type)scene_get_enum(o, "tasks[].type");
     int rc = scene_set_str(c, &t->name, scene_get_string(o, "tasks[].name"));
@@ -312,6 +313,8 @@ static int read_task(ctx *c, const cJSON *o, pst_scene *s, sc_task *t)
         rc = scene_set_str(c, &t->rhs, scene_get_string(o, "tasks[].rhs"));
     if (rc == PST_OK)
         rc = scene_read_boundary(c, o, s->cloud.periodic, t);
+    if (rc == PST_OK && t->type == SC_TASK_DIFFUSE)
+        rc = scene_read_steps(c, o, t);
     /* periodic along every axis, a generated cloud has no boundary to give values to */
     int boundless = pst_scene_periodic_axes(s) == c->dim && s->cloud.source != SC_CLOUD_FILE;
     if (rc == PST_OK && t->type == SC_TASK_SOLVE && t->ngroups == 0 && t->nexact == 0 &&
@@ -349,8 +352,8 @@ static int name_taken(const pst_scene *s, const char *name, int upto)
  * type, numbered from _2 when taken. */
 static int name_tasks(ctx *c, const cJSON *list, pst_scene *s)
 {
-    static const char *const type_names[] = {"laplacian", "divergence", "gradient",
-                                              "hessian",   "interpolate", "solve"};
+    static const char *const type_names[] = {"laplacian",   "divergence", "gradient", "hessian",
+                                              "interpolate", "solve",      "diffuse"};
     int rc = PST_OK;
     for (int i = 0; i < s->ntasks && rc == PST_OK; ++i) {
         const char *name = s->tasks[i].name;
@@ -392,6 +395,14 @@ int scene_read_tasks(ctx *c, const cJSON *root, pst_scene *s)
         rc = read_task(c, o, s, &s->tasks[s->ntasks++]);
         scene_pop(c);
     }
+    /* moving particles change the cloud every other task reads */
+    for (int k = 0; k < s->ntasks && rc == PST_OK && s->ntasks > 1; ++k)
+        if (s->tasks[k].nvelocity) {
+            scene_push(c, cJSON_GetArrayItem(list, k), NULL, k);
+            rc = scene_error(c, "velocity", "moves the particles, so the task must be the "
+                                            "scene's only one (there are %d)", s->ntasks);
+            scene_pop(c);
+        }
     if (rc == PST_OK)
         rc = name_tasks(c, list, s);
     scene_pop(c);

@@ -115,5 +115,7 @@ int scene_read_outputs(ctx *c, const cJSON *root, pst_scene *s);
 /* The boundary groups of a task (scene_boundary.c); a group's side must not lie on one of the
  * cloud's periodic axes. */
 int scene_read_boundary(ctx *c, const cJSON *task, const int periodic[3], sc_task *t);
+/* The keys of a diffuse task (scene_steps.c). */
+int scene_read_steps(ctx *c, const cJSON *task, sc_task *t);
 
 #endif

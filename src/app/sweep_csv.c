@@ -89,7 +89,7 @@ static char *num_of(const cJSON *v)
 static void failed_cells(char **c, const pst_scene *s, int t, const char *message)
 {
     static const char *const types[] = {"laplacian", "divergence", "gradient",
-                                        "hessian",   "interpolate", "solve"};
+                                        "hessian",   "interpolate", "solve", "diffuse"};
     if (s && t < s->ntasks) {
         c[C_DIM] = num_cell(s->dim);
         c[C_TASK] = pst_strdup(s->tasks[t].name);
