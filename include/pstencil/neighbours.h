@@ -15,7 +15,8 @@ extern "C" {
 /* Sort the cloud along a Morton (Z-order) curve of cells of size `cell` (> 0): 64-bit keys,
  * 21 bits per axis in 3D and 32 in 2D (coarser cells are used when the box needs more), a
  * parallel LSD radix sort, and one permutation applied to every field. The ids keep the input
- * order (pst_cloud_to_input_order). */
+ * order (pst_cloud_to_input_order). PST_EINVAL for a bad cell and for a borrowed cloud
+ * (pst_cloud_borrow), which is never reordered. */
 int pst_cloud_morton_sort(pst_cloud *c, double cell, char *err);
 
 /* Morton key of integer cell coordinates (3D: 21 bits per axis; 2D: 32 bits per axis, iz
