@@ -33,7 +33,43 @@ typedef struct pst_cloud pst_cloud;
  * allocation fails (the reason in err). */
 int pst_cloud_create(pst_cloud **out, int dim, size_t n, char *err);
 
-/* Free a cloud and everything it owns. NULL is allowed. */
+/* The caller's own particle arrays, for pst_cloud_borrow: one array of n values per axis and
+ * per quantity (structure of arrays). NULL means "not given": the cloud then owns that array
+ * at its pst_cloud_create default. */
+typedef struct {
+    double *x[3];       /* positions x[d], d < dim: required                                  */
+    double *V;          /* volumes: required                                                   */
+    double *h;          /* per-particle smoothing length, or NULL for the uniform h below      */
+    double h_uniform;   /* the smoothing length of every particle when h is NULL (> 0)         */
+    uint8_t *kind;      /* pst_kind values, or NULL (every particle interior)                  */
+    double *normal[3];  /* outward normals, all dim axes or none (NULL: zero normals)          */
+    int mob_ncomp;      /* 0 (no mobility, m = 1), 1 (scalar) or dim (diagonal tensor)        */
+    double *mob[3];     /* mob[k], k < mob_ncomp: required when mob_ncomp > 0                  */
+} pst_cloud_arrays;
+
+/* A cloud of `n` particles in `dim` (2 or 3) dimensions that reads the caller's arrays `a` in
+ * place, without copying them (docs/embedding.md, "The host code's own data"). The arrays
+ * must hold n values each and outlive the cloud; the caller may change their values in place
+ * between steps (then pst_nlist_update or pst_nlist_set_csr, and pst_op_refresh, as for any
+ * moved cloud). Only structure-of-arrays data is borrowed: interleaved (x y z x y z ...)
+ * positions must be copied into per-axis arrays, since every kernel reads x[d][i]. Arrays not
+ * given, the ids (0..n-1) and the fields (pst_cloud_add_field) belong to the cloud.
+ * The library never writes into a borrowed array except through the calls that say they
+ * write: pst_cloud_wrap folds the borrowed positions, pst_cloud_mobility_from_grid and the
+ * pointer accessors (pst_cloud_coord, ...) return them for the caller to write. A borrowed
+ * cloud is never reordered: pst_cloud_permute and pst_cloud_morton_sort refuse it
+ * (PST_EINVAL), so every per-particle result is in the caller's order. Setters that replace an
+ * array (pst_cloud_set_h_uniform, pst_cloud_set_mobility) let go of a borrowed one without
+ * freeing it; pst_cloud_destroy frees only the cloud's own arrays. Nothing is validated beyond
+ * the arguments: call pst_cloud_validate as for any cloud. PST_EINVAL (a bad dim, more than
+ * 2^32 - 1 particles, a required array NULL, normals on some axes only, a bad mob_ncomp or
+ * uniform h), PST_ENOMEM (the reason in err). */
+int pst_cloud_borrow(pst_cloud **out, int dim, size_t n, const pst_cloud_arrays *a, char *err);
+
+/* 1 when c reads some of the caller's arrays (pst_cloud_borrow), else 0. */
+int pst_cloud_is_borrowed(const pst_cloud *c);
+
+/* Free a cloud and everything it owns (never the arrays it borrows). NULL is allowed. */
 void pst_cloud_destroy(pst_cloud *c);
 
 /* Dimension (2 or 3) and number of particles. */
@@ -55,7 +91,8 @@ const double *pst_cloud_normal_const(const pst_cloud *c, int axis);
 const int64_t *pst_cloud_ids_const(const pst_cloud *c);
 
 /* Smoothing length: one value for every particle, or one per particle. */
-int pst_cloud_set_h_uniform(pst_cloud *c, double h, char *err);   /* frees any per-particle array     */
+int pst_cloud_set_h_uniform(pst_cloud *c, double h, char *err);   /* frees any per-particle array
+                                                          (a borrowed one is only let go)   */
 double *pst_cloud_h_per_particle(pst_cloud *c);        /* allocates (filled with the uniform
                                                           value) on first call; NULL on OOM */
 int pst_cloud_h_is_uniform(const pst_cloud *c);
@@ -64,7 +101,8 @@ const double *pst_cloud_h_array(const pst_cloud *c);   /* per-particle array or 
 double pst_cloud_h_max(const pst_cloud *c);            /* largest h over the cloud          */
 
 /* Mobility: absent (m = 1 everywhere), a scalar per particle (ncomp = 1), or a diagonal
- * tensor per particle (ncomp = dim). Setting a layout allocates it filled with 1. */
+ * tensor per particle (ncomp = dim). Setting a layout allocates it filled with 1 (replacing,
+ * never freeing, a borrowed mobility). */
 int pst_cloud_set_mobility(pst_cloud *c, int ncomp, char *err);   /* ncomp in {0, 1, dim}               */
 int pst_cloud_mobility_ncomp(const pst_cloud *c);
 double *pst_cloud_mobility(pst_cloud *c, int comp);    /* comp < ncomp; NULL otherwise       */
@@ -90,7 +128,8 @@ int pst_cloud_validate(pst_cloud *c, char *err);
 
 /* Reorder every field (positions, V, h, kind, normals, mobility, ids, fields) by one
  * permutation: new particle i is old particle perm[i]. `perm` must be a permutation of 0..n-1
- * (checked: PST_EINVAL otherwise). */
+ * (checked: PST_EINVAL otherwise). A borrowed cloud (pst_cloud_borrow) is refused with
+ * PST_EINVAL and left as it is. */
 int pst_cloud_permute(pst_cloud *c, const uint32_t *perm, char *err);
 
 /* Scatter a per-particle array given in the cloud's current order back to input order:
@@ -121,7 +160,8 @@ int pst_cloud_periodic(const pst_cloud *c, int periodic[3], double lo[3], double
 /* Fold every position along a periodic axis into [lo, hi) (x - P floor((x - lo) / P), with a
  * result that rounds onto hi taken as lo, the same point of the torus): what a particle code
  * calls after moving its particles. Positions that are not finite are left for
- * pst_cloud_validate to report. */
+ * pst_cloud_validate to report. On a borrowed cloud (pst_cloud_borrow) this writes the
+ * caller's position arrays in place. */
 void pst_cloud_wrap(pst_cloud *c);
 
 /* --- Generators ---------------------------------------------------------------------------- */

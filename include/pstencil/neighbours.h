@@ -15,7 +15,8 @@ extern "C" {
 /* Sort the cloud along a Morton (Z-order) curve of cells of size `cell` (> 0): 64-bit keys,
  * 21 bits per axis in 3D and 32 in 2D (coarser cells are used when the box needs more), a
  * parallel LSD radix sort, and one permutation applied to every field. The ids keep the input
- * order (pst_cloud_to_input_order). */
+ * order (pst_cloud_to_input_order). PST_EINVAL for a bad cell and for a borrowed cloud
+ * (pst_cloud_borrow), which is never reordered. */
 int pst_cloud_morton_sort(pst_cloud *c, double cell, char *err);
 
 /* Morton key of integer cell coordinates (3D: 21 bits per axis; 2D: 32 bits per axis, iz
@@ -63,6 +64,50 @@ int pst_nlist_is_half(const pst_nlist *nl);
 double pst_nlist_support(const pst_nlist *nl);
 
 /* ------------------------------------------------------------------------------------------ */
+/* Lists from the host code (docs/neighbours.md, "Lists from the host code")                  */
+/* ------------------------------------------------------------------------------------------ */
+
+/* Optional checks of pst_nlist_from_csr and pst_nlist_set_csr (bits of `flags`). With both the
+ * list is, entry for entry, the one pst_nlist_build would give. */
+enum {
+    PST_CSR_CHECK_RADIUS = 1,  /* every pair within support * (h_i + h_j) / 2, the build's rule
+                                  (minimum images in a periodic box): O(pairs)              */
+    PST_CSR_CHECK_COMPLETE = 2 /* every pair of that rule present: builds the library's list
+                                  once to compare (its time and memory)                     */
+};
+
+/* A whole list of the cloud c (rows = pst_cloud_size(c)) from the caller's CSR: the neighbours
+ * of particle i are index[offset[i] .. offset[i+1]); offset has n + 1 entries. The pairs are
+ * copied: the caller's arrays may be freed or changed once this returns. `support` is the
+ * radius in units of h the caller's list covers (pst_op_create needs it to cover the kernel's,
+ * pst_kernel_support). Always checked, PST_EINPUT with the first offending row (and entry) in
+ * err: offset[0] = 0, offsets non-decreasing, no row longer than n - 1, every index < n, no
+ * self pair, every row strictly increasing (sorted, no repeats), and symmetry (j in row i <=>
+ * i in row j), which the operators, pst_nlist_halve and the AMG proxy rely on. The cloud gets
+ * the checks of a build (finite positions, h in range, periodic periods above twice the
+ * radius). Without PST_CSR_CHECK_RADIUS a pair beyond the rule's radius is kept: with a
+ * uniform h the kernels give it zero weight, but it still counts as a neighbour (row status
+ * "too few") and as an entry of stored weights and assembled matrices; with per-particle h a
+ * scheme weighing by h_I alone may weigh it (docs/neighbours.md). Without
+ * PST_CSR_CHECK_COMPLETE a list that misses pairs of the rule silently gives another
+ * discretisation. The list works with every
+ * reader of lists (pst_op_create, the solves, pst_nlist_halve, pst_nlist_get_stats);
+ * pst_nlist_update refuses it (the library cannot know the caller's rule): after the
+ * particles move, pass the new pairs to pst_nlist_set_csr. index may be NULL when offset[n]
+ * is 0. PST_EINVAL (a NULL argument, unknown flags, a bad support), PST_EINPUT, PST_ENOMEM. */
+int pst_nlist_from_csr(pst_nlist **out, const pst_cloud *c, double support,
+                       const int64_t *offset, const uint32_t *index, int flags, char *err);
+
+/* Replace the pairs of nl, a list made by pst_nlist_from_csr, by the caller's new CSR for the
+ * cloud c (same size), with the checks and the copy of pst_nlist_from_csr and nl's support:
+ * the host code's step after its particles moved, before pst_op_refresh of the operators
+ * built on nl. The handle stays valid; its offsets and indices move (read them again). On
+ * failure nl is unchanged. PST_EINVAL (a list not from pst_nlist_from_csr, a half or cut list,
+ * a cloud of another size), and the errors of pst_nlist_from_csr. */
+int pst_nlist_set_csr(pst_nlist *nl, const pst_cloud *c, const int64_t *offset,
+                      const uint32_t *index, int flags, char *err);
+
+/* ------------------------------------------------------------------------------------------ */
 /* Moving particles: Verlet lists (docs/neighbours.md, "Moving particles")                    */
 /* ------------------------------------------------------------------------------------------ */
 
@@ -94,8 +139,9 @@ typedef struct {
  * pst_nlist_build would give now, for every thread count. Without a skin: a fresh build. The
  * list's handle stays valid; its offsets and indices may move (read them again). Operators
  * built on nl must be refreshed (pst_op_refresh) before their next use. info may be NULL.
- * PST_EINVAL (a half or cut list, a cloud of another size), PST_EINPUT (a non-finite
- * position, h out of range), PST_ENOMEM; on failure nl is unusable until an update succeeds. */
+ * PST_EINVAL (a half or cut list, a list of the caller's pairs (pst_nlist_from_csr: use
+ * pst_nlist_set_csr), a cloud of another size), PST_EINPUT (a non-finite position, h out of
+ * range), PST_ENOMEM; on failure nl is unusable until an update succeeds. */
 int pst_nlist_update(pst_nlist *nl, const pst_cloud *c, pst_nlist_update_info *info, char *err);
 
 /* The skin a list keeps for its updates (0 for a plain list). */

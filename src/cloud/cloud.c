@@ -16,6 +16,28 @@ static double *alloc_filled(size_t n, double value)
     return a;
 }
 
+int pst_cloud_alloc_missing(pst_cloud *c)
+{
+    size_t n = c->n;
+    int ok = 1;
+    for (int d = 0; d < c->dim; ++d) {
+        if (!c->x[d])
+            ok = (c->x[d] = pst_calloc(n, sizeof(double))) != NULL && ok;
+        if (!c->normal[d])
+            ok = (c->normal[d] = pst_calloc(n, sizeof(double))) != NULL && ok;
+    }
+    if (!c->V)
+        ok = (c->V = alloc_filled(n, 1.0)) != NULL && ok;
+    if (!c->kind)
+        ok = (c->kind = pst_calloc(n, 1)) != NULL && ok;
+    if (!c->id) {
+        ok = (c->id = pst_alloc(n * sizeof(int64_t))) != NULL && ok;
+        for (size_t i = 0; c->id && i < n; ++i)
+            c->id[i] = (int64_t)i;
+    }
+    return ok ? PST_OK : PST_ENOMEM;
+}
+
 /* A cloud with every array allocated and at its default (see pst_cloud_create); NULL when an
  * allocation fails. */
 static pst_cloud *new_cloud(int dim, size_t n)
@@ -26,22 +48,18 @@ static pst_cloud *new_cloud(int dim, size_t n)
     c->dim = dim;
     c->n = n;
     c->h_uniform = 1.0;
-    int ok = 1;
-    for (int d = 0; d < dim; ++d) {
-        c->x[d] = pst_calloc(n, sizeof(double));
-        c->normal[d] = pst_calloc(n, sizeof(double));
-        ok = ok && c->x[d] && c->normal[d];
-    }
-    c->V = alloc_filled(n, 1.0);
-    c->kind = pst_calloc(n, 1);
-    c->id = pst_alloc(n * sizeof(int64_t));
-    if (!ok || !c->V || !c->kind || !c->id) {
+    if (pst_cloud_alloc_missing(c) != PST_OK) {
         pst_cloud_destroy(c);
         return NULL;
     }
-    for (size_t i = 0; i < n; ++i)
-        c->id[i] = (int64_t)i;
     return c;
+}
+
+/* Free p unless it belongs to the caller (its group's bit in c->borrowed). */
+static void release(const pst_cloud *c, unsigned group, void *p)
+{
+    if (!(c->borrowed & group))
+        pst_free(p);
 }
 
 int pst_cloud_create(pst_cloud **out, int dim, size_t n, char *err)
@@ -60,13 +78,13 @@ void pst_cloud_destroy(pst_cloud *c)
     if (!c)
         return;
     for (int d = 0; d < 3; ++d) {
-        pst_free(c->x[d]);
-        pst_free(c->normal[d]);
-        pst_free(c->mob[d]);
+        release(c, PST_BORROW_X, c->x[d]);
+        release(c, PST_BORROW_NORMAL, c->normal[d]);
+        release(c, PST_BORROW_MOB, c->mob[d]);
     }
-    pst_free(c->V);
-    pst_free(c->h);
-    pst_free(c->kind);
+    release(c, PST_BORROW_V, c->V);
+    release(c, PST_BORROW_H, c->h);
+    release(c, PST_BORROW_KIND, c->kind);
     pst_free(c->id);
     for (size_t k = 0; k < c->nfields; ++k)
         pst_free(c->field[k]);
@@ -105,7 +123,8 @@ int pst_cloud_set_h_uniform(pst_cloud *c, double h, char *err)
 {
     PST_CHECK(!(h > 0) || !isfinite(h), PST_EINVAL, err,
               "smoothing length must be finite and > 0 (got %g)", h);
-    pst_free(c->h);
+    release(c, PST_BORROW_H, c->h); /* a borrowed array is only let go */
+    c->borrowed &= ~(unsigned)PST_BORROW_H;
     c->h = NULL;
     c->h_uniform = h;
     return PST_OK;
@@ -150,9 +169,10 @@ int pst_cloud_set_mobility(pst_cloud *c, int ncomp, char *err)
     PST_CHECK(!ok, PST_ENOMEM, err, "mobility: out of memory for %d components of %zu values",
               ncomp, c->n);
     for (int k = 0; k < 3; ++k) {
-        pst_free(c->mob[k]);
+        release(c, PST_BORROW_MOB, c->mob[k]); /* borrowed arrays are only let go */
         c->mob[k] = m[k];
     }
+    c->borrowed &= ~(unsigned)PST_BORROW_MOB;
     c->mob_ncomp = ncomp;
     return PST_OK;
 }
@@ -403,6 +423,7 @@ static void permute_arrays(pst_cloud *c, const uint32_t *perm, double *scratch, 
 
 int pst_cloud_permute(pst_cloud *c, const uint32_t *perm, char *err)
 {
+    PST_TRY(pst_cloud_check_owned(c, "permute", err));
     uint8_t *seen = pst_calloc(c->n, 1);
     double *scratch = pst_alloc(c->n * sizeof(double));
     int st = seen && scratch ? check_permutation(perm, c->n, seen, err) : PST_ENOMEM;

@@ -27,7 +27,28 @@ struct pst_cloud {
     size_t nfields;
     char (*field_name)[PST_MAX_NAME];
     double **field;
+    unsigned borrowed;     /* PST_BORROW_* bits: the arrays the caller owns (pst_cloud_borrow),
+                              which the cloud never frees and never reorders                 */
 };
+
+/* The arrays of a borrowed cloud that belong to the caller, one bit per group. */
+enum {
+    PST_BORROW_X = 1,      /* x[d], d < dim      */
+    PST_BORROW_V = 2,
+    PST_BORROW_H = 4,
+    PST_BORROW_KIND = 8,
+    PST_BORROW_NORMAL = 16, /* normal[d], d < dim */
+    PST_BORROW_MOB = 32     /* mob[k], k < ncomp  */
+};
+
+/* Allocate every array of c that is still NULL (positions, normals, V, kinds, ids) at its
+ * pst_cloud_create default; h and mobility stay as they are. PST_ENOMEM when an allocation
+ * fails (what was allocated stays, for pst_cloud_destroy). */
+int pst_cloud_alloc_missing(pst_cloud *c);
+
+/* PST_EINVAL (message in err, starting with `what`) when c borrows the caller's arrays
+ * (pst_cloud_borrow): such a cloud is never reordered. */
+int pst_cloud_check_owned(const pst_cloud *c, const char *what, char *err);
 
 /* Find two particles at the same coordinates: returns 1 with their indices a < b (the first
  * such pair in lexicographic position order), 0 when all positions differ, PST_ENOMEM. */

@@ -107,6 +107,7 @@ int pst_cloud_morton_sort(pst_cloud *c, double cell, char *err)
 {
     PST_CHECK(!(cell > 0) || !isfinite(cell), PST_EINVAL, err,
               "Morton sort: cell size must be finite and > 0 (got %g)", cell);
+    PST_TRY(pst_cloud_check_owned(c, "Morton sort", err));
     size_t n = c->n;
     int dim = c->dim;
     if (n < 2)

@@ -62,6 +62,7 @@ static pst_nlist *new_cut_list(const pst_nlist *nl, double cut)
     cl->n = nl->n;
     cl->support = nl->support;
     cl->cut = cut * nl->cut;
+    cl->from_csr = nl->from_csr; /* still the caller's pairs, not the rule's */
     return cl;
 }
 

@@ -11,6 +11,8 @@ struct pst_nlist {
     double cut;          /* fraction of that radius the pairs lie within: 1 for a built list,
                             < 1 for a cut one (pst_nlist_cut)                               */
     int half;            /* 1: row i holds only its neighbours j > i (pst_nlist_halve)      */
+    int from_csr;        /* 1: the pairs are the caller's (pst_nlist_from_csr), which only
+                            pst_nlist_set_csr replaces; pst_nlist_update refuses the list    */
     int64_t *offset;     /* n + 1 */
     uint32_t *index;     /* offset[n] */
     struct pst_verlet *verlet; /* the skin list and the state pst_nlist_update reads, or NULL

@@ -314,6 +314,10 @@ int pst_nlist_update(pst_nlist *nl, const pst_cloud *c, pst_nlist_update_info *i
     PST_CHECK(nl->half || nl->cut != 1, PST_EINVAL, err,
               "neighbour list update: a half or cut list cannot be updated; update the whole "
               "list and derive it again");
+    PST_CHECK(nl->from_csr, PST_EINVAL, err,
+              "neighbour list update: the list holds the caller's pairs (pst_nlist_from_csr), "
+              "which the library cannot recompute; give it the new pairs with "
+              "pst_nlist_set_csr");
     PST_CHECK(c->n != nl->n, PST_EINVAL, err,
               "neighbour list update: the cloud has %zu particles, the list %zu rows", c->n,
               nl->n);
