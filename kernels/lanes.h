@@ -42,7 +42,8 @@ PST_KHOT pst_lanes pst_lanes_row(const pst_kctx *k, size_t i, double ih)
 /* The pairs idx[e .. e + 8) of the row (fewer before e1: the missing lanes are the row's own
  * particle, a pair at distance 0, which every scheme's rule counts as degenerate with weight
  * 0 and whose u_J - u_I is 0): the scaled offsets (x_J - x_I) / h_I as the rows' gathers form
- * them (minimum images in a periodic box, as pst_offset), and u_J - u_I. Returns the 8 neighbours (idx + e, or pad filled). */
+ * them (minimum images in a periodic box, as pst_offset), and u_J - u_I. Returns the 8
+ * neighbours (idx + e, or pad filled). */
 PST_KHOT const uint32_t *pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx, int64_t e,
                                          int64_t e1, uint32_t pad[PST_LANES], pst_v8 *x,
                                          pst_v8 *y, pst_v8 *z, pst_v8 *du)

@@ -209,8 +209,10 @@ int pst_krylov_create_linop(pst_krylov **out, const pst_linop *A, const pst_lino
  * refreshes and the last solve needed at most 1.5x the iterations of the first solve after its
  * set-up, else it is set up again (docs/solving.md, "Refreshing a solver"). The workspace is
  * kept. A stored solve (o.stored) needs the operator stored again (pst_op_refresh does it).
- * PST_EINVAL for a user operator's handle or an operator without rows, or the failures of a
- * set-up (pst_krylov_create); after a failure every pst_krylov_solve refuses the handle. */
+ * A user operator's handle (pst_krylov_create_linop) whose values changed behind the same
+ * apply gets its Jacobi diagonal again from A->diagonal (a user M is the caller's to update).
+ * PST_EINVAL for an operator without rows, or the failures of a set-up (pst_krylov_create);
+ * after a failure every pst_krylov_solve refuses the handle. */
 int pst_krylov_refresh(pst_krylov *s, char *err);
 
 /* Solve with a new right-hand side b and initial guess u (solution on return), n values each,

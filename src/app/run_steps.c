@@ -189,8 +189,8 @@ static int explicit_part(stepper *st, double t0, steps_row *row)
 }
 
 /* The particles move by dt v(x, t0); the explicit method checks its step against the moved
- * particles' limit, the implicit ones set their solver up again (its Jacobi diagonal was
- * that of the old rows: docs/time-stepping.md, "Solver reuse"). */
+ * particles' limit, the implicit ones refresh their solver (its Jacobi diagonal was that of
+ * the old rows: docs/time-stepping.md, "The implicit system and solver reuse"). */
 static int move(stepper *st, int step, double t0, steps_row *row)
 {
     const sc_task *t = st->t;
@@ -209,10 +209,12 @@ static int move(stepper *st, int step, double t0, steps_row *row)
                      "limit 2/rho = %.6g is below dt = %.6g: use a smaller dt or safety",
                      st->r->s->path, t->name, step, 2 / row->rho, st->dt);
     if (s == PST_OK && st->theta > 0) {
+        /* the handle's Jacobi diagonal was the old rows': taken again from the new ones */
         double a0 = omp_get_wtime();
-        pst_krylov_destroy(st->kr);
-        st->kr = NULL;
-        s = steps_solver_create(st->r, st->k, &st->sys, &st->kr);
+        char msg[PST_ERRLEN];
+        if (pst_krylov_refresh(st->kr, msg) != PST_OK)
+            s = run_fail(st->r, PST_ENUMERIC, "%s: task '%s': step %d: %s", st->r->s->path,
+                         t->name, step, msg);
         st->setups += s == PST_OK;
         row->setup_s = omp_get_wtime() - a0;
     }

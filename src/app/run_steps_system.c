@@ -1,6 +1,7 @@
 /* The implicit system of a diffuse task, (I - theta dt L) u = b on the interior rows with the
  * Dirichlet rows held (u_i = b_i), as a pst_linop for one reusable solver handle
- * (pst_krylov_create_linop): the Jacobi diagonal is set up once and each step only iterates.
+ * (pst_krylov_create_linop): the Jacobi diagonal is set up once (again when the particles
+ * moved: pst_krylov_refresh) and each step only iterates.
  * A linop because the engine's solver eliminates Dirichlet rows of L itself and has no
  * shifted form; its AMG, which needs the engine's rows, is refused by the planner. */
 #include "run_steps.h"

@@ -220,10 +220,15 @@ static int amg_still_good(const pst_krylov *s)
 int pst_krylov_refresh(pst_krylov *s, char *err)
 {
     PST_CHECK(!s, PST_EINVAL, err, "pst_krylov_refresh needs a handle");
-    PST_CHECK(!s->op, PST_EINVAL, err,
-              "pst_krylov_refresh: a handle of a user operator has nothing of the engine's to "
-              "refresh; create it again");
     s->unusable = 1; /* until every step below succeeds */
+    if (!s->op) { /* a user operator whose values changed behind the same apply */
+        s->refreshes++;
+        int stop;
+        if (!s->user_precond)
+            PST_TRY(precond_setup(s, &stop, err));
+        s->unusable = 0;
+        return PST_OK;
+    }
     PST_CHECK(!pst_op_has_rows(s->op), PST_EINVAL, err,
               "pst_krylov_refresh: the operator has no rows (its refresh failed)");
     PST_CHECK(s->o.stored && !pst_op_has_store(s->op), PST_EINVAL, err,
