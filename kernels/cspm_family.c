@@ -706,13 +706,12 @@ static int precompute(pst_op *op, int which, char *err)
 {
     size_t n = op->n;
     int D = op->dim, nm = cs_nm(D), nc = cs_ncoef(D);
-    cs_data *d = calloc(1, sizeof *d);
+    cs_data *d = pst_op_data(op, sizeof *d);
     if (!d)
         return PST_ENOMEM;
-    op->data = d;
     d->which = which;
-    d->V = pst_alloc(n * sizeof *d->V);
-    d->K = pst_alloc(n * (size_t)nc * sizeof *d->K);
+    PST_DATA_ARRAY(d->V, n * sizeof *d->V);
+    PST_DATA_ARRAY(d->K, n * (size_t)nc * sizeof *d->K);
     size_t blk = n < CS_BLOCK ? n : CS_BLOCK;
     double *mom_blk = pst_alloc((blk ? blk : 1) * (size_t)(3 * nm) * sizeof *mom_blk);
     cs_inv *inv_blk = pst_alloc((blk ? blk : 1) * sizeof *inv_blk);

@@ -661,19 +661,18 @@ static int precompute(pst_op *op, int which, char *err)
 {
     size_t n = op->n;
     int dim = op->dim, variant = op->opts.gradient;
-    lv_data *d = calloc(1, sizeof *d);
+    lv_data *d = pst_op_data(op, sizeof *d);
     if (!d)
         return PST_ENOMEM;
-    op->data = d;
     d->which = which;
-    d->C = pst_alloc(n * (size_t)(dim * dim) * sizeof *d->C);
-    d->zeta = pst_alloc(n * (size_t)dim * sizeof *d->zeta);
-    d->eta = pst_alloc(n * (size_t)dim * sizeof *d->eta);
-    d->s = pst_alloc(n * sizeof *d->s);
+    PST_DATA_ARRAY(d->C, n * (size_t)(dim * dim) * sizeof *d->C);
+    PST_DATA_ARRAY(d->zeta, n * (size_t)dim * sizeof *d->zeta);
+    PST_DATA_ARRAY(d->eta, n * (size_t)dim * sizeof *d->eta);
+    PST_DATA_ARRAY(d->s, n * sizeof *d->s);
     if (variant != PST_GRAD_G1)
-        d->nu = pst_alloc(n * sizeof *d->nu);
+        PST_DATA_ARRAY(d->nu, n * sizeof *d->nu);
     if (variant == PST_GRAD_G2)
-        d->gnu = pst_alloc(n * (size_t)dim * sizeof *d->gnu);
+        PST_DATA_ARRAY(d->gnu, n * (size_t)dim * sizeof *d->gnu);
     if (!d->C || !d->zeta || !d->eta || !d->s || (variant != PST_GRAD_G1 && !d->nu) ||
         (variant == PST_GRAD_G2 && !d->gnu)) {
         pst_set_err(err, "%s: cannot allocate the per-particle data of %zu particles",

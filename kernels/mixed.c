@@ -773,17 +773,16 @@ static int precompute(pst_op *op, int which, char *err)
 {
     size_t n = op->n;
     int dim = op->dim;
-    mx_data *d = calloc(1, sizeof *d);
+    mx_data *d = pst_op_data(op, sizeof *d);
     if (!d)
         return PST_ENOMEM;
-    op->data = d;
     d->which = which;
     d->m = basis_size(dim, which);
     int m = d->m, ntri = m * (m + 1) / 2;
-    d->Q = pst_alloc(n * (size_t)(dim * m) * sizeof *d->Q);
-    d->mode = pst_alloc(n);
+    PST_DATA_ARRAY(d->Q, n * (size_t)(dim * m) * sizeof *d->Q);
+    PST_DATA_ARRAY(d->mode, n);
     if (which == MX_ORDINARY)
-        d->Vn = pst_alloc(n * sizeof *d->Vn);
+        PST_DATA_ARRAY(d->Vn, n * sizeof *d->Vn);
     double *tri = pst_alloc((size_t)MX_BLOCK * ntri * sizeof *tri);
     if (!d->Q || !d->mode || !tri || (which == MX_ORDINARY && !d->Vn)) {
         pst_free(tri);

@@ -200,17 +200,15 @@ PST_KHOT int qs_precompute_t(pst_op *op, int D)
 
 static int qs_precompute(pst_op *op, char *err)
 {
-    qs_data *d = calloc(1, sizeof *d);
+    qs_data *d = pst_op_data(op, sizeof *d);
     if (!d)
         return PST_ENOMEM;
-    op->data = d;
     const int D = op->dim, nk = QS_NK(D);
-    d->kap = pst_alloc(op->n * (size_t)nk * sizeof *d->kap);
-    int ok = d->kap != NULL;
+    int ok = PST_DATA_ARRAY(d->kap, op->n * (size_t)nk * sizeof *d->kap) != NULL;
     if (op->opts.keep & PST_KEEP_GRADIENT)
-        ok = ok && (d->gkap = pst_alloc(op->n * (size_t)(D * nk) * sizeof *d->gkap));
+        ok = ok && PST_DATA_ARRAY(d->gkap, op->n * (size_t)(D * nk) * sizeof *d->gkap);
     if (op->opts.keep & PST_KEEP_HESSIAN)
-        ok = ok && (d->hkap = pst_alloc(op->n * (size_t)(QS_NQ(D) * nk) * sizeof *d->hkap));
+        ok = ok && PST_DATA_ARRAY(d->hkap, op->n * (size_t)(QS_NQ(D) * nk) * sizeof *d->hkap);
     int st = !ok ? PST_ENOMEM : D == 2 ? qs_precompute_t(op, 2) : qs_precompute_t(op, 3);
     PST_CHECK(st != PST_OK, PST_ENOMEM, err,
               "qsfdi: cannot allocate the coefficients of %zu particles", op->n);

@@ -538,10 +538,9 @@ int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn
     double t0 = omp_get_wtime();
     size_t n = op->n;
     int D = op->dim;
-    wls_data *d = calloc(1, sizeof *d);
+    wls_data *d = pst_op_data(op, sizeof *d);
     if (!d)
         return PST_ENOMEM;
-    op->data = d;
     d->dim = D;
     d->typeB = typeB;
     d->nb = D + D * (D + 1) / 2 + typeB;
@@ -550,8 +549,8 @@ int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn
     d->solve = solve;
     int nb = d->nb, nm = WLS_NMOM(D) - (typeB ? 0 : D + 1);
     size_t blk = n < WLS_BLOCK ? n : WLS_BLOCK;
-    d->lam = pst_alloc(n * (size_t)nb * sizeof *d->lam);
-    d->level = pst_alloc(n);
+    PST_DATA_ARRAY(d->lam, n * (size_t)nb * sizeof *d->lam);
+    PST_DATA_ARRAY(d->level, n);
     double *mom = pst_alloc(blk * (size_t)nm * sizeof *mom);
     double *Mb = pst_alloc(blk * (size_t)(nb * nb) * sizeof *Mb);
     double *fac = pst_alloc(blk * (size_t)(nb * nb) * sizeof *fac);

@@ -1,11 +1,12 @@
 /* Operator refresh (pst_op_refresh) after the particles moved and the list was updated: for
  * every scheme, 2D and 3D, the refreshed operator gives an operator created afresh bit for bit
- * (matrix-free apply, stored apply when it was stored, gradient, row status); refusals (a half
- * list) and a failed refresh (degenerate rows refused) leave an operator that every call
- * refuses. */
+ * (matrix-free apply, stored apply when it was stored, gradient, row status) in the scheme data
+ * it kept (every entry written again); refusals (a half list) and a failed refresh (degenerate
+ * rows refused) leave an operator that every call refuses. */
 #include "check.h"
 #include "support.h"
 
+#include "operator.h" /* op->data: the scheme data a refresh keeps */
 #include "pstencil.h"
 
 #include <math.h>
@@ -61,7 +62,9 @@ static int refreshed_equals_fresh(const char *scheme, int dim, int stored)
         swirl(c, s0);
         pst_nlist_update_info info;
         CHECK(pst_nlist_update(nl, c, &info, err) == PST_OK);
+        const void *data = op->data;
         CHECK(pst_op_refresh(op, err) == PST_OK);
+        CHECK(op->data == data); /* the scheme's data and its arrays reused, not allocated */
         pst_nlist *fl = test_nlist(c, support);
         pst_op *fresh = test_op_of(c, fl, &o);
         double *u = test_field(c, field);

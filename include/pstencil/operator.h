@@ -197,9 +197,10 @@ void pst_op_destroy(pst_op *op);
 /* Compute op again after its particles moved: the positions (h, volumes, mobility) of its
  * cloud changed in place and its list was brought up to date (pst_nlist_update). The scheme,
  * kernel and options stay; the precompute runs again on the same handle, which keeps its row
- * status and packed positions; stored weights are stored again in their precision (the
- * scheme's data and the weights are allocated afresh); the rows are those pst_op_create would
- * give now, bit for bit. Handles built on op (pst_krylov) must be created again. PST_EINVAL (an
+ * status, packed positions and the scheme's per-particle data (filled again in place, no
+ * allocation); stored weights are stored again in their precision (allocated afresh: the
+ * pairs' count changes); the rows are those pst_op_create would give now, bit for bit. Handles
+ * built on op (pst_krylov) are brought up to date by pst_krylov_refresh. PST_EINVAL (an
  * operator on a half list: create it again; a cloud or list of another size), the errors of
  * pst_op_create's precompute; on failure op keeps no rows and every apply refuses it (destroy
  * it). */

@@ -265,13 +265,11 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
     return PST_OK;
 }
 
-/* What the precompute and a store made, released for a refresh: the scheme's data, the stored
- * weights and a wide pattern (the operator's status, packed positions and handle stay). */
+/* What a store made, released for a refresh: the stored weights and a wide pattern (the
+ * scheme's data stays for the precompute to fill again, pst_op_data; so do the operator's
+ * status, packed positions and handle). */
 static void release_rows(pst_op *op)
 {
-    if (op->data && op->scheme->free_data)
-        op->scheme->free_data(op->data);
-    op->data = NULL;
     pst_op_drop_store(op);
     op->poff = NULL; /* the list's arrays may have moved (pst_nlist_update) */
     op->pidx = NULL;

@@ -7,6 +7,8 @@
 #include "nlist_layout.h"
 #include "tally.h"
 
+#include <stdlib.h>
+
 /* One scheme: a kernel file in kernels/ fills this table and operator.c registers it.
  *
  * A scheme owns the interior and Neumann rows; operator.c owns the Dirichlet rows (identity),
@@ -43,7 +45,10 @@ typedef struct pst_scheme {
     /* minimum neighbours (j != i) of a row in dimension dim (choice 6, docs/choices.md) */
     int (*min_neighbours)(int dim);
     /* Precompute the per-particle data into op->data (op->status is zeroed, fill it); one
-     * threaded pass over particles. Returns PST_OK or an error with a message in err. */
+     * threaded pass over particles. Returns PST_OK or an error with a message in err. On a
+     * refresh op->data is the previous precompute's (the same n, dimension and options, so
+     * the same sizes): the scheme takes it and its arrays (pst_op_data, PST_DATA_ARRAY) and
+     * writes every entry again. */
     int (*precompute)(pst_op *op, char *err);
     /* The rows' sparsity pattern when it is wider than the neighbour list (the mixed schemes'
      * neighbours of neighbours), into fresh arrays: *poff (n + 1 offsets) and, unless pidx is
@@ -173,5 +178,19 @@ extern const pst_scheme pst_scheme_mixed2;
 extern const pst_scheme pst_scheme_qsfdi;
 extern const pst_scheme pst_scheme_lsmps;
 extern const pst_scheme pst_scheme_lpmps;
+
+/* The scheme's data struct of `bytes`: the previous precompute's on a refresh, else a new
+ * zeroed one stored in op->data; NULL when out of memory. */
+static inline void *pst_op_data(pst_op *op, size_t bytes)
+{
+    if (!op->data)
+        op->data = calloc(1, bytes);
+    return op->data;
+}
+
+/* A per-particle array of the scheme's data: kept from the previous precompute (a refresh
+ * allocates nothing and touches no new page: the first touch was up to 12 % of a precompute
+ * in a VM, src/core/alloc.c), else allocated; the pointer, NULL when out of memory. */
+#define PST_DATA_ARRAY(p, bytes) ((p) ? (p) : ((p) = pst_alloc(bytes)))
 
 #endif
