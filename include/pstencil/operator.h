@@ -198,12 +198,12 @@ void pst_op_destroy(pst_op *op);
  * cloud changed in place and its list was brought up to date (pst_nlist_update). The scheme,
  * kernel and options stay; the precompute runs again on the same handle, which keeps its row
  * status, packed positions and the scheme's per-particle data (filled again in place, no
- * allocation); stored weights are stored again in their precision (allocated afresh: the
- * pairs' count changes); the rows are those pst_op_create would give now, bit for bit. Handles
- * built on op (pst_krylov) are brought up to date by pst_krylov_refresh. PST_EINVAL (an
- * operator on a half list: create it again; a cloud or list of another size), the errors of
- * pst_op_create's precompute; on failure op keeps no rows and every apply refuses it (destroy
- * it). */
+ * allocation); stored weights are stored again in their precision, in their array while the
+ * new pattern fits it (else one an eighth larger); the rows are those pst_op_create would give
+ * now, bit for bit. Handles built on op (pst_krylov) are brought up to date by
+ * pst_krylov_refresh. PST_EINVAL (an operator on a half list: create it again; a cloud or list
+ * of another size), the errors of pst_op_create's precompute; on failure op keeps no rows and
+ * every apply refuses it (destroy it). */
 int pst_op_refresh(pst_op *op, char *err);
 
 /* Replace op's progress hook (pst_op_opts.progress) by *progress, or remove it (NULL). Not

@@ -270,7 +270,7 @@ int pst_op_create(pst_op **out, const pst_cloud *c, const pst_nlist *nl, const p
  * status, packed positions and handle). */
 static void release_rows(pst_op *op)
 {
-    pst_op_drop_store(op);
+    pst_op_park_store(op);
     op->poff = NULL; /* the list's arrays may have moved (pst_nlist_update) */
     op->pidx = NULL;
     memset(op->status, 0, op->n);
@@ -310,8 +310,7 @@ void pst_op_destroy(pst_op *op)
     if (op->data && op->scheme->free_data)
         op->scheme->free_data(op->data);
     pst_free(op->status);
-    pst_free(op->w);
-    pst_free(op->w32);
+    pst_op_drop_store(op);
     pst_free(op->own_poff);
     pst_free(op->own_pidx);
     pst_half_schedule_free(op->half);

@@ -112,6 +112,10 @@ struct pst_op {
     double *w;             /* stored weights (pattern layout) or NULL                */
     float *w32;            /* ... stored as float (pst_op_store_with), or NULL; at most one
                               of w and w32 is set                                        */
+    void *spare_w;         /* a refresh's parked weight array (pst_op_park_store) and its   */
+    size_t spare_bytes;    /* size: the next store takes it when the pattern fits in it,
+                              else frees it                                             */
+    size_t w_bytes;        /* the size of the array of w or w32                           */
     /* The sparsity pattern of the rows (without the diagonal), sorted by column in a row: the
      * neighbour list, or for a scheme with a wide_pattern NULL until pst_op_store builds it
      * into own_poff / own_pidx (the read-only paths build theirs per call, operator.c). */
@@ -142,6 +146,9 @@ void pst_op_record_apply(const pst_op *op, double t0);
 
 /* Free op's stored weights and the wide pattern built for them (operator_store.c). */
 void pst_op_drop_store(pst_op *op);
+/* A refresh's release of the store: the weight array parked for the store that follows
+ * (op->spare_w), the wide pattern freed. */
+void pst_op_park_store(pst_op *op);
 
 /* 1 when op holds stored weights of either precision (operator_store.c). */
 int pst_op_has_store(const pst_op *op);

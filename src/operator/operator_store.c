@@ -49,15 +49,52 @@ void pst_op_drop_store(pst_op *op)
 {
     pst_free(op->w);
     pst_free(op->w32);
+    pst_free(op->spare_w);
     op->w = NULL;
     op->w32 = NULL;
+    op->spare_w = NULL;
+    op->spare_bytes = op->w_bytes = 0;
     drop_own_pattern(op);
+}
+
+void pst_op_park_store(pst_op *op)
+{
+    void *w = op->w ? (void *)op->w : (void *)op->w32;
+    if (w) {
+        pst_free(op->spare_w);
+        op->spare_w = w;
+        op->spare_bytes = op->w_bytes;
+    }
+    op->w = NULL;
+    op->w32 = NULL;
+    op->w_bytes = 0;
+    drop_own_pattern(op);
+}
+
+/* The array of `entries` weights of `size` bytes: a refresh's parked one while it holds them
+ * (its pages touched already); else a new one, exactly the size on a first store (the memory
+ * the planner counts), an eighth more on a refresh, so that a moving cloud's next patterns
+ * fit. Its size into op->w_bytes; NULL when out of memory. */
+static void *weights(pst_op *op, int64_t entries, size_t size)
+{
+    size_t need = (size_t)entries * size;
+    void *w = op->spare_w;
+    if (w && op->spare_bytes >= need) {
+        op->w_bytes = op->spare_bytes;
+    } else {
+        op->w_bytes = w ? need + need / 8 : need;
+        pst_free(w);
+        w = pst_alloc(op->w_bytes);
+    }
+    op->spare_w = NULL;
+    op->spare_bytes = 0;
+    return w;
 }
 
 static int store_double(pst_op *op)
 {
     const int64_t *off = op->poff;
-    double *w = pst_alloc((size_t)off[op->n] * sizeof *w);
+    double *w = weights(op, off[op->n], sizeof *w);
     if (!w)
         return PST_ENOMEM;
     const uint8_t *kind = op->kind;
@@ -102,7 +139,7 @@ static int store_float(pst_op *op, char *err)
     int64_t longest = 0;
     for (size_t i = 0; i < op->n; ++i)
         longest = off[i + 1] - off[i] > longest ? off[i + 1] - off[i] : longest;
-    float *w = pst_alloc((size_t)off[op->n] * sizeof *w);
+    float *w = weights(op, off[op->n], sizeof *w);
     double *scratch = pst_alloc((size_t)omp_get_max_threads() * ((size_t)longest + 1) *
                                 sizeof *scratch);
     if (!w || !scratch) {
