@@ -84,6 +84,30 @@ static inline int pst_cell_runs(const pst_cells *g, const pst_image *im, const d
     return m;
 }
 
+/* The runs of every axis for a reach [lo[d], hi[d]] (pst_cell_runs; one run of cell 0 on the
+ * axes above dim): runs[d][0 .. nr[d]). */
+static inline void pst_cell_box_runs(const pst_cells *g, const pst_image *im, const double blo[3],
+                                     const double bhi[3], const double lo[3], const double hi[3],
+                                     pst_cell_run runs[3][3], int nr[3])
+{
+    for (int d = 0; d < 3; ++d) {
+        nr[d] = 1;
+        runs[d][0] = (pst_cell_run){0, 0, 0.0, 0};
+    }
+    for (int d = 0; d < g->dim; ++d)
+        nr[d] = pst_cell_runs(g, im, blo, bhi, d, lo[d], hi[d], runs[d]);
+}
+
+/* Every cell (ix, iy, iz) of the runs of pst_cell_box_runs, z slowest, with the runs it came
+ * from (rx, ry, rz: for their shifts); the body follows the macro as a loop's does. */
+#define PST_FOR_EACH_CELL(runs, nr, rx, ry, rz, ix, iy, iz)                                    \
+    for (int rz = 0; rz < (nr)[2]; ++rz)                                                       \
+        for (uint32_t iz = (runs)[2][rz].l; iz <= (runs)[2][rz].u; ++iz)                       \
+            for (int ry = 0; ry < (nr)[1]; ++ry)                                               \
+                for (uint32_t iy = (runs)[1][ry].l; iy <= (runs)[1][ry].u; ++iy)               \
+                    for (int rx = 0; rx < (nr)[0]; ++rx)                                       \
+                        for (uint32_t ix = (runs)[0][rx].l; ix <= (runs)[0][rx].u; ++ix)
+
 /* Exclusive prefix sum in place: v[b] becomes v[0] + .. + v[b-1]. The block sums of the
  * parallel scans (cells and neighbour lists), in a fixed order. */
 static inline void pst_exclusive_scan(int64_t *v, size_t nblocks)

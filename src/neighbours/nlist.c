@@ -96,36 +96,29 @@ static size_t cell_candidates(const ctx *k, size_t r, cand *out)
         }
     }
     pst_cell_run runs[3][3];
-    int nr[3] = {1, 1, 1};
-    runs[2][0] = (pst_cell_run){0, 0, 0.0, 0};
-    for (int d = 0; d < k->dim; ++d)
-        nr[d] = pst_cell_runs(g, &k->im, k->blo, k->bhi, d, lo[d], hi[d], runs[d]);
+    int nr[3];
+    pst_cell_box_runs(g, &k->im, k->blo, k->bhi, lo, hi, runs, nr);
     size_t m = 0;
-    for (int rz = 0; rz < nr[2]; ++rz)
-        for (uint32_t iz = runs[2][rz].l; iz <= runs[2][rz].u; ++iz)
-            for (int ry = 0; ry < nr[1]; ++ry)
-                for (uint32_t iy = runs[1][ry].l; iy <= runs[1][ry].u; ++iy)
-                    for (int rx = 0; rx < nr[0]; ++rx)
-                        for (uint32_t ix = runs[0][rx].l; ix <= runs[0][rx].u; ++ix) {
-                            size_t rc = g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
-                            uint32_t a = g->start[rc], b = g->start[rc + 1];
-                            if (a == b)
-                                continue;
-                            cand e = {.a = a, .b = b};
-                            const uint32_t ic[3] = {ix, iy, iz};
-                            const pst_cell_run *ar[3] = {&runs[0][rx], &runs[1][ry], &runs[2][rz]};
-                            for (int d = 0; d < 3; ++d) {
-                                double c0 = g->lo[d] + ic[d] * g->size + ar[d]->shift;
-                                double c1 = g->lo[d] + (ic[d] + 1.0) * g->size + ar[d]->shift;
-                                int used = d < k->dim && ar[d]->prune;
-                                e.lo[d] = used ? c0 - k->margin : d < k->dim ? -INFINITY : 0;
-                                e.hi[d] = used ? c1 + k->margin : d < k->dim ? INFINITY : 0;
-                            }
-                            size_t j = m++;
-                            for (; j > 0 && out[j - 1].a > e.a; --j)
-                                out[j] = out[j - 1];
-                            out[j] = e;
-                        }
+    PST_FOR_EACH_CELL(runs, nr, rx, ry, rz, ix, iy, iz) {
+        size_t rc = g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
+        uint32_t a = g->start[rc], b = g->start[rc + 1];
+        if (a == b)
+            continue;
+        cand e = {.a = a, .b = b};
+        const uint32_t ic[3] = {ix, iy, iz};
+        const pst_cell_run *ar[3] = {&runs[0][rx], &runs[1][ry], &runs[2][rz]};
+        for (int d = 0; d < 3; ++d) {
+            double c0 = g->lo[d] + ic[d] * g->size + ar[d]->shift;
+            double c1 = g->lo[d] + (ic[d] + 1.0) * g->size + ar[d]->shift;
+            int used = d < k->dim && ar[d]->prune;
+            e.lo[d] = used ? c0 - k->margin : d < k->dim ? -INFINITY : 0;
+            e.hi[d] = used ? c1 + k->margin : d < k->dim ? INFINITY : 0;
+        }
+        size_t j = m++;
+        for (; j > 0 && out[j - 1].a > e.a; --j)
+            out[j] = out[j - 1];
+        out[j] = e;
+    }
     return m;
 }
 
@@ -589,6 +582,17 @@ int pst_nlist_build_with(pst_nlist **out, const pst_cloud *c, double support,
     }
     *out = nl;
     return PST_OK;
+}
+
+void pst_nlist_adopt(pst_nlist *nl, pst_nlist *fresh)
+{
+    pst_free(nl->offset);
+    pst_free(nl->index);
+    nl->offset = fresh->offset;
+    nl->index = fresh->index;
+    fresh->offset = NULL;
+    fresh->index = NULL;
+    pst_nlist_destroy(fresh);
 }
 
 void pst_nlist_destroy(pst_nlist *nl)

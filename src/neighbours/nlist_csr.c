@@ -220,13 +220,6 @@ int pst_nlist_set_csr(pst_nlist *nl, const pst_cloud *c, const int64_t *offset,
               "neighbour CSR: the cloud has %zu particles, the list %zu rows", c->n, nl->n);
     pst_nlist *fresh = NULL;
     PST_TRY(csr_list(&fresh, c, nl->support, offset, index, flags, err));
-    /* the handle stays (operators hold it); its arrays are the fresh list's */
-    int64_t *off = nl->offset;
-    uint32_t *idx = nl->index;
-    nl->offset = fresh->offset;
-    nl->index = fresh->index;
-    fresh->offset = off;
-    fresh->index = idx;
-    pst_nlist_destroy(fresh);
+    pst_nlist_adopt(nl, fresh); /* the handle stays: operators hold it */
     return PST_OK;
 }

@@ -45,4 +45,8 @@ int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t
 int pst_nlist_cut(pst_nlist **out, const pst_cloud *c, const pst_nlist *nl, double cut,
                   size_t *full_rows, char *err);
 
+/* nl takes fresh's pairs (its offsets and index, which it frees first) and fresh is destroyed:
+ * a list rebuilt or replaced behind the handle operators hold. */
+void pst_nlist_adopt(pst_nlist *nl, pst_nlist *fresh);
+
 #endif

@@ -266,13 +266,7 @@ static int rebuild_plain(pst_nlist *nl, const pst_cloud *c, char *err)
 {
     pst_nlist *fresh = NULL;
     PST_TRY(pst_nlist_build(&fresh, c, nl->support, err));
-    pst_free(nl->offset);
-    pst_free(nl->index);
-    nl->offset = fresh->offset;
-    nl->index = fresh->index;
-    fresh->offset = NULL;
-    fresh->index = NULL;
-    pst_nlist_destroy(fresh);
+    pst_nlist_adopt(nl, fresh);
     return PST_OK;
 }
 

@@ -20,36 +20,32 @@ static size_t visit(const pst_cells *g, const pst_cloud *c, const pst_image *im,
     double p[3] = {0, 0, 0};
     for (int d = 0; d < c->dim; ++d)
         p[d] = pts[d][k];
+    double lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+        lo[d] = p[d] - radius;
+        hi[d] = p[d] + radius;
+    }
     pst_cell_run runs[3][3];
-    int nr[3] = {1, 1, 1};
-    runs[2][0] = (pst_cell_run){0, 0, 0.0, 0};
-    for (int d = 0; d < g->dim; ++d)
-        nr[d] = pst_cell_runs(g, im, c->box_lo, c->box_hi, d, p[d] - radius, p[d] + radius,
-                              runs[d]);
+    int nr[3];
+    pst_cell_box_runs(g, im, c->box_lo, c->box_hi, lo, hi, runs, nr);
     double r2 = radius * radius;
     size_t count = 0;
-    for (int rz = 0; rz < nr[2]; ++rz)
-        for (uint32_t iz = runs[2][rz].l; iz <= runs[2][rz].u; ++iz)
-            for (int ry = 0; ry < nr[1]; ++ry)
-                for (uint32_t iy = runs[1][ry].l; iy <= runs[1][ry].u; ++iy)
-                    for (int rx = 0; rx < nr[0]; ++rx)
-                        for (uint32_t ix = runs[0][rx].l; ix <= runs[0][rx].u; ++ix) {
-                            size_t r = g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
-                            for (uint32_t s = g->start[r]; s < g->start[r + 1]; ++s) {
-                                uint32_t j = g->order[s];
-                                double d2 = 0;
-                                for (int d = 0; d < g->dim; ++d) {
-                                    double t = pst_min_image(c->x[d][j] - p[d], im->P[d],
-                                                             im->hP[d]);
-                                    d2 += t * t;
-                                }
-                                if (d2 < r2) {
-                                    if (row)
-                                        row[count] = j;
-                                    ++count;
-                                }
-                            }
-                        }
+    PST_FOR_EACH_CELL(runs, nr, rx, ry, rz, ix, iy, iz) {
+        size_t r = g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
+        for (uint32_t s = g->start[r]; s < g->start[r + 1]; ++s) {
+            uint32_t j = g->order[s];
+            double d2 = 0;
+            for (int d = 0; d < g->dim; ++d) {
+                double t = pst_min_image(c->x[d][j] - p[d], im->P[d], im->hP[d]);
+                d2 += t * t;
+            }
+            if (d2 < r2) {
+                if (row)
+                    row[count] = j;
+                ++count;
+            }
+        }
+    }
     return count;
 }
 
