@@ -27,6 +27,7 @@
 #include "pstencil/neighbours.h"
 #include "pstencil/operator.h"
 #include "pstencil/solve.h"
+#include "pstencil/dist.h"
 #include "pstencil/norms.h"
 #include "pstencil/normals.h"
 #include "pstencil/spe10.h"

@@ -894,6 +894,7 @@ static void cs_degrade(pst_op *op, size_t i)
                            .default_kernel = PST_KERNEL_QUINTIC,                              \
                            .degree = DEG,                                                     \
                            .degree_lattice = 2,                                               \
+                           .halo = 2, /* the neighbours' volumes */                           \
                            .min_neighbours = MIN,                                             \
                            .precompute = PRE,                                                 \
                            .apply = cs_apply,                                                 \

@@ -918,6 +918,7 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
                            .degree = DEG,                                                      \
                            .degree_lattice = 2,                                                \
                            .mobility = 1,                                                      \
+                           .halo = 2, /* the neighbours' gradients */                          \
                            .min_neighbours = MIN,                                              \
                            .precompute = PRE,                                                  \
                            .wide_pattern = mx_wide_pattern,                                    \

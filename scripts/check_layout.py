@@ -25,6 +25,7 @@ SEES = {
     "src/expr": ["src/core"],
     "src/operator": ["src/core", "src/cloud", "src/neighbours"],
     "src/solve": ["src/core", "src/cloud", "src/neighbours", "src/operator"],
+    "src/dist": ["src/core", "src/cloud", "src/neighbours", "src/operator", "src/solve"],
     "kernels": ["src/core", "src/cloud", "src/neighbours", "src/operator"],
     "src/app": [],
     "src/cli": ["src/app"],

@@ -176,7 +176,12 @@ enum {
     PST_SUPPORTS_SYMMETRIC,        /* CG through a symmetric scaling (with G1, no Neumann rows) */
     PST_SUPPORTS_DERIVATIVES_ONLY, /* derivatives without the rows (opts.laplacian = 0)        */
     PST_SUPPORTS_HALF_LIST,        /* the matrix-free apply on a half list (pst_op_use_half_list) */
-    PST_SUPPORTS_KEEP              /* pst_op_opts.keep (qsfdi)                                 */
+    PST_SUPPORTS_KEEP,             /* pst_op_opts.keep (qsfdi)                                 */
+    PST_SUPPORTS_RANKS             /* an operator on a rank's part (pst_part, one-hop ghosts)
+                                      whose owned rows are the whole cloud's: every row reads
+                                      only its particle and its neighbours (not the CSPM family,
+                                      whose volumes come from the neighbours' neighbours, nor
+                                      the mixed schemes, whose nested gradients do)            */
 };
 int pst_scheme_supports(const char *name, int what);
 

@@ -57,6 +57,7 @@ int pst_scheme_supports(const char *name, int what)
     case PST_SUPPORTS_DERIVATIVES_ONLY: return s->derivatives_standalone;
     case PST_SUPPORTS_HALF_LIST: return s->half_rows != NULL;
     case PST_SUPPORTS_KEEP: return s->keep_bytes[1][0] > 0;
+    case PST_SUPPORTS_RANKS: return s->halo < 2;
     default: return 0;
     }
 }

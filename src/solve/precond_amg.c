@@ -348,15 +348,11 @@ static double proxy_radius(const pst_op *op, double asked)
                                                            : pst_scheme_amg_radius(op->scheme->name);
 }
 
-/* The assembled low-order operator: the operator itself (OWN), or the Brookshaw proxy with the
- * operator's kernel (and mobility and boundary rows) on the operator's list cut to amg_radius h
- * (the whole list when that reaches the list's support: a Brookshaw operator is then its own
- * proxy). */
-static int low_order_matrix(const pst_op *op, const pst_solve_opts *so, int own, pst_csr *a,
-                            size_t *full_rows, char *err)
+int pst_amg_low_order(const pst_op *op, double amg_radius, int own, pst_csr *a,
+                      size_t *full_rows, char *err)
 {
     *full_rows = 0;
-    double support = pst_nlist_support(op->nl), radius = proxy_radius(op, so->amg_radius);
+    double support = pst_nlist_support(op->nl), radius = proxy_radius(op, amg_radius);
     double cut = radius > 0 && radius < support ? radius / support : 1;
     PST_CHECK(own && op->half, PST_EINVAL, err,
               "the scheme's own AMG matrix needs the whole neighbour list, and the operator uses "
@@ -505,7 +501,7 @@ static int prec_amg_on(pst_prec *p, const pst_op *op, const pst_solve_opts *o, i
     double t0 = omp_get_wtime();
     amg_build t = {0};
     size_t full_rows;
-    PST_TRY(low_order_matrix(op, o, own, &t.a, &full_rows, err));
+    PST_TRY(pst_amg_low_order(op, o->amg_radius, own, &t.a, &full_rows, err));
     int st = PST_OK;
     amg_ctx *c = calloc(1, sizeof *c);
     PST_CHECK_GOTO(!c, st, PST_ENOMEM, fail, err, "cannot allocate the AMG matrix of %zu rows",

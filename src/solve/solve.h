@@ -26,6 +26,16 @@ int pst_prec_jacobi(pst_prec *p, const pst_linop *A, char *err);
  * z = A^-1 (S r). Dirichlet rows are eliminated inside (they give z = r). The caller must have
  * initialised MPI: PST_EINVAL saying so when it has not (or has finalised it). */
 int pst_prec_amg(pst_prec *p, const pst_op *op, const pst_solve_opts *o, char *err);
+
+/* The assembled low-order operator AMG is built on (also PETSc's preconditioner matrix,
+ * src/dist/petsc_ksp.c): the operator itself (own), or the Brookshaw proxy with the operator's
+ * kernel, mobility and boundary rows on its list cut to amg_radius h (< 0: the scheme's
+ * measured radius, or the whole list where the mobility varies more than tenfold; the whole
+ * list when the radius reaches the list's support: a Brookshaw operator is then its own
+ * proxy). *full_rows: the rows the cut kept whole. PST_EINVAL (own on a half list), PST_ENOMEM
+ * or the proxy's failure, with the reason in err. */
+int pst_amg_low_order(const pst_op *op, double amg_radius, int own, pst_csr *a,
+                      size_t *full_rows, char *err);
 /* The AMG fields of st (amg_*) from an AMG preconditioner p. */
 void pst_prec_amg_stats(const pst_prec *p, pst_krylov_stats *st);
 /* PST_OK when hypre may run now: MPI initialised and not finalised, and, from a thread other

@@ -1,0 +1,184 @@
+/* A rank's part of a cloud (pst_part, docs/distributed.md), without MPI: for every rank of 1,
+ * 2, 3 and 5, the part's operator gives the whole cloud's rows bit for bit on its owned
+ * particles (assembled entries, columns mapped back, and the matrix-free apply), the owned
+ * ranges tile the cloud, and every ghost is a neighbour of an owned particle that the whole
+ * list has; on 2D and 3D clouds with Neumann particles, per-particle h, a rough mobility and a
+ * periodic box. The schemes whose rows read their neighbours' neighbours say so. */
+#include "check.h"
+#include "pstencil.h"
+#include "support.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* The cloud of a case: a jittered lattice with a boundary layer (some of it Neumann) or
+ * periodic along x, h varying by up to 30 %, Morton-sorted. */
+static pst_cloud *part_cloud(int dim, int periodic, int mobility)
+{
+    pst_lattice_opts o;
+    pst_lattice_defaults(&o);
+    o.dim = dim;
+    o.s0 = dim == 2 ? 0.05 : 1.0 / 12;
+    o.jitter = 0.35;
+    o.seed = 11;
+    o.boundary_layer = 1;
+    o.periodic[0] = periodic;
+    pst_cloud *c = test_lattice_of(&o);
+    test_make_neumann(c, 3);
+    double *h = pst_cloud_h_per_particle(c);
+    for (size_t i = 0; i < pst_cloud_size(c); ++i)
+        h[i] = 1.2 * o.s0 * (1.0 + 0.3 * test_rnd());
+    test_rough_mobility(c, mobility);
+    char err[PST_ERRLEN];
+    if (pst_cloud_morton_sort(c, 3.0 * pst_cloud_h_max(c), err) != PST_OK) {
+        fprintf(stderr, "morton sort: %s\n", err);
+        exit(1);
+    }
+    return c;
+}
+
+/* 1 when local row k of la (an operator on p's cloud) is row global[k] of a, entry for entry. */
+static int same_row(const pst_csr *a, const pst_csr *la, const size_t *global, size_t k)
+{
+    size_t i = global[k];
+    int64_t e = a->rowptr[i], le = la->rowptr[k];
+    if (a->rowptr[i + 1] - e != la->rowptr[k + 1] - le)
+        return 0;
+    for (; e < a->rowptr[i + 1]; ++e, ++le)
+        if (a->col[e] != global[la->col[le]] || memcmp(&a->val[e], &la->val[le], sizeof(double)))
+            return 0;
+    return 1;
+}
+
+typedef struct {
+    int rows_same, apply_same, tiles, ghosts_needed;
+} part_check;
+
+/* One rank's part of c against the whole operator's rows a and apply y of u. */
+static part_check check_rank(const pst_cloud *c, const pst_nlist *nl, const char *scheme,
+                             const pst_csr *a, const double *u, const double *y, int ranks,
+                             int rank, double support, size_t *owned_total)
+{
+    part_check r = {1, 1, 1, 1};
+    char err[PST_ERRLEN];
+    pst_part *p = NULL;
+    CHECK(pst_part_create(&p, c, NULL, NULL, ranks, rank, support, err) == PST_OK);
+    pst_part_info pi;
+    pst_part_layout(p, &pi);
+    const size_t *global = pst_part_global(p);
+    *owned_total += pi.hi - pi.lo;
+    r.tiles = pi.lo == pst_cloud_size(c) * (size_t)rank / (size_t)ranks && pi.nghost + pi.hi - pi.lo == pi.nlocal;
+    const pst_cloud *lc = pst_part_cloud(p);
+    pst_nlist *lnl = test_nlist(lc, support);
+    pst_op *lop = test_op(lc, lnl, scheme, PST_GRAD_G1, 0);
+    pst_csr la = {0};
+    CHECK(pst_op_assemble(lop, &la) == PST_OK);
+    double *ul = malloc(pi.nlocal * sizeof *ul), *yl = malloc(pi.nlocal * sizeof *yl);
+    pst_part_take(p, u, ul);
+    CHECK(pst_op_apply(lop, ul, yl) == PST_OK);
+    for (size_t k = pi.own0; k < pi.own0 + pi.hi - pi.lo; ++k) {
+        r.rows_same &= same_row(a, &la, global, k);
+        r.apply_same &= memcmp(&yl[k], &y[global[k]], sizeof(double)) == 0;
+    }
+    /* every ghost is in the whole list's row of some owned particle */
+    const int64_t *off = pst_nlist_offsets(nl);
+    const uint32_t *idx = pst_nlist_indices(nl);
+    uint8_t *reached = calloc(pst_cloud_size(c), 1);
+    for (size_t i = pi.lo; i < pi.hi; ++i)
+        for (int64_t e = off[i]; e < off[i + 1]; ++e)
+            reached[idx[e]] = 1;
+    for (size_t k = 0; k < pi.nlocal; ++k)
+        r.ghosts_needed &= (global[k] >= pi.lo && global[k] < pi.hi) || reached[global[k]];
+    free(reached);
+    free(ul);
+    free(yl);
+    pst_csr_free(&la);
+    pst_op_destroy(lop);
+    pst_nlist_destroy(lnl);
+    pst_part_destroy(p);
+    return r;
+}
+
+/* Every rank of `ranks` for one scheme on c; returns 1 when all owned rows matched. */
+static int check_scheme(const pst_cloud *c, const char *scheme, int ranks)
+{
+    const double support = pst_kernel_support(pst_scheme_default_kernel(scheme));
+    pst_nlist *nl = test_nlist(c, support);
+    pst_op *op = test_op(c, nl, scheme, PST_GRAD_G1, 0);
+    size_t n = pst_cloud_size(c), owned = 0;
+    pst_csr a = {0};
+    CHECK(pst_op_assemble(op, &a) == PST_OK);
+    double *u = malloc(n * sizeof *u), *y = malloc(n * sizeof *y);
+    for (size_t i = 0; i < n; ++i)
+        u[i] = test_rnd();
+    CHECK(pst_op_apply(op, u, y) == PST_OK);
+    int all_same = 1;
+    for (int rank = 0; rank < ranks; ++rank) {
+        part_check r = check_rank(c, nl, scheme, &a, u, y, ranks, rank, support, &owned);
+        all_same &= r.rows_same && r.apply_same;
+        CHECK(r.tiles);
+        CHECK(r.ghosts_needed);
+    }
+    CHECK(owned == n);
+    free(u);
+    free(y);
+    pst_csr_free(&a);
+    pst_op_destroy(op);
+    pst_nlist_destroy(nl);
+    return all_same;
+}
+
+static void test_bad_arguments(void)
+{
+    pst_cloud *c = part_cloud(2, 0, 0);
+    char err[PST_ERRLEN];
+    pst_part *p = NULL;
+    CHECK(pst_part_create(&p, c, NULL, NULL, 0, 0, 3.0, err) == PST_EINVAL);
+    CHECK(strstr(err, "ranks") != NULL);
+    CHECK(pst_part_create(&p, c, NULL, NULL, 2, 2, 3.0, err) == PST_EINVAL);
+    CHECK(pst_part_create(&p, c, NULL, NULL, PST_PART_MAX_RANKS + 1, 0, 3.0, err) == PST_EINVAL);
+    CHECK(pst_part_create(&p, c, NULL, NULL, 2, 0, -1.0, err) == PST_EINVAL);
+    CHECK(strstr(err, "support") != NULL);
+    CHECK(pst_part_create(&p, NULL, NULL, NULL, 2, 0, 3.0, err) == PST_EINVAL);
+    CHECK(p == NULL);
+    /* more ranks than particles: empty parts own nothing and see nothing */
+    size_t n = pst_cloud_size(c);
+    CHECK(pst_part_create(&p, c, NULL, NULL, (int)n + 3, 0, 3.0, err) == PST_OK);
+    pst_part_info pi;
+    pst_part_layout(p, &pi);
+    CHECK(pi.hi == pi.lo && pi.nlocal == 0);
+    pst_part_destroy(p);
+    pst_cloud_destroy(c);
+}
+
+int main(void)
+{
+    test_rng_seed(5);
+    /* the schemes whose rows are a function of the particle and its neighbours alone */
+    const char *local[] = {"qsfdi", "lv", "lsmps", "lpmps", "brookshaw", "cb", "schwaiger"};
+    for (int dim = 2; dim <= 3; ++dim)
+        for (int periodic = 0; periodic <= 1; ++periodic) {
+            pst_cloud *c = part_cloud(dim, periodic, 0), *cm = part_cloud(dim, periodic, 1);
+            for (size_t s = 0; s < sizeof local / sizeof *local; ++s) {
+                const pst_cloud *cc = strcmp(local[s], "lv") == 0 ? cm : c;
+                for (int ranks = 1; ranks <= 5; ranks += ranks < 3 ? 1 : 2) {
+                    int same = check_scheme(cc, local[s], ranks);
+                    CHECK(same);
+                    if (!same)
+                        fprintf(stderr, "  %s %dD periodic %d, %d ranks\n", local[s], dim,
+                                periodic, ranks);
+                }
+            }
+            pst_cloud_destroy(c);
+            pst_cloud_destroy(cm);
+        }
+    /* the others read their neighbours' neighbours: the library says so, and the PETSc solve
+     * over ranks refuses them */
+    const char *two_hop[] = {"cspm", "icspm", "csph2g", "mixed0", "mixed1", "mixed2"};
+    for (size_t s = 0; s < sizeof two_hop / sizeof *two_hop; ++s)
+        CHECK(!pst_scheme_supports(two_hop[s], PST_SUPPORTS_RANKS));
+    for (size_t s = 0; s < sizeof local / sizeof *local; ++s)
+        CHECK(pst_scheme_supports(local[s], PST_SUPPORTS_RANKS));
+    test_bad_arguments();
+    return check_summary("test_part");
+}
