@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(build-essential cmake pkg-config libopenblas-dev liblapacke-dev libhwloc-dev
           libbenchmark-dev libhypre-dev libopenmpi-dev python3 python3-vtk9
           libcjson-dev gnuplot-nox libexpat1-dev zlib1g-dev
+          petsc-dev openmpi-bin # optional: the PETSc solves and MPI ranks (test_ranks)
           clang libclang-rt-dev libomp-dev) # the last three: the fuzzers (scripts/fuzz.sh)
 
 missing=()

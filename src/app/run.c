@@ -96,10 +96,27 @@ static double cpu_seconds(void)
            1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
+/* Over several ranks only solves run, each on the rank's part of the cloud (run_petsc.c),
+ * with a scheme whose rows the part's one-radius halo serves. */
+static int check_ranks(run_state *r)
+{
+    if (r->dist && !pst_scheme_supports(r->s->op.scheme, PST_SUPPORTS_RANKS))
+        return run_fail(r, PST_EINPUT, "%s: scheme %s over %d ranks: its rows read their "
+                        "neighbours' neighbours, which a rank's one-radius halo does not hold "
+                        "yet (docs/distributed.md); run it on one process", r->s->path,
+                        r->s->op.scheme, r->o->ranks);
+    for (int k = 0; k < r->s->ntasks && r->dist; ++k)
+        if (r->s->tasks[k].type != SC_TASK_SOLVE)
+            return run_fail(r, PST_EINPUT, "%s: task '%s': over %d ranks only solve tasks run "
+                            "(docs/distributed.md); run this one on one process",
+                            r->s->path, r->s->tasks[k].name, r->o->ranks);
+    return PST_OK;
+}
+
 static int run_tasks(run_state *r)
 {
     const pst_scene *s = r->s;
-    if (r->plan.base_operator) {
+    if (r->plan.base_operator && !r->dist) {
         int st = run_make_operator(r, r->plan.base_laplacian, NULL, &r->base);
         if (st != PST_OK)
             return st;
@@ -142,6 +159,10 @@ static int build(run_state *r)
     pst_progress hook = progress_list_hook(&pg);
     double cell = (r->plan.support + r->plan.skin) * pst_cloud_h_max(r->c);
     st = pst_cloud_morton_sort(r->c, cell, msg);
+    if (st == PST_OK && r->dist) { /* the ranks build their parts' lists (run_petsc.c) */
+        progress_end(&pg);
+        return PST_OK;
+    }
     if (st == PST_OK && r->plan.moving) /* the Verlet list the particles' moves update */
         st = pst_nlist_build_skin(&r->nl, r->c, r->plan.support, r->plan.skin, msg);
     else if (st == PST_OK)
@@ -157,7 +178,7 @@ static int build(run_state *r)
 int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
                   pst_run_counters *counters, pst_cloud **cloud, char *err, size_t errlen)
 {
-    run_state r = {.s = s, .o = o, .err = err, .errlen = errlen};
+    run_state r = {.s = s, .o = o, .err = err, .errlen = errlen, .dist = o->ranks > 1};
     err[0] = '\0';
     if (o->report)
         *o->report = NULL;
@@ -177,6 +198,10 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
             *plan = r.plan;
         return PST_OK;
     }
+    for (int k = 0; k < s->ntasks; ++k) /* PETSc assembles the operator: the whole list */
+        r.plan.half_list = r.plan.half_list && !run_in_petsc(&r, k);
+    if (st == PST_OK)
+        st = check_ranks(&r);
     r.report = report_begin(s);
     r.tasks = cJSON_AddArrayToObject(r.report, "tasks");
     double t0 = omp_get_wtime(), cpu0 = cpu_seconds();
@@ -189,8 +214,9 @@ int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
         report_timer(r.report, "cpu", cpu_seconds() - cpu0);
         report_peak_memory(r.report);
         report_finish(r.report, &r.plan, &r.cnt, r.c);
-        st = report_write_outputs(s, r.c, r.base ? pst_op_status(r.base) : r.status, r.report,
-                                  &r.cnt, err, errlen);
+        if (o->rank == 0) /* over several ranks, rank 0 writes */
+            st = report_write_outputs(s, r.c, r.base ? pst_op_status(r.base) : r.status,
+                                      r.report, &r.cnt, err, errlen);
     }
     if (st == PST_OK && !o->quiet)
         report_summary(stdout, r.report);

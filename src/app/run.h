@@ -15,6 +15,17 @@ typedef struct {
      * library never starts it (docs/solving.md, "MPI"), so the program starts it here, only
      * for the runs that need it. Non-zero: the run stops with PST_ENUMERIC. */
     int (*start_mpi)(void);
+    /* The ranks of the run and this process's (the program runs under mpirun and started MPI
+     * and PETSc): with more than one, every solve runs in PETSc over the ranks, each building
+     * the neighbours and the operator of its own part of the cloud (docs/distributed.md), and
+     * rank 0 alone writes the outputs. 0 or 1: one process. */
+    int ranks, rank;
+    /* PETSc options from the command line, read after each solve's own (tasks[].petsc); not
+     * NULL: every solve runs in PETSc. */
+    const char *petsc_options;
+    /* Called before the first PETSc solve (starts MPI, then PETSc); NULL: PETSc solves are
+     * refused. Non-zero: the run stops with the library's message. */
+    int (*start_petsc)(char *err);
 } pst_run_opts;
 
 /* Run scene `s`. On success the counters and the plan are filled (either may be NULL) and,

@@ -135,6 +135,11 @@ static int estimate_normals(run_state *r, const uint8_t *pick, run_boundary *bnd
                             group_count *cnt)
 {
     char msg[PST_ERRLEN];
+    if (r->dist)
+        return run_fail(r, PST_EINPUT, "%s: boundary normals: estimated normals need the whole "
+                        "cloud's neighbour list, which a run over several ranks does not build: "
+                        "give the normals in the cloud file or take the box faces' "
+                        "(docs/distributed.md)", r->s->path);
     int st = pst_normals_estimate(r->c, r->nl, (pst_kernel)r->plan.kernel, pick, bnd->normal,
                                   &cnt->degenerate, msg);
     if (st != PST_OK)

@@ -10,14 +10,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-typedef struct {
-    cli_progress *pg;
-    double rtol;
-} monitor_ctx;
-
-static void solve_monitor(int it, double rel, void *ctx)
+void run_solve_monitor(int it, double rel, void *ctx)
 {
-    monitor_ctx *m = ctx;
+    run_monitor_ctx *m = ctx;
     char detail[96];
     snprintf(detail, sizeof detail, "iteration %d, residual %.2e", it, rel);
     double frac = rel > 0 && rel < 1 ? log(rel) / log(m->rtol) : 0;
@@ -148,8 +143,8 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     so.stored = r->plan.task_stored[k];
     so.history = 1;
     cli_progress pg;
-    monitor_ctx mc = {&pg, t->rtol};
-    so.monitor = solve_monitor;
+    run_monitor_ctx mc = {&pg, t->rtol};
+    so.monitor = run_solve_monitor;
     so.monitor_ctx = &mc;
     if (so.precond == PST_PREC_AMG && r->o->start_mpi && r->o->start_mpi() != 0)
         return run_fail(r, PST_ENUMERIC, "%s: task '%s': MPI, which the AMG preconditioner "
@@ -196,11 +191,21 @@ int run_solve(run_state *r, int k, cJSON *tj)
     if (st == PST_OK)
         st = unclaimed_values(r, k, claim, ue, b);
     pst_op *op = r->base;
-    if (st == PST_OK && grouped)
+    if (st == PST_OK && grouped && !r->dist)
         st = run_make_operator(r, 1, &bnd, &op);
-    int fix_mean = st == PST_OK && needs_fixed_mean(r, grouped ? bnd.kind
-                                                               : pst_cloud_kinds_const(r->c));
-    if (st == PST_OK)
+    const uint8_t *kind = grouped ? bnd.kind : pst_cloud_kinds_const(r->c);
+    int fix_mean = st == PST_OK && needs_fixed_mean(r, kind);
+    int petsc = run_in_petsc(r, k);
+    if (st == PST_OK && petsc && fix_mean)
+        st = run_fail(r, PST_EINPUT, "%s: task '%s': the cloud is periodic and the solve has no "
+                      "Dirichlet particle, so the mean of u must be fixed, which the PETSc "
+                      "solves do not do yet (docs/distributed.md)", r->s->path, t->name);
+    double *normal[3] = {NULL, NULL, NULL};
+    for (int d = 0; d < r->s->dim; ++d)
+        normal[d] = grouped ? bnd.normal[d] : pst_cloud_normal(r->c, d);
+    if (st == PST_OK && petsc)
+        st = run_solve_petsc(r, k, tj, op, kind, normal, b, u[0]);
+    else if (st == PST_OK)
         st = solve_with(r, k, tj, op, b, u[0], fix_mean);
     if (st == PST_OK && op != r->base && !r->base) /* outputs.vtu: this solve's rows */
         st = run_keep_status(r, op);

@@ -3,6 +3,7 @@
 #ifndef PSTENCIL_RUN_STATE_H
 #define PSTENCIL_RUN_STATE_H
 
+#include "progress.h"
 #include "run.h"
 
 #include "pstencil.h"
@@ -24,6 +25,7 @@ typedef struct {
     const double *time; /* the t of a diffuse task's expressions; NULL: expressions have no t */
     cJSON *report, *tasks;
     int solve_failed;
+    int dist;        /* more than one rank (pst_run_opts.ranks): every solve on the rank's part */
     uint8_t *status; /* the row status of a solve's own operator, when there is no base one */
     char *err;
     size_t errlen;
@@ -71,6 +73,23 @@ int run_estimate(run_state *r, int k, cJSON *tj);
 int run_interpolate(run_state *r, int k, cJSON *tj);
 int run_solve(run_state *r, int k, cJSON *tj);
 int run_steps(run_state *r, int k, cJSON *tj);
+
+/* The solve monitor: the iterations' progress line. */
+typedef struct {
+    cli_progress *pg;
+    double rtol;
+} run_monitor_ctx;
+void run_solve_monitor(int it, double rel, void *ctx);
+
+/* 1 when solve task k runs in PETSc: several ranks, tasks[k].petsc given or PETSc options on
+ * the command line (run_petsc.c). */
+int run_in_petsc(const run_state *r, int k);
+
+/* Solve task k in PETSc (run_petsc.c): b into u over the whole cloud, on the task's boundary
+ * (kind, normal); op is the task's operator on one process, NULL over several ranks (each
+ * builds its part's). */
+int run_solve_petsc(run_state *r, int k, cJSON *tj, pst_op *op, const uint8_t *kind,
+                    double *const normal[3], const double *b, double *u);
 
 /* The boundary of solve task k (which has groups) into bnd, and its group values into b
  * (fluxes divided by a constant mobility's factor); claim[i] becomes the kind its group gave

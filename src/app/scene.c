@@ -187,6 +187,7 @@ void pst_scene_free(pst_scene *s)
             free(t->exact[k]);
         free(t->points_file);
         free(t->rhs);
+        free(t->petsc);
         free(t->initial);
         free(t->source);
         free(t->boundary_value);

@@ -123,6 +123,7 @@ typedef struct {
     double amg_radius, amg_strong;
     int amg_aggressive, amg_coarsen, amg_interp, amg_pmax; /* pst_solve_opts' fields       */
     double rtol;
+    char *petsc;             /* PETSc options: the solve runs in PETSc's KSP; NULL: not given   */
     int stored;              /* -1 auto (the planner decides), 0 matrix-free, 1 stored          */
     /* diffuse: expressions of x, y, z and t (the boundary value NULL: the exact solution's) */
     char *initial, *source, *boundary_value;

@@ -248,6 +248,11 @@ const sc_param sc_params[] = {
     {.key = "tasks[].amg_pmax", .type = SC_T_INT, .def = "4", .lo_kind = '[', .lo = 0,
      .hi = 100, .hi_kind = ']', .applies = "solve",
      .doc = "Interpolation entries kept per row (0: no truncation)."},
+    {.key = "tasks[].petsc", .type = SC_T_STRING, .applies = "solve",
+     .doc = "PETSc options of this solve, e.g. \"-ksp_type bcgs -pc_type gamg\" (docs/"
+            "distributed.md). Given, even empty, the solve runs in PETSc's KSP (GMRES(restart) "
+            "+ BoomerAMG by default, rtol and max_iter as below); under mpirun with several "
+            "ranks every solve does. Needs a pstencil built with PETSc."},
     {.key = "tasks[].restart", .type = SC_T_INT, .def = "50", .lo_kind = '[', .lo = 1,
      .hi = 2147483647.0, .hi_kind = ']', .applies = "solve|diffuse",
      .doc = "GMRES restart length."},

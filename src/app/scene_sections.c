@@ -312,6 +312,8 @@ static int read_task(ctx *c, const cJSON *o, pst_scene *s, sc_task *t)
     if (rc == PST_OK)
         rc = scene_set_str(c, &t->rhs, scene_get_string(o, "tasks[].rhs"));
     if (rc == PST_OK)
+        rc = scene_set_str(c, &t->petsc, scene_get_string(o, "tasks[].petsc"));
+    if (rc == PST_OK)
         rc = scene_read_boundary(c, o, s->cloud.periodic, t);
     if (rc == PST_OK && t->type == SC_TASK_DIFFUSE)
         rc = scene_read_steps(c, o, t);

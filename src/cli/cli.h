@@ -21,6 +21,14 @@ int cli_fail(int status, const char *what, const char *detail);
  * cannot be started. */
 int cli_start_mpi(void);
 
+/* Start MPI (cli_start_mpi) and PETSc on it once: the runner's hook before its first PETSc
+ * solve (pst_run_opts.start_petsc). 0, or -1 with the reason in err (PST_ERRLEN bytes). */
+int cli_start_petsc(char *err);
+
+/* The number of ranks mpirun (Open MPI, MPICH) started the program with, from their
+ * environment: 1 when it was not started by mpirun. */
+int cli_launched_ranks(void);
+
 /* Passive OpenMP waiting unless the user set OMP_WAIT_POLICY: re-executes the program with
  * OMP_WAIT_POLICY=PASSIVE, so it must run first in main, before any OpenMP call (libgomp reads
  * the variable when it is loaded). Returns only in the re-executed program, when the user set

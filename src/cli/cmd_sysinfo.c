@@ -68,5 +68,9 @@ int cli_sysinfo(const cli_ctx *ctx, int argc, char **argv)
     printf("wait policy          %s\n", cli_wait_policy());
     printf("BLAS                 OpenBLAS %s, core %s\n", openblas_get_config(),
            openblas_get_corename());
+    if (pst_petsc_available())
+        printf("PETSc                %s (solves in PETSc, mpirun ranks)\n", pst_petsc_version());
+    else
+        printf("PETSc                not built in (petsc-dev absent at configure time)\n");
     return CLI_OK;
 }

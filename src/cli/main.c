@@ -142,6 +142,29 @@ int cli_start_mpi(void)
     return mpi_started == 1 ? 0 : -1;
 }
 
+int cli_start_petsc(char *err)
+{
+    if (cli_start_mpi() != 0) {
+        snprintf(err, PST_ERRLEN, "MPI, which PETSc runs on, could not be started");
+        return -1;
+    }
+    if (mpi_started == 1)
+        MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
+    return pst_petsc_start(NULL, NULL, err) == PST_OK ? 0 : -1;
+}
+
+int cli_launched_ranks(void)
+{
+    static const char *const vars[] = {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"};
+    for (size_t k = 0; k < sizeof vars / sizeof *vars; ++k) {
+        const char *v = getenv(vars[k]);
+        long n;
+        if (v && cli_parse_long(v, &n) == 0 && n >= 1 && n <= PST_PART_MAX_RANKS)
+            return (int)n;
+    }
+    return 1;
+}
+
 /* SIGINT, SIGTERM, SIGHUP: remove the temporary files of the writes in progress, then die of
  * the signal as if there were no handler (SA_RESETHAND restored the default action). */
 static void on_signal(int sig)
@@ -229,6 +252,7 @@ int main(int argc, char **argv)
         rc = usage_error("unknown command '%s'", args[0]);
     }
     free(args);
+    pst_petsc_stop(); /* PETSc goes before the MPI it runs on */
     if (mpi_started == 1)
         MPI_Finalize();
     return rc;
