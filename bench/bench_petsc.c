@@ -27,7 +27,6 @@
 #include "pstencil.h"
 #include "support.h"
 
-#include <malloc.h>
 #include <math.h>
 #include <omp.h>
 #include <petscksp.h>
@@ -487,10 +486,6 @@ static PetscErrorCode petsc_start(int argc, char **argv, int first, char ***parg
 
 int main(int argc, char **argv)
 {
-    /* A library PETSc links sets M_MMAP_MAX = 0 when loaded, so freed memory would never leave
-     * the process: glibc's default back, for the per-configuration peaks and for pstencil's
-     * allocations to behave as in bench_solve. */
-    mallopt(M_MMAP_MAX, 65536);
     options o;
     int first;
     char **pargv = NULL;

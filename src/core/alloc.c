@@ -2,10 +2,25 @@
 #define _DEFAULT_SOURCE /* madvise, MADV_HUGEPAGE */
 #include "internal.h"
 
+#include <malloc.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+
+#ifdef PSTENCIL_HAVE_PETSC
+/* Debian's PETSc links SuperLU_DIST, which sets glibc's M_MMAP_MAX to 0 when it is loaded: no
+ * large block would go back to the system, and a run's resident memory would stay at its peak
+ * after the whole neighbour list is freed (docs/scale.md). A library's dependencies are set up
+ * before it, and a static consumer links this file with its first allocation, so this puts
+ * glibc's default back after them, unless the user set the limit through the environment. */
+__attribute__((constructor)) static void glibc_mmap_default(void)
+{
+    const char *tunables = getenv("GLIBC_TUNABLES");
+    if (!getenv("MALLOC_MMAP_MAX_") && !(tunables && strstr(tunables, "mmap_max")))
+        mallopt(M_MMAP_MAX, 65536);
+}
+#endif
 
 /* Arrays of at least this size are placed on 2 MiB boundaries and offered to the kernel as
  * transparent huge pages (where THP is in "madvise" mode, Debian's default). The first touch of

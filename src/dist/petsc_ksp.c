@@ -8,7 +8,6 @@
 #include "pstencil/dist.h"
 #include "solve.h"
 
-#include <malloc.h>
 #include <math.h>
 #include <petscksp.h>
 #include <stdio.h>
@@ -16,12 +15,6 @@
 #include <string.h>
 
 static int started_here; /* 1: pst_petsc_start called PetscInitialize */
-
-/* Debian's PETSc links SuperLU_DIST, which sets glibc's M_MMAP_MAX to 0 when it is loaded: no
- * large block would ever go back to the system, and a run's resident memory would stay at its
- * peak after the whole neighbour list is freed (docs/scale.md). Constructors of a library's
- * dependencies run first, so this puts glibc's default back after it. */
-__attribute__((constructor)) static void glibc_mmap_default(void) { mallopt(M_MMAP_MAX, 65536); }
 
 int pst_petsc_available(void) { return 1; }
 
