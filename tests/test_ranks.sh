@@ -62,8 +62,8 @@ for scene in dirichlet_2d neumann_2d dirichlet_3d neumann_3d; do
   done
 done
 
-# refusals: a derivative task and a two-hop scheme over two ranks, a periodic solve without
-# Dirichlet particles in PETSc
+# refusals: a derivative task, a two-hop scheme and another command over two ranks, a periodic
+# solve without Dirichlet particles in PETSc
 refused() {
   local what=$1 code=$2 pattern=$3 rc
   shift 3
@@ -82,6 +82,8 @@ refused "cspm over two ranks" 2 "neighbours' neighbours" "$mpiexec" -n 2 "$exe" 
 refused "a gradient task over two ranks" 2 "only solve tasks run" "$mpiexec" -n 2 "$exe" \
   --quiet run "fields.f=x*y" 'tasks=[{"type":"gradient","field":"f"}]' cloud.spacing=0.1 \
   "outputs={}"
+refused "a sweep over two ranks" 1 "only 'pstencil run' runs over" "$mpiexec" -n 2 "$exe" \
+  sweep "$work/none.json"
 refused "a periodic solve without Dirichlet particles in PETSc" 2 "mean of u must be fixed" \
   "$exe" --quiet run "$(dirname "$0")/../scenes/periodic_poisson_2d.json" cloud.spacing=0.05 \
   "outputs={}" --petsc ""

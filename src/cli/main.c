@@ -218,7 +218,14 @@ int main(int argc, char **argv)
         }
     }
     int rc;
-    if (nargs == 0) {
+    int ranked = cli_launched_ranks() > 1;
+    if (ranked && nargs > 0 && strcmp(args[0], "run") != 0 && strcmp(args[0], "sysinfo") != 0 &&
+        strcmp(args[0], "help") != 0 && strcmp(args[0], "--help") != 0 &&
+        strcmp(args[0], "--version") != 0) {
+        /* every rank would write the same files */
+        rc = usage_error("'%s' runs on one process: only 'pstencil run' runs over mpirun's ranks",
+                         args[0]);
+    } else if (nargs == 0) {
         print_help();
         rc = CLI_USAGE;
     } else if (strcmp(args[0], "help") == 0 && nargs > 1) {
@@ -252,6 +259,14 @@ int main(int argc, char **argv)
         rc = usage_error("unknown command '%s'", args[0]);
     }
     free(args);
+    int up = 0, down = 0;
+    if (mpi_started == 1) {
+        MPI_Initialized(&up);
+        MPI_Finalized(&down);
+    }
+    /* a rank that failed alone would leave the others waiting in a collective: end them all */
+    if (ranked && rc != CLI_OK && up && !down)
+        MPI_Abort(MPI_COMM_WORLD, rc);
     pst_petsc_stop(); /* PETSc goes before the MPI it runs on */
     if (mpi_started == 1)
         MPI_Finalize();
