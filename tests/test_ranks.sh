@@ -2,7 +2,8 @@
 # Distributed solves (docs/distributed.md): `mpirun -n 2 pstencil run SCENE` gives the answer of
 # `pstencil run SCENE` (one process, pstencil's own GMRES + AMG) to 1e-10 relative, for qsfdi,
 # lv and lsmps on the 2D and 3D scenes of tests/ranks/, Dirichlet and mixed Neumann, solved to
-# rtol 1e-13 (2D) and 1e-14 (3D); so does one process solving in PETSc (--petsc); bad requests are refused.
+# rtol 1e-13 (2D) and 1e-14 (3D); so does one process solving in PETSc (--petsc); 1 and 2
+# threads per rank give the same bits; bad requests are refused.
 # Usage: test_ranks.sh PATH_TO_PSTENCIL MPIEXEC
 set -u
 exe=$1
@@ -60,6 +61,23 @@ for scene in dirichlet_2d neumann_2d dirichlet_3d neumann_3d; do
       "operator.scheme=$scheme" "outputs.csv=$pet" --petsc "-ksp_gmres_restart 60" &&
       agree "$case: one process in PETSc" "$one" "$pet"
   done
+done
+
+# one and two threads per rank give the same bits (the applies and the part's operator are
+# thread-count independent; PETSc and hypre are serial inside a rank)
+for case in dirichlet_3d/qsfdi neumann_2d/lsmps; do
+  scene=${case%/*} scheme=${case#*/}
+  for t in 1 2; do
+    OMP_NUM_THREADS=$t "$mpiexec" -n 2 "$exe" --quiet run "$scenes/$scene.json" \
+      "operator.scheme=$scheme" "outputs.csv=$work/t$t.csv" > "$work/log" 2>&1
+  done
+  if [ -s "$work/t1.csv" ] && cmp -s "$work/t1.csv" "$work/t2.csv"; then
+    passed=$((passed + 1))
+  else
+    failed=$((failed + 1))
+    echo "FAIL: $case: two ranks with 1 and 2 threads each differ"
+  fi
+  rm -f "$work/t1.csv" "$work/t2.csv"
 done
 
 # refusals: a derivative task, a two-hop scheme and another command over two ranks, a periodic

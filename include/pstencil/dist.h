@@ -98,10 +98,13 @@ typedef struct {
                              lsmps, else the proxy; the proxy where own has a row without a
                              positive diagonal)                                              */
     double amg_radius;    /* the proxy's radius in h, as pst_solve_opts.amg_radius (-1: auto) */
-    int history;          /* 1: the relative residual per iteration in the result             */
+    int history;          /* 1: the relative residual per iteration in the result (the first
+                             PST_PETSC_HISTORY)                                               */
     void (*monitor)(int iteration, double rel_residual, void *ctx); /* NULL: none              */
     void *monitor_ctx;
 } pst_petsc_opts;
+
+#define PST_PETSC_HISTORY 65536
 
 /* rtol 1e-8, max_iter 1000, restart 30, amg_source AUTO, amg_radius -1, no history, no
  * monitor, no options. */

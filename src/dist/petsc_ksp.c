@@ -62,8 +62,8 @@ void pst_petsc_stop(void)
         }                                                                                      \
     } while (0)
 
-/* What MatMult needs: the operator, its kinds, where the owned rows lie in its local order,
- * and the scatter of x's owned and ghost values into that order. */
+/* What MatMult needs: the operator (with its kinds), where the owned rows lie in its local
+ * order, and the scatter of x's owned and ghost values into that order. */
 typedef struct {
     const pst_op *op;
     size_t own0, nown, nlocal;
@@ -305,6 +305,12 @@ static int fill_result(KSP ksp, Mat A, Vec x, Vec rhs, double bnorm, pst_solve_r
     const PetscReal *hist = NULL;
     PetscReal rn = 0;
     Vec res = NULL;
+    KSPType kt = NULL;
+    PCType pt = NULL;
+    PC pc;
+    PETSC_TRY(KSPGetType(ksp, &kt));
+    PETSC_TRY(KSPGetPC(ksp, &pc));
+    PETSC_TRY(PCGetType(pc, &pt));
     PETSC_TRY(KSPGetIterationNumber(ksp, &its));
     PETSC_TRY(KSPGetConvergedReason(ksp, &why));
     PETSC_TRY(VecDuplicate(rhs, &res));
@@ -314,10 +320,12 @@ static int fill_result(KSP ksp, Mat A, Vec x, Vec rhs, double bnorm, pst_solve_r
     r->iterations = (int)its;
     r->stop = stop_of(why);
     r->converged = why > 0;
-    r->solver = PST_SOLVER_GMRES;
+    r->solver = strcmp(kt, KSPCG) == 0     ? PST_SOLVER_CG
+                : strcmp(kt, KSPBCGS) == 0 ? PST_SOLVER_BICGSTAB
+                                           : PST_SOLVER_GMRES; /* the message names the type */
     r->rel_residual = bnorm > 0 ? rn / bnorm : rn;
-    snprintf(r->message, sizeof r->message, "PETSc KSP: %s after %d iterations, residual %.3e",
-             KSPConvergedReasons[why], (int)its, r->rel_residual);
+    snprintf(r->message, sizeof r->message, "PETSc %s + %s: %s after %d iterations, residual %.3e",
+             kt, pt ? pt : "no PC", KSPConvergedReasons[why], (int)its, r->rel_residual);
     if (KSPGetResidualHistory(ksp, &hist, &nh) == 0 && nh > 0 && r->history) {
         r->nhistory = (int)nh;
         for (PetscInt k = 0; k < nh; ++k)
@@ -394,11 +402,12 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
     if (o->monitor)
         PETSC_TRY(KSPMonitorSet(ksp, ksp_monitor, &mc, NULL));
     if (o->history) {
-        hist = malloc(((size_t)o->max_iter + 1) * sizeof *hist);
-        r->history = malloc(((size_t)o->max_iter + 1) * sizeof *r->history);
+        size_t len = o->max_iter < PST_PETSC_HISTORY ? (size_t)o->max_iter + 1 : PST_PETSC_HISTORY;
+        hist = malloc(len * sizeof *hist);
+        r->history = malloc(len * sizeof *r->history);
         PST_CHECK_GOTO(!hist || !r->history, st, PST_ENOMEM, done, err,
                        "petsc solve: out of memory for the history");
-        PETSC_TRY(KSPSetResidualHistory(ksp, hist, (PetscInt)o->max_iter + 1, PETSC_TRUE));
+        PETSC_TRY(KSPSetResidualHistory(ksp, hist, (PetscInt)len, PETSC_TRUE));
     }
     double t1 = MPI_Wtime();
     PETSC_TRY(KSPSetUp(ksp));
