@@ -63,6 +63,28 @@ for scene in dirichlet_2d neumann_2d dirichlet_3d neumann_3d; do
   done
 done
 
+# PETSc's own choices through the command line and the scene key, which the command line
+# overrides: the same answer, and the summary names what ran
+one=$work/one.csv
+"$exe" --quiet run "$scenes/dirichlet_3d.json" "outputs.csv=$one" > /dev/null 2>&1
+# petsc_case WANT ARGS...: converged with "PETSc WANT" in the summary, and the same answer
+petsc_case() {
+  local want=$1
+  shift
+  rm -f "$work/p.csv"
+  if "$exe" run "$scenes/dirichlet_3d.json" "outputs.csv=$work/p.csv" "$@" > "$work/log" 2>&1 &&
+     grep -q "PETSc $want: CONVERGED" "$work/log"; then
+    agree "dirichlet_3d/qsfdi with $*" "$one" "$work/p.csv"
+  else
+    failed=$((failed + 1))
+    echo "FAIL: dirichlet_3d/qsfdi with $*: no 'PETSc $want: CONVERGED'"
+    sed 's/^/  | /' "$work/log" | tail -8
+  fi
+}
+petsc_case "gmres + ilu" --petsc "-pc_type ilu"
+petsc_case "bcgs + jacobi" "tasks.0.petsc=-ksp_type bcgs -pc_type jacobi"
+petsc_case "gmres + ilu" "tasks.0.petsc=-pc_type jacobi" --petsc "-pc_type ilu"
+
 # one and two threads per rank give the same bits (the applies and the part's operator are
 # thread-count independent; PETSc and hypre are serial inside a rank)
 for case in dirichlet_3d/qsfdi neumann_2d/lsmps; do
