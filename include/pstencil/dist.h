@@ -87,7 +87,7 @@ void pst_petsc_stop(void);
 void pst_mpi_rank(int *rank, int *ranks);
 
 typedef struct {
-    const char *options;  /* PETSc options of this solve, "-ksp_type bcgs -pc_type gamg": they
+    const char *options;  /* PETSc options of this solve, "-ksp_type bcgs -pc_type jacobi": they
                              override the defaults below and stay with this solve only; NULL
                              or "" for none                                                  */
     double rtol;          /* ||b - L u|| <= rtol ||b|| on the unpreconditioned residual       */

@@ -249,7 +249,7 @@ const sc_param sc_params[] = {
      .hi = 100, .hi_kind = ']', .applies = "solve",
      .doc = "Interpolation entries kept per row (0: no truncation)."},
     {.key = "tasks[].petsc", .type = SC_T_STRING, .applies = "solve",
-     .doc = "PETSc options of this solve, e.g. \"-ksp_type bcgs -pc_type gamg\" (docs/"
+     .doc = "PETSc options of this solve, e.g. \"-ksp_type bcgs -pc_type jacobi\" (docs/"
             "distributed.md). Given, even empty, the solve runs in PETSc's KSP (GMRES(restart) "
             "+ BoomerAMG by default, rtol and max_iter as below); under mpirun with several "
             "ranks every solve does. Needs a pstencil built with PETSc."},

@@ -60,6 +60,7 @@ typedef struct {
     int quiet;                    /* no progress bar                                           */
     const struct cJSON *machine;  /* members copied into the summary (NULL: none)             */
     int (*start_mpi)(void);       /* handed to every run (pst_run_opts.start_mpi)              */
+    int (*start_petsc)(char *err); /* handed to every run (pst_run_opts.start_petsc)         */
     /* Runs at once (docs/sweeps.md): with jobs > 1 and a worker program, up to `jobs` small
      * runs at once, each in a worker process with pst_threads() / jobs threads, and large
      * runs one at a time in this process; otherwise every run here, one after the other. */

@@ -196,7 +196,8 @@ int sweep_run_one(const pst_sweep *sw, const pst_sweep_opts *o, size_t k, int *r
     int st = sweep_combo_scene(sw, k, &s, msg, len);
     if (st != PST_OK)
         return st;
-    pst_run_opts ro = {.quiet = 1, .report = report, .start_mpi = o->start_mpi};
+    pst_run_opts ro = {.quiet = 1, .report = report, .start_mpi = o->start_mpi,
+                       .start_petsc = o->start_petsc};
     st = pst_run_scene(&s, &ro, NULL, NULL, NULL, msg, len);
     *ran = 1;
     pst_scene_free(&s);

@@ -20,7 +20,7 @@ static void run_help(void)
            "  --plan      print what would be computed, with the memory estimate, and stop\n"
            "  --petsc OPTIONS\n"
            "              solve in PETSc's KSP with these PETSc options, after each task's own\n"
-           "              (tasks.K.petsc): --petsc '-ksp_type bcgs -pc_type gamg'\n\n"
+           "              (tasks.K.petsc): --petsc '-ksp_type bcgs -pc_type jacobi'\n\n"
            "Under mpirun with several ranks, each rank owns a Morton range of the cloud and its\n"
            "ghosts, every solve runs in PETSc over the ranks, and rank 0 writes the outputs\n"
            "(docs/distributed.md; needs a pstencil built with PETSc).\n\n"

@@ -69,7 +69,7 @@ static cJSON *machine_info(void)
 static int serve(const pst_sweep *sw, const char *digest)
 {
     char err[2 * PST_ERRLEN + 1024];
-    pst_sweep_opts o = {.quiet = 1, .start_mpi = cli_start_mpi};
+    pst_sweep_opts o = {.quiet = 1, .start_mpi = cli_start_mpi, .start_petsc = cli_start_petsc};
     int st = pst_sweep_serve(sw, digest, &o, 3, err, sizeof err);
     return st == PST_OK ? CLI_OK : cli_fail(st, "sweep worker", err);
 }
@@ -128,7 +128,8 @@ int cli_sweep(const cli_ctx *ctx, int argc, char **argv)
     }
     cJSON *machine = machine_info();
     pst_sweep_opts o = {.resume = resume, .quiet = ctx->quiet, .machine = machine,
-                        .start_mpi = cli_start_mpi, .jobs = (int)jobs,
+                        .start_mpi = cli_start_mpi, .start_petsc = cli_start_petsc,
+                        .jobs = (int)jobs,
                         .worker_exe = "/proc/self/exe"};
     pst_sweep_stats stats;
     st = pst_sweep_run(&sw, &o, &stats, err, sizeof err);
