@@ -98,6 +98,9 @@ typedef struct {
                              lsmps, else the proxy; the proxy where own has a row without a
                              positive diagonal)                                              */
     double amg_radius;    /* the proxy's radius in h, as pst_solve_opts.amg_radius (-1: auto) */
+    int fix_mean;         /* 1: a problem without Dirichlet rows, solved as pst_solve_opts
+                             fix_mean does: (L + c 1 V^T) u = b, u with zero V-weighted mean,
+                             lambda = c V^T u in the result's mean_shift (docs/solving.md)     */
     int history;          /* 1: the relative residual per iteration in the result (the first
                              PST_PETSC_HISTORY)                                               */
     void (*monitor)(int iteration, double rel_residual, void *ctx); /* NULL: none              */
@@ -106,8 +109,8 @@ typedef struct {
 
 #define PST_PETSC_HISTORY 65536
 
-/* rtol 1e-8, max_iter 1000, restart 30, amg_source AUTO, amg_radius -1, no history, no
- * monitor, no options. */
+/* rtol 1e-8, max_iter 1000, restart 30, amg_source AUTO, amg_radius -1, no fixed mean, no
+ * history, no monitor, no options. */
 void pst_petsc_defaults(pst_petsc_opts *o);
 
 /* Solve L u = b with PETSc's KSP. The system is S L u = S b with S = -1 on interior rows and +1
@@ -125,7 +128,7 @@ void pst_petsc_defaults(pst_petsc_opts *o);
  * rows. r (NULL allowed) as pst_solve fills it, rel_residual recomputed as ||b - L u|| / ||b||
  * over all ranks. PST_OK, PST_ENUMERIC (not converged; PETSc's reason in r->message and err),
  * PST_EINVAL (bad arguments, no PETSc, PETSc not started, a PETSc error: its message in err),
- * PST_ENOMEM. */
+ * PST_ENOMEM; with fix_mean, PST_EINVAL when some row is a Dirichlet row. */
 int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double *u,
                     const pst_petsc_opts *o, pst_solve_result *r, char *err);
 

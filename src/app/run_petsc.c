@@ -100,7 +100,7 @@ static int solve_ranks(run_state *r, const uint8_t *kind, double *const normal[3
 }
 
 int run_solve_petsc(run_state *r, int k, cJSON *tj, pst_op *op, const uint8_t *kind,
-                    double *const normal[3], const double *b, double *u)
+                    double *const normal[3], const double *b, double *u, int fix_mean)
 {
     const sc_task *t = &r->s->tasks[k];
     char opts[1024], msg[PST_ERRLEN];
@@ -119,6 +119,7 @@ int run_solve_petsc(run_state *r, int k, cJSON *tj, pst_op *op, const uint8_t *k
     po.amg_source = r->plan.task_amg_source[k];
     po.amg_radius = r->plan.task_amg_radius[k];
     po.history = 1;
+    po.fix_mean = fix_mean;
     cli_progress pg;
     run_monitor_ctx mc = {&pg, t->rtol};
     po.monitor = run_solve_monitor;
@@ -134,7 +135,7 @@ int run_solve_petsc(run_state *r, int k, cJSON *tj, pst_op *op, const uint8_t *k
                  : pst_petsc_solve(op, NULL, b, u, &po, &res, msg);
     progress_end(&pg);
     r->cnt.solves++;
-    report_solve(tj, &res, 0);
+    report_solve(tj, &res, fix_mean);
     cJSON_AddNumberToObject(tj, "seconds", res.seconds);
     pst_solve_result_free(&res);
     if (st == PST_ENUMERIC) {

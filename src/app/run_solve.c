@@ -196,15 +196,11 @@ int run_solve(run_state *r, int k, cJSON *tj)
     const uint8_t *kind = grouped ? bnd.kind : pst_cloud_kinds_const(r->c);
     int fix_mean = st == PST_OK && needs_fixed_mean(r, kind);
     int petsc = run_in_petsc(r, k);
-    if (st == PST_OK && petsc && fix_mean)
-        st = run_fail(r, PST_EINPUT, "%s: task '%s': the cloud is periodic and the solve has no "
-                      "Dirichlet particle, so the mean of u must be fixed, which the PETSc "
-                      "solves do not do yet (docs/distributed.md)", r->s->path, t->name);
     double *normal[3] = {NULL, NULL, NULL};
     for (int d = 0; d < r->s->dim; ++d)
         normal[d] = grouped ? bnd.normal[d] : pst_cloud_normal(r->c, d);
     if (st == PST_OK && petsc)
-        st = run_solve_petsc(r, k, tj, op, kind, normal, b, u[0]);
+        st = run_solve_petsc(r, k, tj, op, kind, normal, b, u[0], fix_mean);
     else if (st == PST_OK)
         st = solve_with(r, k, tj, op, b, u[0], fix_mean);
     if (st == PST_OK && op != r->base && !r->base) /* outputs.vtu: this solve's rows */

@@ -86,10 +86,10 @@ void run_solve_monitor(int it, double rel, void *ctx);
 int run_in_petsc(const run_state *r, int k);
 
 /* Solve task k in PETSc (run_petsc.c): b into u over the whole cloud, on the task's boundary
- * (kind, normal); op is the task's operator on one process, NULL over several ranks (each
- * builds its part's). */
+ * (kind, normal), with the mean of u fixed when fix_mean; op is the task's operator on one
+ * process, NULL over several ranks (each builds its part's). */
 int run_solve_petsc(run_state *r, int k, cJSON *tj, pst_op *op, const uint8_t *kind,
-                    double *const normal[3], const double *b, double *u);
+                    double *const normal[3], const double *b, double *u, int fix_mean);
 
 /* The boundary of solve task k (which has groups) into bnd, and its group values into b
  * (fluxes divided by a constant mobility's factor); claim[i] becomes the kind its group gave

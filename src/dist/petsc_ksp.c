@@ -70,7 +70,22 @@ typedef struct {
     VecScatter gather;
     Vec xl;     /* x in the local order (sequential)  */
     double *yl; /* L x in the local order             */
+    /* a fixed mean (pst_petsc_opts.fix_mean): the operator is L + c 1 V^T, as pst_solve's
+     * (docs/solving.md, "Singular problems"); V NULL: none */
+    const double *V;
+    double c, vsum;
+    MPI_Comm comm;
 } shell_ctx;
+
+/* V . x over the owned particles of every rank (x in the local order). */
+static double owned_dot(const shell_ctx *s, const double *x)
+{
+    double local = 0, all = 0;
+    for (size_t k = 0; k < s->nown; ++k)
+        local += s->V[s->own0 + k] * x[s->own0 + k];
+    MPI_Allreduce(&local, &all, 1, MPI_DOUBLE, MPI_SUM, s->comm);
+    return all;
+}
 
 static PetscErrorCode shell_mult(Mat A, Vec x, Vec y)
 {
@@ -82,11 +97,13 @@ static PetscErrorCode shell_mult(Mat A, Vec x, Vec y)
     PetscScalar *yo;
     PetscCall(VecGetArrayRead(s->xl, &xl));
     int st = s->nlocal ? pst_op_apply(s->op, xl, s->yl) : PST_OK;
+    double t = s->V ? s->c * owned_dot(s, xl) : 0.0;
     PetscCall(VecGetArray(y, &yo));
     for (size_t k = 0; k < s->nown; ++k) {
         size_t i = s->own0 + k;
         uint8_t kd = s->op->kind[i];
-        yo[k] = kd == PST_DIRICHLET ? xl[i] : kd == PST_INTERIOR ? -s->yl[i] : s->yl[i];
+        double v = s->yl[i] + t;
+        yo[k] = kd == PST_DIRICHLET ? xl[i] : kd == PST_INTERIOR ? -v : v;
     }
     PetscCall(VecRestoreArray(y, &yo));
     PetscCall(VecRestoreArrayRead(s->xl, &xl));
@@ -104,7 +121,8 @@ static PetscErrorCode shell_diagonal(Mat A, Vec d)
     PetscCall(VecGetArray(d, &dv));
     for (size_t k = 0; k < s->nown; ++k) {
         size_t i = s->own0 + k;
-        dv[k] = s->op->kind[i] == PST_INTERIOR ? -s->yl[i] : s->yl[i];
+        double v = s->yl[i] + (s->V ? s->c * s->V[i] : 0.0);
+        dv[k] = s->op->kind[i] == PST_INTERIOR ? -v : v;
     }
     PetscCall(VecRestoreArray(d, &dv));
     return 0;
@@ -231,11 +249,17 @@ static int make_ksp(MPI_Comm comm, int dim, Mat A, Mat P, const pst_petsc_opts *
 {
     int st = PST_OK;
     PC pc;
-    char amg[256];
+    char amg[384];
+    /* with a fixed mean the matrix is singular (no Dirichlet row): elimination on the coarsest
+     * grid would return a huge multiple of the constants, four smoothing sweeps stay bounded,
+     * as in pstencil's own AMG */
     snprintf(amg, sizeof amg,
              "-pc_hypre_boomeramg_coarsen_type HMIS -pc_hypre_boomeramg_interp_type ext+i "
-             "-pc_hypre_boomeramg_P_max 4 -pc_hypre_boomeramg_strong_threshold %g",
-             dim == 2 ? 0.25 : 0.5);
+             "-pc_hypre_boomeramg_P_max 4 -pc_hypre_boomeramg_strong_threshold %g%s",
+             dim == 2 ? 0.25 : 0.5,
+             o->fix_mean ? " -pc_hypre_boomeramg_relax_type_coarse symmetric-SOR/Jacobi "
+                           "-pc_hypre_boomeramg_grid_sweeps_coarse 4"
+                         : "");
     PETSC_TRY(PetscOptionsCreate(db));
     PETSC_TRY(PetscOptionsInsertString(*db, amg));
     if (o->options && o->options[0])
@@ -259,6 +283,30 @@ static int make_ksp(MPI_Comm comm, int dim, Mat A, Mat P, const pst_petsc_opts *
     PETSC_TRY(KSPSetFromOptions(*ksp));
 done:
     return st;
+}
+
+/* A fixed mean: c = -(mean |diag L|) / sum V over all ranks, as pst_solve takes it; refused
+ * when a rank owns a Dirichlet row. */
+static int fix_mean_setup(shell_ctx *s, size_t n, char *err)
+{
+    double part[3] = {0, 0, 0}, all[3];
+    int st = s->nlocal ? pst_op_diagonal(s->op, s->yl) : PST_OK;
+    PST_CHECK(st != PST_OK, st, err, "petsc solve: the operator's diagonal failed");
+    const double *V = pst_cloud_volume_const(s->op->cloud);
+    for (size_t k = 0; k < s->nown; ++k) {
+        size_t i = s->own0 + k;
+        part[0] += fabs(s->yl[i]);
+        part[1] += V[i];
+        part[2] += s->op->kind[i] == PST_DIRICHLET;
+    }
+    MPI_Allreduce(part, all, 3, MPI_DOUBLE, MPI_SUM, s->comm);
+    PST_CHECK(all[2] > 0, PST_EINVAL, err,
+              "petsc solve: fix_mean is for problems without Dirichlet rows (%.0f here)", all[2]);
+    PST_CHECK(!(all[1] > 0), PST_EINVAL, err, "petsc solve: fix_mean needs positive volumes");
+    s->V = V;
+    s->vsum = all[1];
+    s->c = -(all[0] > 0 && isfinite(all[0]) ? all[0] / (double)n : 1.0) / s->vsum;
+    return PST_OK;
 }
 
 /* The arguments of pst_petsc_solve and the layout they describe (a whole operator: one rank
@@ -356,7 +404,7 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
             whole[i] = i;
         global = whole;
     }
-    shell_ctx sc = {.op = op, .own0 = pi.own0, .nown = nown, .nlocal = pi.nlocal};
+    shell_ctx sc = {.op = op, .own0 = pi.own0, .nown = nown, .nlocal = pi.nlocal, .comm = comm};
     sc.yl = malloc((pi.nlocal ? pi.nlocal : 1) * sizeof *sc.yl);
     PetscInt *from = malloc((pi.nlocal ? pi.nlocal : 1) * sizeof *from);
     int st = PST_OK;
@@ -385,6 +433,8 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
                              (PetscInt)pi.n, &sc, &A));
     PETSC_TRY(MatShellSetOperation(A, MATOP_MULT, (void (*)(void))shell_mult));
     PETSC_TRY(MatShellSetOperation(A, MATOP_GET_DIAGONAL, (void (*)(void))shell_diagonal));
+    if (o->fix_mean)
+        PST_TRY_GOTO(st, fix_mean_setup(&sc, pi.n, err), done);
     PetscScalar *xv, *bv;
     PETSC_TRY(VecGetArray(x, &xv));
     PETSC_TRY(VecGetArray(rhs, &bv));
@@ -419,6 +469,12 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
     for (size_t k = 0; k < nown; ++k)
         u[pi.own0 + k] = xs[k];
     PETSC_TRY(VecRestoreArrayRead(x, &xs));
+    if (sc.V) { /* the solution with zero weighted mean, and lambda */
+        double vu = owned_dot(&sc, u);
+        for (size_t k = 0; k < nown; ++k)
+            u[pi.own0 + k] -= vu / sc.vsum;
+        r->mean_shift = sc.c * vu;
+    }
     r->setup_seconds += t1 - t0; /* the matrices and the scatter too */
     r->seconds = MPI_Wtime() - t0;
     if (!r->converged) {
