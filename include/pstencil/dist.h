@@ -128,7 +128,8 @@ void pst_petsc_defaults(pst_petsc_opts *o);
  * rows. r (NULL allowed) as pst_solve fills it, rel_residual recomputed as ||b - L u|| / ||b||
  * over all ranks. PST_OK, PST_ENUMERIC (not converged; PETSc's reason in r->message and err),
  * PST_EINVAL (bad arguments, no PETSc, PETSc not started, a PETSc error: its message in err),
- * PST_ENOMEM; with fix_mean, PST_EINVAL when some row is a Dirichlet row. */
+ * PST_EINPUT (a non-finite owned value of b or u), PST_ENOMEM; with fix_mean, PST_EINVAL
+ * when some row is a Dirichlet row. */
 int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double *u,
                     const pst_petsc_opts *o, pst_solve_result *r, char *err);
 

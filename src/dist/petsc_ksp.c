@@ -343,6 +343,18 @@ static int check_solve(const pst_op *op, const pst_part *p, const double *b, con
     return PST_OK;
 }
 
+/* PST_EINPUT naming the first owned particle with a non-finite b or u (on this rank). */
+static int check_finite(const pst_part_info *pi, const size_t *global, const double *b,
+                        const double *u, char *err)
+{
+    for (size_t k = pi->own0; k < pi->own0 + pi->hi - pi->lo; ++k)
+        PST_CHECK(!isfinite(b[k]) || !isfinite(u[k]), PST_EINPUT, err,
+                  "petsc solve: particle %zu has a non-finite %s (%g)",
+                  global ? global[k] : k, isfinite(b[k]) ? "u" : "b",
+                  isfinite(b[k]) ? u[k] : b[k]);
+    return PST_OK;
+}
+
 /* Iterations, reason, history and the true residual of a finished solve into r. */
 static int fill_result(KSP ksp, Mat A, Vec x, Vec rhs, double bnorm, pst_solve_result *r,
                        char *err)
@@ -393,6 +405,7 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
     pst_part_info pi;
     MPI_Comm comm;
     PST_TRY(check_solve(op, p, b, u, o, &pi, &comm, err));
+    PST_TRY(check_finite(&pi, p ? pst_part_global(p) : NULL, b, u, err));
     double t0 = MPI_Wtime();
     size_t nown = pi.hi - pi.lo;
     size_t *whole = NULL;
