@@ -134,14 +134,5 @@ int run_solve_petsc(run_state *r, int k, cJSON *tj, pst_op *op, const uint8_t *k
     st = r->dist ? solve_ranks(r, kind, normal, b, u, &po, &res, pj, msg)
                  : pst_petsc_solve(op, NULL, b, u, &po, &res, msg);
     progress_end(&pg);
-    r->cnt.solves++;
-    report_solve(tj, &res, fix_mean);
-    cJSON_AddNumberToObject(tj, "seconds", res.seconds);
-    pst_solve_result_free(&res);
-    if (st == PST_ENUMERIC) {
-        r->solve_failed = 1;
-        snprintf(r->err, r->errlen, "%s: task '%s': %s", r->s->path, t->name, msg);
-        return PST_OK;
-    }
-    return st == PST_OK ? PST_OK : run_fail(r, st, "%s: task '%s': %s", r->s->path, t->name, msg);
+    return run_solve_finish(r, k, tj, &res, fix_mean, st, msg);
 }

@@ -156,16 +156,23 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     progress_begin(&pg, !r->o->quiet, label, NULL);
     int ss = pst_solve(op, b, u, &so, &res, msg);
     progress_end(&pg);
+    return run_solve_finish(r, k, tj, &res, fix_mean, ss, msg);
+}
+
+int run_solve_finish(run_state *r, int k, cJSON *tj, pst_solve_result *res, int fix_mean,
+                     int st, const char *msg)
+{
+    const sc_task *t = &r->s->tasks[k];
     r->cnt.solves++;
-    report_solve(tj, &res, fix_mean);
-    cJSON_AddNumberToObject(tj, "seconds", res.seconds);
-    pst_solve_result_free(&res);
-    if (ss == PST_ENUMERIC) {
+    report_solve(tj, res, fix_mean);
+    cJSON_AddNumberToObject(tj, "seconds", res->seconds);
+    pst_solve_result_free(res);
+    if (st == PST_ENUMERIC) {
         r->solve_failed = 1;
         snprintf(r->err, r->errlen, "%s: task '%s': %s", r->s->path, t->name, msg);
         return PST_OK;
     }
-    return ss == PST_OK ? PST_OK : run_fail(r, ss, "%s: task '%s': %s", r->s->path, t->name, msg);
+    return st == PST_OK ? PST_OK : run_fail(r, st, "%s: task '%s': %s", r->s->path, t->name, msg);
 }
 
 int run_solve(run_state *r, int k, cJSON *tj)

@@ -81,6 +81,12 @@ typedef struct {
 } run_monitor_ctx;
 void run_solve_monitor(int it, double rel, void *ctx);
 
+/* The end of solve task k, either solver: the result into tj (then freed), counted; a solve
+ * that did not converge (st PST_ENUMERIC) is not an error here, its outputs are still written
+ * and the run reports it at the end (r->solve_failed); another failure is, with msg. */
+int run_solve_finish(run_state *r, int k, cJSON *tj, pst_solve_result *res, int fix_mean,
+                     int st, const char *msg);
+
 /* 1 when solve task k runs in PETSc: several ranks, tasks[k].petsc given or PETSc options on
  * the command line (run_petsc.c). */
 int run_in_petsc(const run_state *r, int k);

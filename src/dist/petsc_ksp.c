@@ -77,6 +77,12 @@ typedef struct {
     MPI_Comm comm;
 } shell_ctx;
 
+/* S_i of the system S L u = S b: -1 on interior rows, so that every diagonal is positive. */
+static inline double row_sign(const pst_op *op, size_t i)
+{
+    return op->kind[i] == PST_INTERIOR ? -1.0 : 1.0;
+}
+
 /* V . x over the owned particles of every rank (x in the local order). */
 static double owned_dot(const shell_ctx *s, const double *x)
 {
@@ -103,7 +109,7 @@ static PetscErrorCode shell_mult(Mat A, Vec x, Vec y)
         size_t i = s->own0 + k;
         uint8_t kd = s->op->kind[i];
         double v = s->yl[i] + t;
-        yo[k] = kd == PST_DIRICHLET ? xl[i] : kd == PST_INTERIOR ? -v : v;
+        yo[k] = kd == PST_DIRICHLET ? xl[i] : row_sign(s->op, i) * v;
     }
     PetscCall(VecRestoreArray(y, &yo));
     PetscCall(VecRestoreArrayRead(s->xl, &xl));
@@ -122,7 +128,7 @@ static PetscErrorCode shell_diagonal(Mat A, Vec d)
     for (size_t k = 0; k < s->nown; ++k) {
         size_t i = s->own0 + k;
         double v = s->yl[i] + (s->V ? s->c * s->V[i] : 0.0);
-        dv[k] = s->op->kind[i] == PST_INTERIOR ? -v : v;
+        dv[k] = row_sign(s->op, i) * v;
     }
     PetscCall(VecRestoreArray(d, &dv));
     return 0;
@@ -135,7 +141,7 @@ static int lacks_diagonal(const pst_op *op, MPI_Comm comm, const pst_part_info *
     int bad = 0, any = 0;
     for (size_t k = 0; k < pi->hi - pi->lo && !bad; ++k) {
         size_t i = pi->own0 + k;
-        double sign = op->kind[i] == PST_INTERIOR ? -1.0 : 1.0, d = 0;
+        double sign = row_sign(op, i), d = 0;
         for (int64_t e = a->rowptr[i]; e < a->rowptr[i + 1]; ++e)
             d = a->col[e] == i ? sign * a->val[e] : d;
         bad = !(d > 0);
@@ -196,7 +202,7 @@ static int preconditioner_matrix(const pst_op *op, MPI_Comm comm, const pst_part
     for (size_t k = 0; k < nown; ++k) {
         size_t i = pi->own0 + k;
         PetscInt row = (PetscInt)(pi->lo + k), m = 0;
-        double sign = op->kind[i] == PST_INTERIOR ? -1.0 : 1.0;
+        double sign = row_sign(op, i);
         for (int64_t e = a.rowptr[i]; e < a.rowptr[i + 1]; ++e) {
             vals[m] = sign * a.val[e];
             cols[m++] = (PetscInt)global[a.col[e]];
@@ -453,7 +459,7 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
     PETSC_TRY(VecGetArray(rhs, &bv));
     for (size_t k = 0; k < nown; ++k) {
         size_t i = pi.own0 + k;
-        bv[k] = op->kind[i] == PST_INTERIOR ? -b[i] : b[i];
+        bv[k] = row_sign(op, i) * b[i];
         xv[k] = op->kind[i] == PST_DIRICHLET ? b[i] : u[i]; /* Dirichlet values are known */
     }
     PETSC_TRY(VecRestoreArray(rhs, &bv));
