@@ -166,8 +166,8 @@ static const struct {
     {"brookshaw", {52, 60}}, {"cb", {52, 60}},      {"schwaiger", {52, 60}},
     {"lv", {52, 60}},        {"cspm", {82, 104}},   {"icspm", {82, 104}},
     {"csph2g", {82, 104}},   {"mixed0", {101, 140}}, {"mixed1", {99, 138}},
-    {"mixed2", {133, 228}},  {"lsmps", {44, 59}},   {"lpmps", {42, 57}},
-    {"qsfdi", {52, 73}},
+    {"mixed2", {133, 228}},  {"lsmps", {39, 51}},   {"lpmps", {38, 50}},
+    {"qsfdi", {49, 68}},
 };
 
 static double apply_flops_per_pair(int scheme, int dim)

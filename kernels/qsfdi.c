@@ -221,9 +221,9 @@ static int qs_precompute(pst_op *op, char *err)
 PST_KHOT double qs_row_weight(const qs_ctx *k, int D, const double xi[3], double ih,
                               const double *kap, size_t j)
 {
-    double r[3] = {0, 0, 0}, o2, o4;
-    qs_pair(k, D, xi, ih, j, r, &o2, &o4);
-    return qs_weight(D, r, o2, o4, kap);
+    double r[3] = {0, 0, 0}, o2, id2;
+    qs_pair(k, D, xi, ih, j, r, &o2, &id2);
+    return qs_weight(D, r, o2, id2, kap);
 }
 
 /* The weight of row j for its neighbour i (the reverse of a pair, from row j's own data). */
@@ -240,11 +240,11 @@ PST_KHOT double qs_weight_to(const qs_ctx *k, const qs_data *d, int D, size_t j,
 PST_KHOT void qs_chunk_weights(const qs_ctx *k, int D, const double xi[3], double ih,
                                const double *kap, const uint32_t *idx, int n, double *a)
 {
-    double r[3][QS_CHUNK], o2[QS_CHUNK], o4[QS_CHUNK];
-    qs_gather(k, D, xi, ih, idx, n, r, o2, o4);
+    double r[3][QS_CHUNK], o2[QS_CHUNK], id2[QS_CHUNK];
+    qs_gather(k, D, xi, ih, idx, n, r, o2, id2);
 #pragma omp simd
     for (int c = 0; c < n; ++c)
-        a[c] = qs_weight_xyz(D, r[0][c], r[1][c], D == 3 ? r[2][c] : 0.0, o2[c], o4[c], kap);
+        a[c] = qs_weight_xyz(D, r[0][c], r[1][c], D == 3 ? r[2][c] : 0.0, o2[c], id2[c], kap);
 }
 
 /* Row i's weights into w (emission, pst_op_store), in the widest vector ISA: chunk by chunk
@@ -273,17 +273,18 @@ PST_KHOT pst_v8 qs_lane_weights(pst_kernel K, int D, double supp, double eps, ps
     pst_v8 d2 = x * x + y * y + (D == 3 ? z * z : pst_v8_splat(0.0)), a;
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
-        double o2, o4;
-        qs_omega(K, D, supp, eps, d2[l], &o2, &o4);
-        a[l] = qs_weight_xyz(D, x[l], y[l], z[l], o2, o4, kap);
+        double o2, id2;
+        qs_omega(K, D, supp, eps, d2[l], &o2, &id2);
+        a[l] = qs_weight_xyz(D, x[l], y[l], z[l], o2, id2, kap);
     }
     return a;
 }
 
 /* Rows [i0, i1) of the matrix-free apply for the constant D and kernel K, 8 pairs at a time
- * (kernels/lanes.h). Compute-bound: per pair a sqrt, a division, ~19 flops of kernel and ~45
- * (3D) of monomials and kappa in vector lanes, against 4 bytes of index and a 32-byte row of
- * the packed array (in cache: the neighbours of Morton-ordered rows overlap). */
+ * (kernels/lanes.h). Compute-bound (its multiplications): per pair a sqrt, a division, ~19
+ * flops of kernel and ~34 (3D) of the two quadratic forms in vector lanes, against 4 bytes of
+ * index and a 32-byte row of the packed array (in cache: the neighbours of Morton-ordered rows
+ * overlap). */
 PST_KHOT void qs_lane_rows(const qs_ctx *k, const qs_data *d, int D, pst_kernel K, size_t i0,
                            size_t i1, double *y)
 {
@@ -341,14 +342,14 @@ PST_KHOT void qs_half_row_uniform(const qs_ctx *k, const qs_data *d, int D, cons
     for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += QS_CHUNK) {
         int n = (int)(off[i + 1] - c0 < QS_CHUNK ? off[i + 1] - c0 : QS_CHUNK);
         const uint32_t *ic = idx + c0;
-        double r[3][QS_CHUNK], o2[QS_CHUNK], o4[QS_CHUNK], wji[QS_CHUNK], du[QS_CHUNK];
-        qs_gather(k, D, xi, ih, ic, n, r, o2, o4);
+        double r[3][QS_CHUNK], o2[QS_CHUNK], id2[QS_CHUNK], wji[QS_CHUNK], du[QS_CHUNK];
+        qs_gather(k, D, xi, ih, ic, n, r, o2, id2);
 #pragma omp simd reduction(+ : s)
         for (int c = 0; c < n; ++c) {
             double x = r[0][c], yy = r[1][c], z = D == 3 ? r[2][c] : 0.0;
             du[c] = u[ic[c]] - ui;
-            s += qs_weight_xyz(D, x, yy, z, o2[c], o4[c], kap) * du[c];
-            wji[c] = qs_weight_xyz(D, -x, -yy, -z, o2[c], o4[c], d->kap + (size_t)nk * ic[c]);
+            s += qs_weight_xyz(D, x, yy, z, o2[c], id2[c], kap) * du[c];
+            wji[c] = qs_weight_xyz(D, -x, -yy, -z, o2[c], id2[c], d->kap + (size_t)nk * ic[c]);
         }
         for (int c = 0; c < n; ++c)
             if (kind[ic[c]] != PST_DIRICHLET)

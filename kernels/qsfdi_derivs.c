@@ -41,10 +41,10 @@ PST_KHOT void qs_data_block(const qs_ctx *k, int D, pst_kernel K, const pst_lane
     const pst_v8 d2 = x * x + y * y + (D == 3 ? z * z : pst_v8_splat(0.0));
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
-        double a2, a4;
-        qs_omega(K, D, k->supp, k->c.pair_eps, d2[l], &a2, &a4);
+        double a2, id2;
+        qs_omega(K, D, k->supp, k->c.pair_eps, d2[l], &a2, &id2);
         o2[l] = a2;
-        o4[l] = a4;
+        o4[l] = a2 * id2;
     }
     const pst_v8 o2u = o2 * du, o4u = o4 * du, xx = x * x, yy = y * y, xy = x * y;
     s->x += o2u * x;
@@ -218,8 +218,8 @@ PST_KHOT int qs_point_t(const qs_ctx *k, int D, const double p[3], double h, con
     /* tau = sum omega1 (r; r2s / 2; r2c), omega1 = w / d */
     double tau[9] = {0};
     for (int64_t e = e0; e < e1; ++e) {
-        double r[3] = {0, 0, 0}, o2, o4, qm[6];
-        qs_pair(k, D, p, ih, idx[e], r, &o2, &o4);
+        double r[3] = {0, 0, 0}, o2, id2, qm[6];
+        qs_pair(k, D, p, ih, idx[e], r, &o2, &id2);
         qs_quad(D, r, qm);
         double o1 = o2 * sqrt(qm[0] + qm[1] + (D == 3 ? qm[2] : 0.0)); /* w/d = omega2 d */
         for (int a = 0; a < D; ++a)
@@ -232,14 +232,14 @@ PST_KHOT int qs_point_t(const qs_ctx *k, int D, const double p[3], double h, con
     qs_functional(D, &st, zero, one, zero, kl);
     double sp = 0, m0 = 0, sphi = 0, sa = 0, sau = 0;
     for (int64_t e = e0; e < e1; ++e) {
-        double r[3] = {0, 0, 0}, o2, o4;
+        double r[3] = {0, 0, 0}, o2, id2;
         size_t j = idx[e];
-        qs_pair(k, D, p, ih, j, r, &o2, &o4);
+        qs_pair(k, D, p, ih, j, r, &o2, &id2);
         double d2 = 0;
         for (int a = 0; a < D; ++a)
             d2 += r[a] * r[a];
         double o1 = o2 * sqrt(d2);
-        double phi = o1 - qs_weight(D, r, o2, o4, kt), a = qs_weight(D, r, o2, o4, kl);
+        double phi = o1 - qs_weight(D, r, o2, id2, kt), a = qs_weight(D, r, o2, id2, kl);
         double du = u[j] - uref;
         sp += phi * du;
         m0 += phi;

@@ -64,33 +64,33 @@ static inline qs_ctx make_ctx(const pst_op *op)
                     .cond_max = op->opts.cond_max, .rank_tol = op->opts.rank_tol};
 }
 
-/* omega2 = w / d^2 and omega4 = w / d^4 of a pair at scaled squared distance d2 for the kernel
- * K; 0 for degenerate pairs and pairs beyond the support. Returns 1 for a live pair, else 0,
+/* omega2 = w / d^2 and 1 / d^2 (omega4 = omega2 / d^2 is their product) of a pair at scaled
+ * squared distance d2 for the kernel K; 0 for degenerate pairs and pairs beyond the support. Returns 1 for a live pair, else 0,
  * as a double: arithmetic on it rather than selects of computed values, which GCC turns back
  * into branches (it may not speculate the division). The scalar pair (qs_pair) and the
  * vectorised chunk (qs_omegas) both call this: their weights are bit-identical. */
 PST_KHOT double qs_omega(pst_kernel K, int D, double supp, double eps, double d2, double *o2,
-                         double *o4)
+                         double *id2)
 {
     double q = sqrt(d2), in = ((q > eps) & (q < supp)) ? 1.0 : 0.0;
     double w = pst_sph_shape(K, D, q, 0); /* the constant C_D cancels */
-    double id2 = in / (d2 + (1.0 - in)); /* 1 / d^2, or 0 / (d^2 + 1) */
-    *o2 = w * id2;
-    *o4 = w * id2 * id2;
+    *id2 = in / (d2 + (1.0 - in)); /* 1 / d^2, or 0 / (d^2 + 1) */
+    *o2 = w * *id2;
     return in;
 }
 
-/* Scaled offset r = (x_j - x_I) / h_I and omega2, omega4 of a pair; degenerate pairs and pairs
- * beyond the support (possible with per-particle h) get 0 weights. Returns 1 for a live pair. */
+/* Scaled offset r = (x_j - x_I) / h_I and omega2, 1 / d^2 of a pair; degenerate pairs and
+ * pairs beyond the support (possible with per-particle h) get 0 weights. Returns 1 for a live
+ * pair. */
 PST_KHOT int qs_pair(const qs_ctx *k, int D, const double xi[3], double ih, size_t j, double r[3],
-                   double *o2, double *o4)
+                   double *o2, double *id2)
 {
     double d2 = 0;
     for (int a = 0; a < D; ++a) {
         r[a] = pst_offset(&k->c, a, k->c.x[a][j], xi[a]) * ih;
         d2 += r[a] * r[a];
     }
-    return qs_omega(k->c.kernel, D, k->supp, k->c.pair_eps, d2, o2, o4) > 0;
+    return qs_omega(k->c.kernel, D, k->supp, k->c.pair_eps, d2, o2, id2) > 0;
 }
 
 /* The quadratic monomials (r2s, r2c) of r. */
@@ -106,29 +106,32 @@ PST_KHOT void qs_quad(int D, const double r[3], double qm[6])
 }
 
 /* a_IJ = omega4 kappa4 . (r2s, r2c) + omega2 kappa2 . (r, r2s, r2c), from the components of r
- * as scalars (no arrays: the form that vectorises across neighbours; z is not read in 2D). */
-PST_KHOT double qs_weight_xyz(int D, double x, double y, double z, double o2, double o4,
+ * as scalars (no arrays: the form that vectorises across neighbours; z is not read in 2D), as
+ * omega2 (s4 / d^2 + s2) with the quadratic forms s4 = kappa4 . (r2s, r2c) and s2 in Horner
+ * order: 20 multiplications in 3D where the monomials and two dot products take 24 (the
+ * multiplications are what the matrix-free apply is bound by, qs_lane_rows), and neither
+ * form waits for the division. */
+PST_KHOT double qs_weight_xyz(int D, double x, double y, double z, double o2, double id2,
                               const double *kap)
 {
     const int nq = QS_NQ(D);
     const double *k2 = kap + nq;
     double s4, s2;
     if (D == 2) {
-        double xx = x * x, yy = y * y, xy = x * y;
-        s4 = kap[0] * xx + kap[1] * yy + kap[2] * xy;
-        s2 = k2[2] * xx + k2[3] * yy + k2[4] * xy + k2[0] * x + k2[1] * y;
+        s4 = x * (kap[0] * x + kap[2] * y) + y * (kap[1] * y);
+        s2 = x * (k2[2] * x + k2[4] * y + k2[0]) + y * (k2[3] * y + k2[1]);
     } else {
-        double xx = x * x, yy = y * y, zz = z * z, xy = x * y, xz = x * z, yz = y * z;
-        s4 = kap[0] * xx + kap[1] * yy + kap[2] * zz + kap[3] * xy + kap[4] * xz + kap[5] * yz;
-        s2 = k2[3] * xx + k2[4] * yy + k2[5] * zz + k2[6] * xy + k2[7] * xz + k2[8] * yz +
-             k2[0] * x + k2[1] * y + k2[2] * z;
+        s4 = x * (kap[0] * x + kap[3] * y + kap[4] * z) + y * (kap[1] * y + kap[5] * z) +
+             z * (kap[2] * z);
+        s2 = x * (k2[3] * x + k2[6] * y + k2[7] * z + k2[0]) + y * (k2[4] * y + k2[8] * z + k2[1]) +
+             z * (k2[5] * z + k2[2]);
     }
-    return o4 * s4 + o2 * s2;
+    return o2 * (s4 * id2 + s2);
 }
 
-PST_KHOT double qs_weight(int D, const double r[3], double o2, double o4, const double *kap)
+PST_KHOT double qs_weight(int D, const double r[3], double o2, double id2, const double *kap)
 {
-    return qs_weight_xyz(D, r[0], r[1], D == 3 ? r[2] : 0.0, o2, o4, kap);
+    return qs_weight_xyz(D, r[0], r[1], D == 3 ? r[2] : 0.0, o2, id2, kap);
 }
 
 /* ---- moments ---------------------------------------------------------------------------- */
@@ -140,24 +143,24 @@ PST_KHOT double qs_weight(int D, const double r[3], double o2, double o4, const 
  * count. A 3D row (~190 neighbours) is one chunk. */
 #define QS_CHUNK 256
 
-/* omega2, omega4 (qs_omega) of a chunk of n pairs from their squared distances d2, vectorised;
- * returns the live pairs. */
+/* omega2 and 1 / d^2 (qs_omega) of a chunk of n pairs from their squared distances d2,
+ * vectorised; returns the live pairs. */
 PST_KHOT int qs_omegas(pst_kernel K, int D, double supp, double eps, int n,
-                       const double *restrict d2, double *restrict o2, double *restrict o4)
+                       const double *restrict d2, double *restrict o2, double *restrict id2)
 {
     double live = 0;
 #pragma omp simd reduction(+ : live)
     for (int c = 0; c < n; ++c)
-        live += qs_omega(K, D, supp, eps, d2[c], &o2[c], &o4[c]);
+        live += qs_omega(K, D, supp, eps, d2[c], &o2[c], &id2[c]);
     return (int)live;
 }
 
 /* Scaled offsets r[a][c] = (x_j - x_I) / h_I of the neighbours idx[0..n) and their omega2,
- * omega4 (qs_pair's values, bit for bit). Returns the live pairs. Vectorised (sqrt too: the
+ * 1 / d^2 (qs_pair's values, bit for bit). Returns the live pairs. Vectorised (sqrt too: the
  * library is built without math errno): the gather of x_J, a sqrt, a division and ~25 flops
  * per neighbour. */
 PST_KHOT int qs_gather(const qs_ctx *k, int D, const double xi[3], double ih, const uint32_t *idx,
-                     int n, double (*r)[QS_CHUNK], double *o2, double *o4)
+                     int n, double (*r)[QS_CHUNK], double *o2, double *id2)
 {
     double d2[QS_CHUNK];
     for (int c = 0; c < n; ++c)
@@ -166,10 +169,10 @@ PST_KHOT int qs_gather(const qs_ctx *k, int D, const double xi[3], double ih, co
     for (int c = 0; c < n; ++c)
         d2[c] = r[0][c] * r[0][c] + r[1][c] * r[1][c] + (D == 3 ? r[2][c] * r[2][c] : 0.0);
     switch (k->c.kernel) { /* one vectorised instantiation per kernel */
-    case PST_KERNEL_CUBIC: return qs_omegas(PST_KERNEL_CUBIC, D, k->supp, k->c.pair_eps, n, d2, o2, o4);
-    case PST_KERNEL_QUINTIC: return qs_omegas(PST_KERNEL_QUINTIC, D, k->supp, k->c.pair_eps, n, d2, o2, o4);
-    case PST_KERNEL_WENDLAND_C2: return qs_omegas(PST_KERNEL_WENDLAND_C2, D, k->supp, k->c.pair_eps, n, d2, o2, o4);
-    default: return qs_omegas(PST_KERNEL_WENDLAND_C4, D, k->supp, k->c.pair_eps, n, d2, o2, o4);
+    case PST_KERNEL_CUBIC: return qs_omegas(PST_KERNEL_CUBIC, D, k->supp, k->c.pair_eps, n, d2, o2, id2);
+    case PST_KERNEL_QUINTIC: return qs_omegas(PST_KERNEL_QUINTIC, D, k->supp, k->c.pair_eps, n, d2, o2, id2);
+    case PST_KERNEL_WENDLAND_C2: return qs_omegas(PST_KERNEL_WENDLAND_C2, D, k->supp, k->c.pair_eps, n, d2, o2, id2);
+    default: return qs_omegas(PST_KERNEL_WENDLAND_C4, D, k->supp, k->c.pair_eps, n, d2, o2, id2);
     }
 }
 
@@ -191,6 +194,9 @@ PST_KHOT int qs_moments(const qs_ctx *k, int D, const double xi[3], double ih, c
         int n = (int)(e1 - c0 < QS_CHUNK ? e1 - c0 : QS_CHUNK);
         double r[3][QS_CHUNK], o2[QS_CHUNK], o4[QS_CHUNK];
         live += qs_gather(k, D, xi, ih, idx + c0, n, r, o2, o4);
+#pragma omp simd
+        for (int c = 0; c < n; ++c)
+            o4[c] *= o2[c]; /* omega4 = omega2 / d^2 */
         pst_wls_msums(D, 2, n, r[0], QS_CHUNK, o2, nu);
         pst_wls_msums(D, 3, n, r[0], QS_CHUNK, o2, nu + nd2);
         pst_wls_msums(D, 4, n, r[0], QS_CHUNK, o2, nu + nd2 + nd3);

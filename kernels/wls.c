@@ -189,29 +189,21 @@ PST_KHOT void centre_of(const wls_ctx *k, int D, size_t i, double xc[3])
 }
 
 /* w lam . p(x, y, z): the weight of a pair with scaled offset (x, y, z) (z unused in 2D) and
- * kernel weight w in the row of coefficients lam; the sum in basis order. Scalars, not the
- * basis array, so that GCC vectorises the loops over a chunk that call it. */
+ * kernel weight w in the row of coefficients lam, the quadratic part in Horner order: 10
+ * multiplications in 3D where the monomials and the dot product take 16 (the multiplications
+ * bound the matrix-free apply, lane_rows_t). Scalars, not the basis array, so that GCC
+ * vectorises the loops over a chunk that call it. */
 PST_KHOT double basis_weight_xyz(int D, int B, double w, double x, double y, double z,
                                  const double *lam)
 {
     const double *l = lam + B;
-    double s = B ? 0.0 + lam[0] * 1.0 : 0.0;
-    s += l[0] * x;
-    s += l[1] * y;
-    if (D == 2) {
-        s += l[2] * (x * x);
-        s += l[3] * (y * y);
-        s += l[4] * (x * y);
-        return w * s;
-    }
-    s += l[2] * z;
-    s += l[3] * (x * x);
-    s += l[4] * (y * y);
-    s += l[5] * (z * z);
-    s += l[6] * (x * y);
-    s += l[7] * (x * z);
-    s += l[8] * (y * z);
-    return w * s;
+    double s;
+    if (D == 2)
+        s = x * (l[2] * x + l[4] * y + l[0]) + y * (l[3] * y + l[1]);
+    else
+        s = x * (l[3] * x + l[6] * y + l[7] * z + l[0]) + y * (l[4] * y + l[8] * z + l[1]) +
+            z * (l[5] * z + l[2]);
+    return w * (B ? lam[0] + s : s);
 }
 
 PST_KHOT double basis_weight(int D, int B, double w, const double xh[3], const double *lam)
@@ -303,7 +295,7 @@ PST_KHOT pst_v8 lane_weights(const wls_ctx *k, int D, int B, pst_kernel K, pst_v
 }
 
 /* Rows [i0, i1) of the matrix-free apply, 8 pairs at a time (kernels/lanes.h). Per pair: one
- * sqrt and ~60 flops (3D) in vector lanes against 4 bytes of index and a 32-byte row of the
+ * sqrt and ~50 flops (3D) in vector lanes against 4 bytes of index and a 32-byte row of the
  * packed array (in cache): compute-bound. */
 PST_KHOT void lane_rows_t(const wls_ctx *k, size_t i0, size_t i1, double *y, int D, int B,
                           pst_kernel K)
