@@ -4,8 +4,8 @@
 // a user of nanoflann writes: its KD-tree, then one radiusSearch per particle, threaded with
 // OpenMP over the query points, each thread appending its rows to its own buffer, then a scan of
 // the row lengths and a copy into one CSR list with rows sorted by index (pstencil's contract).
-// Both sides are timed from the cloud to the finished CSR; they alternate, repeated, and the
-// medians and their ratio are printed, with 1 and 2 threads. The two lists are checked entry for
+// Both sides are timed from the cloud to the finished CSR; they alternate, and so do the thread
+// counts (1 and 2) within each repetition; the medians and their ratio are printed. The two lists are checked entry for
 // entry once per cloud: the same rule (squared distance summed x, y, z, strict <) on the same
 // doubles gives the same list.
 //
@@ -121,12 +121,13 @@ template <int D> int compare(int reps)
                                                                            : nullptr},
                      n};
     std::printf("%dD: %zu particles, radius %.4g (%.2f s0)\n", D, n, r, kSupport * 1.2);
-    double med[2][2]; // [threads - 1][pstencil, nanoflann]
+    // Repetition by repetition, 1 then 2 threads, pstencil then nanoflann: each thread count is
+    // measured beside the other, so that the 1 -> 2 thread ratios compare the same minutes.
+    std::vector<double> t[2][2]; // [threads - 1][pstencil, nanoflann]
     int saved = omp_get_max_threads();
-    for (int nt = 1; nt <= 2; ++nt) {
-        omp_set_num_threads(nt);
-        std::vector<double> tp, tn;
-        for (int k = 0; k < reps; ++k) {
+    for (int k = 0; k < reps; ++k)
+        for (int nt = 1; nt <= 2; ++nt) {
+            omp_set_num_threads(nt);
             char err[PST_ERRLEN];
             pst_nlist *nl = NULL;
             double t0 = omp_get_wtime();
@@ -138,8 +139,8 @@ template <int D> int compare(int reps)
             csr peer;
             nanoflann_list<D>(pts, r * r, peer);
             double t2 = omp_get_wtime();
-            tp.push_back(t1 - t0);
-            tn.push_back(t2 - t1);
+            t[nt - 1][0].push_back(t1 - t0);
+            t[nt - 1][1].push_back(t2 - t1);
             if (nt == 1 && k == 0) {
                 int same = same_list(nl, peer, n);
                 std::printf("  lists identical: %s (%.1f neighbours per particle)\n",
@@ -149,14 +150,16 @@ template <int D> int compare(int reps)
             }
             pst_nlist_destroy(nl);
         }
-        med[nt - 1][0] = bench_median(tp.data(), reps);
-        med[nt - 1][1] = bench_median(tn.data(), reps);
+    double med[2][2];
+    for (int nt = 1; nt <= 2; ++nt) {
+        for (int side = 0; side < 2; ++side)
+            med[nt - 1][side] = bench_median(t[nt - 1][side].data(), reps);
         std::printf("  %d thread%s: pstencil %.3f s, nanoflann %.3f s: ratio %.2f "
                     "(medians of %d)\n",
                     nt, nt > 1 ? "s" : " ", med[nt - 1][0], med[nt - 1][1],
                     med[nt - 1][1] / med[nt - 1][0], reps);
-        std::fflush(stdout);
     }
+    std::fflush(stdout);
     omp_set_num_threads(saved);
     std::printf("  1 -> 2 threads: pstencil %.2fx, nanoflann %.2fx\n", med[0][0] / med[1][0],
                 med[0][1] / med[1][1]);
