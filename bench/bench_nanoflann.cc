@@ -5,9 +5,9 @@
 // OpenMP over the query points, each thread appending its rows to its own buffer, then a scan of
 // the row lengths and a copy into one CSR list with rows sorted by index (pstencil's contract).
 // Both sides are timed from the cloud to the finished CSR; they alternate, and so do the thread
-// counts (1 and 2) within each repetition; the medians and their ratio are printed. The two lists are checked entry for
-// entry once per cloud: the same rule (squared distance summed x, y, z, strict <) on the same
-// doubles gives the same list.
+// counts (1 and 2) within each repetition; the medians and their ratio are printed. The two
+// lists are checked entry for entry once per cloud: the same rule (squared distance summed x,
+// y, z, strict <) on the same doubles gives the same list.
 //
 //   bench_nanoflann [repetitions (default 5)] [dims: 3, 2 or 23 (default 23)]
 #include <nanoflann.hpp>

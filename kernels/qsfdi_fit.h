@@ -65,9 +65,9 @@ static inline qs_ctx make_ctx(const pst_op *op)
 }
 
 /* omega2 = w / d^2 and 1 / d^2 (omega4 = omega2 / d^2 is their product) of a pair at scaled
- * squared distance d2 for the kernel K; 0 for degenerate pairs and pairs beyond the support. Returns 1 for a live pair, else 0,
- * as a double: arithmetic on it rather than selects of computed values, which GCC turns back
- * into branches (it may not speculate the division). The scalar pair (qs_pair) and the
+ * squared distance d2 for the kernel K; 0 for degenerate pairs and pairs beyond the support.
+ * Returns 1 for a live pair, else 0, as a double: arithmetic on it rather than selects of
+ * computed values, which GCC turns back into branches (it may not speculate the division). The scalar pair (qs_pair) and the
  * vectorised chunk (qs_omegas) both call this: their weights are bit-identical. */
 PST_KHOT double qs_omega(pst_kernel K, int D, double supp, double eps, double d2, double *o2,
                          double *id2)
@@ -193,7 +193,7 @@ PST_KHOT int qs_moments(const qs_ctx *k, int D, const double xi[3], double ih, c
     for (int64_t c0 = e0; c0 < e1; c0 += QS_CHUNK) {
         int n = (int)(e1 - c0 < QS_CHUNK ? e1 - c0 : QS_CHUNK);
         double r[3][QS_CHUNK], o2[QS_CHUNK], o4[QS_CHUNK];
-        live += qs_gather(k, D, xi, ih, idx + c0, n, r, o2, o4);
+        live += qs_gather(k, D, xi, ih, idx + c0, n, r, o2, o4); /* o4 = 1 / d^2 here */
 #pragma omp simd
         for (int c = 0; c < n; ++c)
             o4[c] *= o2[c]; /* omega4 = omega2 / d^2 */
