@@ -311,7 +311,7 @@ static int fix_mean_setup(shell_ctx *s, size_t n, char *err)
     PST_CHECK(!(all[1] > 0), PST_EINVAL, err, "petsc solve: fix_mean needs positive volumes");
     s->V = V;
     s->vsum = all[1];
-    s->c = -(all[0] > 0 && isfinite(all[0]) ? all[0] / (double)n : 1.0) / s->vsum;
+    s->c = pst_fix_mean_c(all[0], n, s->vsum);
     return PST_OK;
 }
 

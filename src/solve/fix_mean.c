@@ -43,8 +43,7 @@ int pst_fix_mean_update(pst_krylov *s, char *err)
         dsum += fabs(d[i]);
     pst_free(d);
     PST_CHECK(st != PST_OK, st, err, "fix_mean: the operator's diagonal failed");
-    double scale = dsum > 0 && isfinite(dsum) ? dsum / (double)n : 1.0;
-    s->c = -scale / s->vsum; /* sum V > 0: the volumes are checked positive */
+    s->c = pst_fix_mean_c(dsum, n, s->vsum); /* sum V > 0: the volumes are checked positive */
     return PST_OK;
 }
 

@@ -7,6 +7,8 @@
 #include "check.h"
 #include "operator.h"
 
+#include <math.h>
+
 /* A preconditioner the solver owns: its linop (z = M^-1 r, r and z of n values, never
  * aliased) and the function that frees the linop's context. */
 typedef struct {
@@ -176,6 +178,13 @@ int pst_fix_mean_wrap(pst_krylov *s, char *err);
 /* c again from the refreshed operator's diagonal (pst_krylov_refresh). */
 int pst_fix_mean_update(pst_krylov *s, char *err);
 double pst_fix_mean_finish(pst_krylov *s, double *u);
+/* That c from sum |diag L| over n rows and sum V > 0 (1 in place of a mean |diag L| that is 0
+ * or not finite); PETSc's solves (src/dist/petsc_ksp.c) take the same. */
+static inline double pst_fix_mean_c(double abs_diag_sum, size_t n, double vsum)
+{
+    return -(abs_diag_sum > 0 && isfinite(abs_diag_sum) ? abs_diag_sum / (double)n : 1.0) /
+           vsum;
+}
 
 /* The checks of a request that come before the set-up: the options (also the engine
  * operator's stored path) and, when b is not NULL, b and u finite (u only where it is an
