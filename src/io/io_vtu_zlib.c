@@ -11,9 +11,12 @@
 #include <string.h>
 #include <zlib.h>
 
-/* Take up to `want` bytes of the source; how many were there. */
+/* Take up to `want` bytes of the source; how many were there. A block of 0 compressed bytes
+ * (a file's word) takes none, with no buffer allocated yet (out NULL). */
 static size_t src_take(vtu_source *s, unsigned char *out, size_t want)
 {
+    if (want == 0)
+        return 0;
     if (s->b64)
         return vtu_b64_take(s->b64, out, want);
     size_t n = s->len - s->pos < want ? s->len - s->pos : want;
