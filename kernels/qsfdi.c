@@ -265,17 +265,17 @@ PST_ISA_DISPATCH static void qs_emit(const qs_ctx *k, const qs_data *d, int D, c
     }
 }
 
-/* The weights of 8 pairs (scaled offsets x, y, z) in the row with coefficients kap, lane by
- * lane through qs_omega and qs_weight_xyz: the emission's weights bit for bit. */
-PST_KHOT pst_v8 qs_lane_weights(pst_kernel K, int D, double supp, double eps, pst_v8 x,
-                                pst_v8 y, pst_v8 z, const double *kap)
+/* The weights of a block of 8 pairs (kernels/lanes.h) in the row with coefficients kap, lane
+ * by lane through qs_omega_q and qs_weight_xyz: the emission's weights bit for bit. */
+PST_KHOT pst_v8 qs_lane_weights(pst_kernel K, int D, double supp, double eps,
+                                const pst_lanes_block *b, const double *kap)
 {
-    pst_v8 d2 = x * x + y * y + (D == 3 ? z * z : pst_v8_splat(0.0)), a;
+    pst_v8 a;
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
         double o2, id2;
-        qs_omega(K, D, supp, eps, d2[l], &o2, &id2);
-        a[l] = qs_weight_xyz(D, x[l], y[l], z[l], o2, id2, kap);
+        qs_omega_q(K, D, supp, eps, b->d2[l], b->q[l], &o2, &id2);
+        a[l] = qs_weight_xyz(D, b->x[l], b->y[l], b->z[l], o2, id2, kap);
     }
     return a;
 }
@@ -295,8 +295,8 @@ PST_KHOT void qs_lane_rows(const qs_ctx *k, const qs_data *d, int D, pst_kernel 
             continue;
         const double *kap = d->kap + (size_t)QS_NK(D) * i;
         pst_lanes L = pst_lanes_row(&k->c, i, 1.0 / pst_h(&k->c, i));
-        PST_LANES_ROW(L, idx, off[i], off[i + 1], j, x, yy, z,
-                      qs_lane_weights(K, D, k->supp, k->c.pair_eps, x, yy, z, kap));
+        PST_LANES_ROW(L, D, idx, off[i], off[i + 1], b,
+                      qs_lane_weights(K, D, k->supp, k->c.pair_eps, b, kap));
         y[i] = pst_v8_sum(L.acc);
     }
 }

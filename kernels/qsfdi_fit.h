@@ -67,16 +67,24 @@ static inline qs_ctx make_ctx(const pst_op *op)
 /* omega2 = w / d^2 and 1 / d^2 (omega4 = omega2 / d^2 is their product) of a pair at scaled
  * squared distance d2 for the kernel K; 0 for degenerate pairs and pairs beyond the support.
  * Returns 1 for a live pair, else 0, as a double: arithmetic on it rather than selects of
- * computed values, which GCC turns back into branches (it may not speculate the division). The scalar pair (qs_pair) and the
- * vectorised chunk (qs_omegas) both call this: their weights are bit-identical. */
-PST_KHOT double qs_omega(pst_kernel K, int D, double supp, double eps, double d2, double *o2,
-                         double *id2)
+ * computed values, which GCC turns back into branches (it may not speculate the division).
+ * qs_omega_q takes q = sqrt(d2) computed (the matrix-free rows take it a block ahead,
+ * kernels/lanes.h). The scalar pair (qs_pair), the vectorised chunk (qs_omegas) and the lanes
+ * all call this: their weights are bit-identical. */
+PST_KHOT double qs_omega_q(pst_kernel K, int D, double supp, double eps, double d2, double q,
+                           double *o2, double *id2)
 {
-    double q = sqrt(d2), in = ((q > eps) & (q < supp)) ? 1.0 : 0.0;
+    double in = ((q > eps) & (q < supp)) ? 1.0 : 0.0;
     double w = pst_sph_shape(K, D, q, 0); /* the constant C_D cancels */
     *id2 = in / (d2 + (1.0 - in)); /* 1 / d^2, or 0 / (d^2 + 1) */
     *o2 = w * *id2;
     return in;
+}
+
+PST_KHOT double qs_omega(pst_kernel K, int D, double supp, double eps, double d2, double *o2,
+                         double *id2)
+{
+    return qs_omega_q(K, D, supp, eps, d2, sqrt(d2), o2, id2);
 }
 
 /* Scaled offset r = (x_j - x_I) / h_I and omega2, 1 / d^2 of a pair; degenerate pairs and

@@ -278,18 +278,18 @@ PST_KHOT void emit_t(const wls_ctx *k, size_t i, double *w, int D, int B, pst_ke
     }
 }
 
-/* The weights of 8 pairs (scaled offsets x, y, z) in the row with coefficients lam, lane by
- * lane with gather's kernel, cut and basis_weight_xyz: the emission's weights bit for bit. */
-PST_KHOT pst_v8 lane_weights(const wls_ctx *k, int D, int B, pst_kernel K, pst_v8 x, pst_v8 y,
-                             pst_v8 z, const double *lam)
+/* The weights of a block of 8 pairs (kernels/lanes.h) in the row with coefficients lam, lane
+ * by lane with gather's kernel, cut and basis_weight_xyz: the emission's weights bit for bit. */
+PST_KHOT pst_v8 lane_weights(const wls_ctx *k, int D, int B, pst_kernel K,
+                             const pst_lanes_block *b, const double *lam)
 {
     const double supp = pst_sph_support[K], eps = k->c.pair_eps;
-    pst_v8 q2 = x * x + y * y + (D == 3 ? z * z : pst_v8_splat(0.0)), a;
+    pst_v8 a;
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
-        double q = sqrt(q2[l]), w = pst_sph_shape(K, D, q, 0);
+        double q = b->q[l], w = pst_sph_shape(K, D, q, 0);
         w = ((q < supp) & (q > eps)) ? w : 0.0;
-        a[l] = basis_weight_xyz(D, B, w, x[l], y[l], z[l], lam);
+        a[l] = basis_weight_xyz(D, B, w, b->x[l], b->y[l], b->z[l], lam);
     }
     return a;
 }
@@ -306,8 +306,8 @@ PST_KHOT void lane_rows_t(const wls_ctx *k, size_t i0, size_t i1, double *y, int
             continue;
         const double *lam = k->d->lam + (size_t)nb * i;
         pst_lanes L = pst_lanes_row(&k->c, i, 1.0 / pst_h(&k->c, i));
-        PST_LANES_ROW(L, k->c.idx, k->c.off[i], k->c.off[i + 1], j, x, yy, z,
-                      lane_weights(k, D, B, K, x, yy, z, lam));
+        PST_LANES_ROW(L, D, k->c.idx, k->c.off[i], k->c.off[i + 1], b,
+                      lane_weights(k, D, B, K, b, lam));
         y[i] = pst_v8_sum(L.acc);
     }
 }
