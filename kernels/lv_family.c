@@ -210,24 +210,39 @@ typedef struct {
     double x[3][LV_CHUNK], d2[LV_CHUNK], a[LV_CHUNK], W[LV_CHUNK];
 } lv_chunk;
 
-/* a and W of a chunk for the constant kernel K (pair_geometry's arithmetic). */
-PST_KHOT void chunk_kernel(pst_kernel K, int D, int needW, int n, const double *d,
-                           const double *ht, double eps, lv_chunk *ch)
+/* The distances d = sqrt(d2) of a chunk, and a and W for the constant kernel K
+ * (pair_geometry's arithmetic), h~ of pair c at ht[c * hs]. The loop waits on the divider
+ * (the sqrt and the division by d): the sqrt runs here, beside the kernel's multiplications,
+ * rather than in a loop of its own, and with hs = 0 (one h in the cloud) the kernel's 1 / h~
+ * and its powers are computed once per chunk instead of once per pair (the same values). */
+PST_KHOT void chunk_kernel(pst_kernel K, int D, int needW, int n, double *d,
+                           const double *ht, int hs, double eps, lv_chunk *ch)
 {
 #pragma omp simd
     for (int c = 0; c < n; ++c) {
-        double av = -pst_sph_dw(K, D, d[c], ht[c]) / d[c];
-        ch->a[c] = d[c] > eps * ht[c] ? av : 0.0;
+        double dc = sqrt(ch->d2[c]), av = -pst_sph_dw(K, D, dc, ht[c * hs]) / dc;
+        ch->a[c] = dc > eps * ht[c * hs] ? av : 0.0;
+        d[c] = dc;
     }
     if (needW)
 #pragma omp simd
         for (int c = 0; c < n; ++c) {
-            double wv = pst_sph_w(K, D, d[c], ht[c]);
-            ch->W[c] = d[c] > eps * ht[c] ? wv : 0.0;
+            double wv = pst_sph_w(K, D, d[c], ht[c * hs]);
+            ch->W[c] = d[c] > eps * ht[c * hs] ? wv : 0.0;
         }
 }
 
-/* Separate loops, so that the sqrt (the library is built without math errno) and the kernel
+/* chunk_kernel with the kernel and the stride of h~ as constants. */
+PST_KHOT void chunk_kernel_hs(pst_kernel K, int D, int needW, int n, double *d,
+                              const double *ht, int hs, double eps, lv_chunk *ch)
+{
+    if (hs)
+        chunk_kernel(K, D, needW, n, d, ht, 1, eps, ch);
+    else
+        chunk_kernel(K, D, needW, n, d, ht, 0, eps, ch);
+}
+
+/* Separate loops, so that the sqrt (the library is built without math errno) with the kernel
  * (one loop per kernel, the switch outside) vectorise. The offsets come from the positions,
  * or with L (the matrix-free apply) from its packed rows (pst_lanes_gather), u_J - u_I with
  * them into du. */
@@ -247,22 +262,24 @@ PST_KHOT void chunk_geometry(const lv_ctx *k, int D, int needW, size_t i, const 
             d2 += ch->x[b][c] * ch->x[b][c];
         ch->d2[c] = d2;
     }
-    if (k->c.h)
+    int hs = k->c.h != NULL;
+    if (hs)
         for (int c = 0; c < n; ++c)
             ht[c] = 0.5 * (hi + k->c.h[idx[c]]);
     else
-        for (int c = 0; c < n; ++c)
-            ht[c] = 0.5 * (hi + k->c.h_uniform);
-    for (int c = 0; c < n; ++c)
-        d[c] = sqrt(ch->d2[c]);
+        ht[0] = 0.5 * (hi + k->c.h_uniform);
     const double eps = k->c.pair_eps;
     switch (k->c.kernel) {
-    case PST_KERNEL_CUBIC: chunk_kernel(PST_KERNEL_CUBIC, D, needW, n, d, ht, eps, ch); break;
-    case PST_KERNEL_QUINTIC: chunk_kernel(PST_KERNEL_QUINTIC, D, needW, n, d, ht, eps, ch); break;
-    case PST_KERNEL_WENDLAND_C2:
-        chunk_kernel(PST_KERNEL_WENDLAND_C2, D, needW, n, d, ht, eps, ch);
+    case PST_KERNEL_CUBIC:
+        chunk_kernel_hs(PST_KERNEL_CUBIC, D, needW, n, d, ht, hs, eps, ch);
         break;
-    default: chunk_kernel(PST_KERNEL_WENDLAND_C4, D, needW, n, d, ht, eps, ch); break;
+    case PST_KERNEL_QUINTIC:
+        chunk_kernel_hs(PST_KERNEL_QUINTIC, D, needW, n, d, ht, hs, eps, ch);
+        break;
+    case PST_KERNEL_WENDLAND_C2:
+        chunk_kernel_hs(PST_KERNEL_WENDLAND_C2, D, needW, n, d, ht, hs, eps, ch);
+        break;
+    default: chunk_kernel_hs(PST_KERNEL_WENDLAND_C4, D, needW, n, d, ht, hs, eps, ch); break;
     }
 }
 
