@@ -117,14 +117,14 @@ PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int
         b->q[l] = sqrt(b->d2[l]);
 }
 
-/* The pairs idx[e0 .. e1) of row L (dimension D) into L.acc: for each block of 8 (b, a
- * const pst_lanes_block *), `weights`, an expression in b, times u_J - u_I. Each block is
- * taken (its loads, transposes and sqrt) one block ahead of the arithmetic that uses it: the
- * latency of the loads and of the sqrt then overlaps the previous block's weights, where in
- * program order the core's scheduler did not reach that far (3D 10^6, 1 and 2 threads:
- * 13-21 % off the qsfdi, lpmps and lsmps applies; two blocks ahead gained nothing more). The
- * sums stay in lane and block order: the same bits as one block at a time. */
-#define PST_LANES_ROW(L, D, idx, e0, e1, b, weights)                                           \
+/* The pairs idx[e0 .. e1) of row L (dimension D), 8 at a time: `step`, a statement in b (a
+ * const pst_lanes_block *), for each block in order. Each block is taken (its loads,
+ * transposes and sqrt) one block ahead of the step that uses it: the latency of the loads and
+ * of the sqrt then overlaps the previous block's arithmetic, where in program order the core's
+ * scheduler did not reach that far (3D 10^6, 1 and 2 threads: 13-21 % off the qsfdi, lpmps
+ * and lsmps applies; two blocks ahead gained nothing more). The same operations in the same
+ * order as one block at a time: the same bits. */
+#define PST_LANES_EACH(L, D, idx, e0, e1, b, step)                                             \
     do {                                                                                       \
         int64_t pst_e_ = (e0), pst_n_ = (e1);                                                  \
         uint32_t pst_pa_[PST_LANES], pst_pb_[PST_LANES];                                       \
@@ -136,7 +136,7 @@ PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int
                 pst_lanes_take(&(L), D, idx, pst_e_ + PST_LANES, pst_n_, pst_pb_, &pst_b_);    \
             {                                                                                  \
                 const pst_lanes_block *b = &pst_a_;                                            \
-                (L).acc += (weights) * pst_a_.du;                                              \
+                step;                                                                          \
             }                                                                                  \
             if (pst_e_ + PST_LANES >= pst_n_)                                                  \
                 break;                                                                         \
@@ -144,9 +144,14 @@ PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int
                 pst_lanes_take(&(L), D, idx, pst_e_ + 2 * PST_LANES, pst_n_, pst_pa_, &pst_a_); \
             {                                                                                  \
                 const pst_lanes_block *b = &pst_b_;                                            \
-                (L).acc += (weights) * pst_b_.du;                                              \
+                step;                                                                          \
             }                                                                                  \
         }                                                                                      \
     } while (0)
+
+/* The pairs idx[e0 .. e1) of row L (dimension D) into L.acc: for each block of 8 (b),
+ * `weights`, an expression in b, times u_J - u_I (PST_LANES_EACH). */
+#define PST_LANES_ROW(L, D, idx, e0, e1, b, weights)                                           \
+    PST_LANES_EACH(L, D, idx, e0, e1, b, (L).acc += (weights) * b->du)
 
 #endif /* PSTENCIL_LANES_H */

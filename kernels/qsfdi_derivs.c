@@ -31,18 +31,17 @@ typedef struct {
     pst_v8 x, y, z, xx2, yy2, zz2, xy2, xz2, yz2, xx4, yy4, zz4, xy4, xz4, yz4;
 } qs_dsums;
 
-/* The data moments of 8 pairs (the block of idx at e) added to *s: qs_data_moments' terms. */
-PST_KHOT void qs_data_block(const qs_ctx *k, int D, pst_kernel K, const pst_lanes *L,
-                            const uint32_t *idx, int64_t e, int64_t e1, qs_dsums *s)
+/* The data moments of a block of 8 pairs (kernels/lanes.h) added to *s: qs_data_moments'
+ * terms. */
+PST_KHOT void qs_data_block(const qs_ctx *k, int D, pst_kernel K, const pst_lanes_block *b,
+                            qs_dsums *s)
 {
-    uint32_t pad[PST_LANES];
-    pst_v8 x, y, z, du, o2 = pst_v8_splat(0.0), o4 = o2;
-    pst_lanes_pairs(L, idx, e, e1, pad, &x, &y, &z, &du);
-    const pst_v8 d2 = x * x + y * y + (D == 3 ? z * z : pst_v8_splat(0.0));
+    const pst_v8 x = b->x, y = b->y, z = b->z, du = b->du;
+    pst_v8 o2 = pst_v8_splat(0.0), o4 = o2;
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
         double a2, id2;
-        qs_omega(K, D, k->supp, k->c.pair_eps, d2[l], &a2, &id2);
+        qs_omega_q(K, D, k->supp, k->c.pair_eps, b->d2[l], b->q[l], &a2, &id2);
         o2[l] = a2;
         o4[l] = a2 * id2;
     }
@@ -73,10 +72,9 @@ PST_KHOT void qs_data_block(const qs_ctx *k, int D, pst_kernel K, const pst_lane
 /* The data moments of row i for u (op->xyzu holds it, pst_op_gradient / _hessian wrote it):
  * du2 = sum omega2 m (u_j - u_i) (the D linear then the quadratic monomials, in the order of
  * (r, r2s, r2c)) and du4 = sum omega4 (r2s, r2c) (u_j - u_i), 8 neighbours at a time from the
- * packed rows (kernels/lanes.h) with qs_omega lane by lane, into 8 lanes per sum: the same
- * sums for every ISA level and thread count. Per neighbour a sqrt, a division, ~19 flops of
- * kernel and 2 per each of the 15 (3D) sums, in vector lanes; two blocks per step, whose
- * geometry and kernel the core overlaps (their sums go in block order). */
+ * packed rows (kernels/lanes.h, each block taken one ahead) with qs_omega_q lane by lane,
+ * into 8 lanes per sum: the same sums for every ISA level and thread count. Per neighbour a
+ * sqrt, a division, ~19 flops of kernel and 2 per each of the 15 (3D) sums, in vector lanes. */
 PST_KHOT void qs_data_moments(const qs_ctx *k, int D, pst_kernel K, size_t i, double ih,
                               const int64_t *off, const uint32_t *idx, double *du2, double *du4)
 {
@@ -84,13 +82,7 @@ PST_KHOT void qs_data_moments(const qs_ctx *k, int D, pst_kernel K, size_t i, do
     qs_dsums s = {zero, zero, zero, zero, zero, zero, zero, zero,
                   zero, zero, zero, zero, zero, zero, zero};
     pst_lanes L = pst_lanes_row(&k->c, i, ih);
-    int64_t e = off[i];
-    for (; e + 2 * PST_LANES <= off[i + 1]; e += 2 * PST_LANES) {
-        qs_data_block(k, D, K, &L, idx, e, off[i + 1], &s);
-        qs_data_block(k, D, K, &L, idx, e + PST_LANES, off[i + 1], &s);
-    }
-    for (; e < off[i + 1]; e += PST_LANES)
-        qs_data_block(k, D, K, &L, idx, e, off[i + 1], &s);
+    PST_LANES_EACH(L, D, idx, off[i], off[i + 1], b, qs_data_block(k, D, K, b, &s));
     const pst_v8 v2[9] = {s.x, s.y, s.z, s.xx2, s.yy2, s.zz2, s.xy2, s.xz2, s.yz2};
     const pst_v8 v4[6] = {s.xx4, s.yy4, s.zz4, s.xy4, s.xz4, s.yz4};
     for (int a = 0; a < D; ++a)
