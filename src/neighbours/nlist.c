@@ -344,12 +344,14 @@ int pst_nlist_check_cloud(const pst_cloud *c, double support, char *err)
     return PST_OK;
 }
 
-/* An empty list of n rows (offsets only; the index too when n < 2, which has no pairs). */
+/* A list of n rows: its offsets, zero when n < 2 (with the index: no pairs), else unset (the
+ * build writes every one, in parallel). */
 static int new_list(pst_nlist **out, size_t n, double support, char *err)
 {
     pst_nlist *nl = calloc(1, sizeof *nl);
     if (nl)
-        nl->offset = pst_calloc(n + 1, sizeof *nl->offset);
+        nl->offset = n < 2 ? pst_calloc(n + 1, sizeof *nl->offset)
+                           : pst_alloc((n + 1) * sizeof *nl->offset);
     if (nl && n < 2)
         nl->index = pst_alloc(0);
     if (!nl || !nl->offset || (n < 2 && !nl->index)) {
@@ -484,6 +486,8 @@ static int fill_list(pst_nlist *nl, const pst_cloud *c, ctx *k, build_buffers *b
         size_t c0 = first_cell(g, (size_t)t * n / (size_t)nt);
         size_t c1 = t + 1 == nt ? g->ncells : first_cell(g, (size_t)(t + 1) * n / (size_t)nt);
         uint32_t *cur = bb->cnts + (size_t)t * n;
+        for (int u = t; u < nth; u += nt) /* zeroed in parallel, not by one thread before */
+            memset(bb->cnts + (size_t)u * n, 0, n * sizeof *bb->cnts);
         pass(k, c0, c1, bb->cl + (size_t)t * maxcand, cur);
 #pragma omp barrier
         /* row lengths; thread u's counts of a row become its cursor: the sum of the counts of
@@ -548,7 +552,7 @@ int pst_nlist_build_with(pst_nlist **out, const pst_cloud *c, double support,
     }
     int nth = omp_get_max_threads();
     build_buffers bb = {.copy = pst_alloc(n * (size_t)(c->dim + (c->h != NULL)) * sizeof(double)),
-                        .cnts = pst_calloc((size_t)nth * n, sizeof(uint32_t)),
+                        .cnts = pst_alloc((size_t)nth * n * sizeof(uint32_t)),
                         .bsum = calloc(SCAN_BLOCKS, sizeof(int64_t))};
     if (!bb.copy || !bb.cnts || !bb.bsum) {
         status = PST_ENOMEM;
