@@ -23,9 +23,19 @@
 
 typedef double pst_v8 __attribute__((vector_size(64)));
 typedef double pst_v4 __attribute__((vector_size(32)));
+typedef double pst_v2 __attribute__((vector_size(16)));
 typedef int64_t pst_v8i __attribute__((vector_size(64))); /* a comparison's lanes: 0 or -1 */
 
-PST_V8_INLINE pst_v8 pst_v8_splat(double a) { return (pst_v8){a, a, a, a, a, a, a, a}; }
+/* Vectors are built as shuffles of short initialisers, never as an initialiser of 8 elements:
+ * in the AVX-512 clones of a target_clones function (src/core/isa.h) GCC 12 compiles that to
+ * a chain of 8 dependent masked broadcasts, one per lane, a splat included. */
+
+/* a in every lane: one broadcast (a shuffle of {a, a} went through the stack). */
+PST_V8_INLINE pst_v8 pst_v8_splat(double a)
+{
+    pst_v4 v = {a};
+    return __builtin_shufflevector(v, v, 0, 0, 0, 0, 0, 0, 0, 0);
+}
 
 /* pst_min_image (cloud_layout.h) in every lane: the same operations, so the same bits. */
 PST_V8_INLINE pst_v8 pst_v8_min_image(pst_v8 d, double P, double hP)
@@ -35,10 +45,27 @@ PST_V8_INLINE pst_v8 pst_v8_min_image(pst_v8 d, double P, double hP)
     return d;
 }
 
-/* The lanes' sum in one fixed order (kernels/wls.h's pst_dot_sum has the same). */
+/* The lanes' sum in one fixed order, ((a0 + a4) + (a2 + a6)) + ((a1 + a5) + (a3 + a7))
+ * (kernels/wls.h's pst_dot_sum has the same), as halves added in registers: element reads
+ * had GCC store the vector and load its lanes back, a stalled store-to-load forwarding per
+ * row (a fifth of a 17-pair row's stored apply). */
 PST_V8_INLINE double pst_v8_sum(pst_v8 a)
 {
-    return ((a[0] + a[4]) + (a[2] + a[6])) + ((a[1] + a[5]) + (a[3] + a[7]));
+    pst_v4 s =
+        __builtin_shufflevector(a, a, 0, 1, 2, 3) + __builtin_shufflevector(a, a, 4, 5, 6, 7);
+    pst_v2 t = __builtin_shufflevector(s, s, 0, 1) + __builtin_shufflevector(s, s, 2, 3);
+    return t[0] + t[1];
+}
+
+/* a[j[0]], ..., a[j[7]], as a tree of pairs (a loop of element stores also became a chain of
+ * masked merges). */
+PST_V8_INLINE pst_v8 pst_v8_gather(const double *a, const uint32_t *j)
+{
+    pst_v2 p0 = {a[j[0]], a[j[1]]}, p1 = {a[j[2]], a[j[3]]}, p2 = {a[j[4]], a[j[5]]},
+           p3 = {a[j[6]], a[j[7]]};
+    return __builtin_shufflevector(__builtin_shufflevector(p0, p1, 0, 1, 2, 3),
+                                   __builtin_shufflevector(p2, p3, 0, 1, 2, 3), 0, 1, 2, 3, 4, 5,
+                                   6, 7);
 }
 
 /* Row j of an array of rows of 4 doubles (32 bytes each). */

@@ -220,24 +220,44 @@ int pst_op_store_with(pst_op *op, const pst_op_store_opts *o, char *err)
 
 int pst_op_store(pst_op *op) { return pst_op_store_with(op, NULL, NULL); }
 
+/* w_IJ (u_J - u_I) of the 8 pattern entries from k (double weights wd, or float wf widened
+ * exactly), with uiv = u_I in every lane. */
+static inline __attribute__((always_inline)) pst_v8
+block_terms(int single, const double *wd, const float *wf, const uint32_t *idx, const double *u,
+            int64_t k, pst_v8 uiv)
+{
+    pst_v8 wv;
+    if (single)
+        for (int l = 0; l < PST_LANES; ++l)
+            wv[l] = (double)wf[k + l];
+    else
+        memcpy(&wv, wd + k, sizeof wv);
+    return wv * (pst_v8_gather(u, idx + k) - uiv);
+}
+
 /* Rows [i0, i1) of the stored apply from the double weights wd or, with single, the float
  * weights wf (a float weight is widened exactly, so the float store differs only by its
- * weights' rounding, 2^-24 relative). 8 pairs at a time (src/core/lanes8.h): the weights as
- * one vector load, u_J as element loads, times u_J - u_I into 8 partial sums; the row's last
- * pairs (fewer than 8) go to lanes 0, 1, ... as scalars: neighbour c in lane c mod 8, the lanes
- * combined in pst_v8_sum's order, so the sum is the same for every ISA and thread count.
+ * weights' rounding, 2^-24 relative); end = off[n], the pattern's length. 8 pairs at a time
+ * (src/core/lanes8.h): the weights as one vector load, u_J as element loads, times u_J - u_I
+ * into 8 partial sums, neighbour c in lane c mod 8, the lanes combined in pst_v8_sum's order,
+ * so the sum is the same for every ISA and thread count. The row's last pairs (fewer than 8)
+ * are one more block of 8 whose lanes past the row's end (the next row's entries) are kept
+ * out of the sums by a select: the same bits as adding the last pairs one by one, which only
+ * the pattern's last row still does (no 8 entries after it), without a scalar loop whose
+ * length changes from row to row (2D rows of 17 pairs).
  * Bound: per-core loads at 2 threads here (8 index loads, 8 element loads merged into one
- * vector, one weight load per 8 pairs), near the memory's bandwidth: measured 3D qsfdi, 2
- * threads, best of 21 beside a triad of the same bytes (2026-12-04, bench/README.md): 0.77-0.83
- * of the triad, against 0.67-0.72 for the simd reduction it replaces (whose partial sums GCC
- * kept on the stack), lv (55 pairs per row) 0.55-0.58 against 0.50-0.57. Dirichlet rows (their
- * stored weights are zeros) are the identity and skip the stream: a boundary layer is 6 % of
- * the rows of a 100^3 cloud and 17 % of a 33^3 one. */
+ * vector, one weight load per 8 pairs), near the memory's bandwidth: measured beside a triad
+ * of the same bytes (bench_stored, bench/README.md) 2026-12-05, medians of 9, 1 / 2 threads:
+ * 3D qsfdi (187 pairs per row) 0.99 / 0.87, 3D lv (55) 0.92 / 0.92, 2D qsfdi (40) 0.95 / 0.91,
+ * 2D lv (17) 0.62 / 0.62. Dirichlet rows (their stored weights are zeros) are the identity and
+ * skip the stream: a boundary layer is 6 % of the rows of a 100^3 cloud and 17 % of a 33^3
+ * one. */
 static inline __attribute__((always_inline)) void
 stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *wd,
             const float *wf, const uint8_t *kind, const double *u, double *y, size_t i0,
-            size_t i1)
+            size_t i1, int64_t end)
 {
+    const pst_v8 lane_no = {0, 1, 2, 3, 4, 5, 6, 7};
     for (size_t i = i0; i < i1; ++i) {
         if (kind[i] == PST_DIRICHLET) {
             y[i] = u[i];
@@ -247,35 +267,33 @@ stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *w
         const pst_v8 uiv = pst_v8_splat(ui);
         pst_v8 acc = pst_v8_splat(0.0);
         int64_t k = off[i];
-        for (; k + PST_LANES <= off[i + 1]; k += PST_LANES) {
-            pst_v8 wv, uj;
-            if (single)
-                for (int l = 0; l < PST_LANES; ++l)
-                    wv[l] = (double)wf[k + l];
-            else
-                memcpy(&wv, wd + k, sizeof wv);
-            for (int l = 0; l < PST_LANES; ++l)
-                uj[l] = u[idx[k + l]];
-            acc += wv * (uj - uiv);
+        for (; k + PST_LANES <= off[i + 1]; k += PST_LANES)
+            acc += block_terms(single, wd, wf, idx, u, k, uiv);
+        int64_t rest = off[i + 1] - k;
+        if (rest > 0 && k + PST_LANES <= end) {
+            pst_v8 sum = acc + block_terms(single, wd, wf, idx, u, k, uiv);
+            pst_v8i keep = lane_no < pst_v8_splat((double)rest);
+            acc = (pst_v8)(((pst_v8i)sum & keep) | ((pst_v8i)acc & ~keep));
+        } else {
+            for (int l = 0; k < off[i + 1]; ++k, ++l)
+                acc[l] += (single ? (double)wf[k] : wd[k]) * (u[idx[k]] - ui);
         }
-        for (int l = 0; k < off[i + 1]; ++k, ++l)
-            acc[l] += (single ? (double)wf[k] : wd[k]) * (u[idx[k]] - ui);
         y[i] = pst_v8_sum(acc);
     }
 }
 
 PST_ISA_DISPATCH static void rows_double(const int64_t *off, const uint32_t *idx,
                                          const double *w, const uint8_t *kind, const double *u,
-                                         double *y, size_t i0, size_t i1)
+                                         double *y, size_t i0, size_t i1, size_t n)
 {
-    stored_rows(off, idx, 0, w, NULL, kind, u, y, i0, i1);
+    stored_rows(off, idx, 0, w, NULL, kind, u, y, i0, i1, off[n]);
 }
 
 PST_ISA_DISPATCH static void rows_float(const int64_t *off, const uint32_t *idx, const float *w,
                                         const uint8_t *kind, const double *u, double *y,
-                                        size_t i0, size_t i1)
+                                        size_t i0, size_t i1, size_t n)
 {
-    stored_rows(off, idx, 1, NULL, w, kind, u, y, i0, i1);
+    stored_rows(off, idx, 1, NULL, w, kind, u, y, i0, i1, off[n]);
 }
 
 #define STORED_BLOCK 1024 /* rows per call of a worker: its dispatch costs < 0.1 % of a block */
@@ -293,9 +311,9 @@ int pst_op_apply_stored(const pst_op *op, const double *u, double *y)
     for (size_t b = 0; b < nb; ++b) {
         size_t i0 = b * STORED_BLOCK, i1 = i0 + STORED_BLOCK < op->n ? i0 + STORED_BLOCK : op->n;
         if (op->w)
-            rows_double(op->poff, op->pidx, op->w, op->kind, u, y, i0, i1);
+            rows_double(op->poff, op->pidx, op->w, op->kind, u, y, i0, i1, op->n);
         else
-            rows_float(op->poff, op->pidx, op->w32, op->kind, u, y, i0, i1);
+            rows_float(op->poff, op->pidx, op->w32, op->kind, u, y, i0, i1, op->n);
     }
     pst_op_record_apply(op, t0);
     return PST_OK;
