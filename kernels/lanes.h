@@ -98,9 +98,9 @@ PST_KHOT void pst_lanes_dot(int n, const double *t, const double *du, double acc
         acc[c % PST_LANES] += t[c] * du[c];
 }
 
-/* A block of 8 pairs as the matrix-free rows take it: the scaled offsets x, y, z, u_J - u_I,
- * the squared scaled distance d2 (x x + y y [+ z z], the schemes' own order) and its square
- * root q. */
+/* A block of 8 pairs as the matrix-free rows (and qsfdi's data moments) take it: the scaled
+ * offsets x, y, z, u_J - u_I, the squared scaled distance d2 (x x + y y [+ z z], the schemes'
+ * own order) and its square root q. */
 typedef struct {
     pst_v8 x, y, z, du, d2, q;
 } pst_lanes_block;
