@@ -235,6 +235,20 @@ block_terms(int single, const double *wd, const float *wf, const uint32_t *idx, 
     return wv * (pst_v8_gather(u, idx + k) - uiv);
 }
 
+/* acc + terms in the lanes l with from + l < len, acc in the others (by a select, so the
+ * lanes past a row's end add nothing, not even a zero). */
+static inline __attribute__((always_inline)) pst_v8 add_lanes_below(pst_v8 acc, pst_v8 terms,
+                                                                  double from, pst_v8 len)
+{
+    const pst_v8 lane_no = {0, 1, 2, 3, 4, 5, 6, 7};
+    pst_v8 sum = acc + terms;
+    pst_v8i keep = lane_no + pst_v8_splat(from) < len;
+    return (pst_v8)(((pst_v8i)sum & keep) | ((pst_v8i)acc & ~keep));
+}
+
+/* Rows of at most this many pairs (three blocks) are always taken as three blocks of 8. */
+#define SHORT_ROW (3 * PST_LANES)
+
 /* Rows [i0, i1) of the stored apply from the double weights wd or, with single, the float
  * weights wf (a float weight is widened exactly, so the float store differs only by its
  * weights' rounding, 2^-24 relative); end = off[n], the pattern's length. 8 pairs at a time
@@ -243,21 +257,24 @@ block_terms(int single, const double *wd, const float *wf, const uint32_t *idx, 
  * so the sum is the same for every ISA and thread count. The row's last pairs (fewer than 8)
  * are one more block of 8 whose lanes past the row's end (the next row's entries) are kept
  * out of the sums by a select: the same bits as adding the last pairs one by one, which only
- * the pattern's last row still does (no 8 entries after it), without a scalar loop whose
- * length changes from row to row (2D rows of 17 pairs).
- * Bound: per-core loads at 2 threads here (8 index loads, 8 element loads merged into one
- * vector, one weight load per 8 pairs), near the memory's bandwidth: measured beside a triad
- * of the same bytes (bench_stored, bench/README.md) 2026-12-05, medians of 9, 1 / 2 threads:
- * 3D qsfdi (187 pairs per row) 0.99 / 0.87, 3D lv (55) 0.92 / 0.92, 2D qsfdi (40) 0.95 / 0.91,
- * 2D lv (17) 0.62 / 0.62. Dirichlet rows (their stored weights are zeros) are the identity and
- * skip the stream: a boundary layer is 6 % of the rows of a 100^3 cloud and 17 % of a 33^3
- * one. */
+ * the pattern's last row still does (no 8 entries after it). A short row (<= SHORT_ROW pairs:
+ * the ~17-pair 2D rows of the LV family) is always three such blocks, whatever its length, so
+ * its loop has one trip count: rows of 13 to 22 pairs made the exit of the loop over full
+ * blocks unpredictable, which cost more than the loads of the lanes past the row (2D lv 10^6,
+ * alternated: 6-17 % less time at 1 thread, 6-14 % at 2, the same bits; a fixed count for
+ * longer rows, 8 blocks for 3D lv, gained nothing). Bound: per-core loads at 2 threads here
+ * (8 index loads, 8 element loads merged into one vector, one weight load per 8 pairs), near
+ * the memory's bandwidth: measured beside a triad of the same bytes (bench_stored,
+ * bench/README.md) 2026-12-05, medians of 9, two runs, 1 / 2 threads: 3D qsfdi (187 pairs per
+ * row) 0.90-0.94 / 0.75-0.91, 3D lv (55) 0.92-1.0 / 0.77-0.98, 2D qsfdi (40) 0.99-1.0 /
+ * 0.73-0.99, 2D lv (17) 0.66-0.70 / 0.67-0.85. Dirichlet rows (their stored weights are zeros) are the
+ * identity and skip the stream: a boundary layer is 6 % of the rows of a 100^3 cloud and 17 %
+ * of a 33^3 one. */
 static inline __attribute__((always_inline)) void
 stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *wd,
             const float *wf, const uint8_t *kind, const double *u, double *y, size_t i0,
             size_t i1, int64_t end)
 {
-    const pst_v8 lane_no = {0, 1, 2, 3, 4, 5, 6, 7};
     for (size_t i = i0; i < i1; ++i) {
         if (kind[i] == PST_DIRICHLET) {
             y[i] = u[i];
@@ -266,17 +283,22 @@ stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *w
         const double ui = u[i];
         const pst_v8 uiv = pst_v8_splat(ui);
         pst_v8 acc = pst_v8_splat(0.0);
-        int64_t k = off[i];
-        for (; k + PST_LANES <= off[i + 1]; k += PST_LANES)
-            acc += block_terms(single, wd, wf, idx, u, k, uiv);
-        int64_t rest = off[i + 1] - k;
-        if (rest > 0 && k + PST_LANES <= end) {
-            pst_v8 sum = acc + block_terms(single, wd, wf, idx, u, k, uiv);
-            pst_v8i keep = lane_no < pst_v8_splat((double)rest);
-            acc = (pst_v8)(((pst_v8i)sum & keep) | ((pst_v8i)acc & ~keep));
+        int64_t k = off[i], len = off[i + 1] - k;
+        if (len <= SHORT_ROW && k + SHORT_ROW <= end) {
+            const pst_v8 lenv = pst_v8_splat((double)len);
+            for (int b = 0; b < SHORT_ROW; b += PST_LANES)
+                acc = add_lanes_below(acc, block_terms(single, wd, wf, idx, u, k + b, uiv), b,
+                                      lenv);
         } else {
-            for (int l = 0; k < off[i + 1]; ++k, ++l)
-                acc[l] += (single ? (double)wf[k] : wd[k]) * (u[idx[k]] - ui);
+            for (; k + PST_LANES <= off[i + 1]; k += PST_LANES)
+                acc += block_terms(single, wd, wf, idx, u, k, uiv);
+            int64_t rest = off[i + 1] - k;
+            if (rest > 0 && k + PST_LANES <= end)
+                acc = add_lanes_below(acc, block_terms(single, wd, wf, idx, u, k, uiv), 0,
+                                      pst_v8_splat((double)rest));
+            else
+                for (int l = 0; k < off[i + 1]; ++k, ++l)
+                    acc[l] += (single ? (double)wf[k] : wd[k]) * (u[idx[k]] - ui);
         }
         y[i] = pst_v8_sum(acc);
     }
