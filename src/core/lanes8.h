@@ -26,9 +26,10 @@ typedef double pst_v4 __attribute__((vector_size(32)));
 typedef double pst_v2 __attribute__((vector_size(16)));
 typedef int64_t pst_v8i __attribute__((vector_size(64))); /* a comparison's lanes: 0 or -1 */
 
-/* Vectors are built as shuffles of short initialisers, never as an initialiser of 8 elements:
- * in the AVX-512 clones of a target_clones function (src/core/isa.h) GCC 12 compiles that to
- * a chain of 8 dependent masked broadcasts, one per lane, a splat included. */
+/* Vectors of run-time values are built as shuffles of short initialisers, never as an
+ * initialiser of 8 elements: in the AVX-512 clones of a target_clones function
+ * (src/core/isa.h) GCC 12 compiles that to a chain of 8 dependent masked broadcasts, one per
+ * lane, a splat included (a constant initialiser is one load). */
 
 /* a in every lane: one broadcast (a shuffle of {a, a} went through the stack). */
 PST_V8_INLINE pst_v8 pst_v8_splat(double a)

@@ -258,18 +258,16 @@ static inline __attribute__((always_inline)) pst_v8 add_lanes_below(pst_v8 acc, 
  * are one more block of 8 whose lanes past the row's end (the next row's entries) are kept
  * out of the sums by a select: the same bits as adding the last pairs one by one, which only
  * the pattern's last row still does (no 8 entries after it). A short row (<= SHORT_ROW pairs:
- * the ~17-pair 2D rows of the LV family) is always three such blocks, whatever its length, so
- * its loop has one trip count: rows of 13 to 22 pairs made the exit of the loop over full
- * blocks unpredictable, which cost more than the loads of the lanes past the row (2D lv 10^6,
- * alternated: 6-17 % less time at 1 thread, 6-14 % at 2, the same bits; a fixed count for
- * longer rows, 8 blocks for 3D lv, gained nothing). Bound: per-core loads at 2 threads here
- * (8 index loads, 8 element loads merged into one vector, one weight load per 8 pairs), near
- * the memory's bandwidth: measured beside a triad of the same bytes (bench_stored,
- * bench/README.md) 2026-12-05, medians of 9, two runs, 1 / 2 threads: 3D qsfdi (187 pairs per
- * row) 0.90-0.94 / 0.75-0.91, 3D lv (55) 0.92-1.0 / 0.77-0.98, 2D qsfdi (40) 0.99-1.0 /
- * 0.73-0.99, 2D lv (17) 0.66-0.70 / 0.67-0.85. Dirichlet rows (their stored weights are zeros) are the
- * identity and skip the stream: a boundary layer is 6 % of the rows of a 100^3 cloud and 17 %
- * of a 33^3 one. */
+ * the ~17-pair 2D rows of the LV family) is always three such blocks, so that its loop has
+ * one trip count: with rows of 13 to 22 pairs the exit of the loop over full blocks was
+ * unpredictable, which cost more than the loads of the lanes past the row (2D lv: 6-17 % off
+ * the apply; bench/README.md, "short rows as three blocks").
+ * Bound: per-core loads (8 index loads, 8 element loads merged into one vector, one weight
+ * load per 8 pairs), near the memory's bandwidth: beside a triad of the same bytes
+ * (bench_stored, 2026-12-05, 1 / 2 threads) 0.75-1.0 for the 3D rows of qsfdi and lv and the
+ * 2D rows of qsfdi, 0.59-0.70 / 0.67-0.85 for 2D lv, whose row is mostly its own
+ * instructions. Dirichlet rows (their stored weights are zeros) are the identity and skip the
+ * stream: a boundary layer is 6 % of the rows of a 100^3 cloud and 17 % of a 33^3 one. */
 static inline __attribute__((always_inline)) void
 stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *wd,
             const float *wf, const uint8_t *kind, const double *u, double *y, size_t i0,
