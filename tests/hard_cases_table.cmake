@@ -1,5 +1,5 @@
-# test_stability_table: docs/stability.md must hold exactly `hard_cases --markdown` between the
-# lines <!-- hard-cases:begin --> and <!-- hard-cases:end -->.
+# test_hard_cases: every check of `hard_cases --markdown` passes (exit 0), and docs/stability.md
+# holds exactly its output between the lines <!-- hard-cases:begin --> and <!-- hard-cases:end -->.
 # cmake -DEXE=path/to/hard_cases -DDOC=docs/stability.md -P hard_cases_table.cmake
 execute_process(COMMAND ${EXE} --markdown OUTPUT_VARIABLE table ERROR_VARIABLE log
                 RESULT_VARIABLE rc)
