@@ -111,6 +111,18 @@ pst_cloud *scene_cloud(int dim)
     return c;
 }
 
+// pstencil's list of c (radius kSupport h); NULL after a message.
+pst_nlist *pstencil_list(const pst_cloud *c)
+{
+    char err[PST_ERRLEN];
+    pst_nlist *nl = NULL;
+    if (pst_nlist_build(&nl, c, kSupport, err) != PST_OK) {
+        std::fprintf(stderr, "bench_nanoflann: %s\n", err);
+        return NULL;
+    }
+    return nl;
+}
+
 template <int D> int compare(int reps)
 {
     pst_cloud *c = scene_cloud(D);
@@ -129,13 +141,10 @@ template <int D> int compare(int reps)
     for (int k = 0; k < reps; ++k)
         for (int nt = 1; nt <= 2; ++nt) {
             omp_set_num_threads(nt);
-            char err[PST_ERRLEN];
-            pst_nlist *nl = NULL;
             double t0 = omp_get_wtime();
-            if (pst_nlist_build(&nl, c, kSupport, err) != PST_OK) {
-                std::fprintf(stderr, "bench_nanoflann: %s\n", err);
+            pst_nlist *nl = pstencil_list(c);
+            if (!nl)
                 return 1;
-            }
             double t1 = omp_get_wtime();
             csr peer;
             nanoflann_list<D>(pts, r * r, peer);
@@ -171,13 +180,10 @@ template <int D> int compare(int reps)
     for (int k = 0; k < reps; ++k)
         for (int nt = 1; nt <= 2; ++nt) {
             omp_set_num_threads(nt);
-            char err[PST_ERRLEN];
-            pst_nlist *nl = NULL;
             double t0 = omp_get_wtime();
-            if (pst_nlist_build(&nl, c, kSupport, err) != PST_OK) {
-                std::fprintf(stderr, "bench_nanoflann: %s\n", err);
+            pst_nlist *nl = pstencil_list(c);
+            if (!nl)
                 return 1;
-            }
             alone[nt - 1].push_back(omp_get_wtime() - t0);
             pst_nlist_destroy(nl);
         }
