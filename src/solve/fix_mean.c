@@ -16,7 +16,7 @@ static void mean_apply(void *ctx, const double *x, double *y)
     pst_krylov *s = ctx;
     s->L.apply(s->L.ctx, x, y);
     double t = s->c * pst_ksp_dot(&s->k, s->V, x);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(s->L.n))
     for (size_t i = 0; i < s->L.n; ++i)
         y[i] += t;
 }
@@ -26,7 +26,7 @@ static int mean_diagonal(void *ctx, double *d)
 {
     pst_krylov *s = ctx;
     PST_TRY(s->L.diagonal(s->L.ctx, d));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(s->L.n))
     for (size_t i = 0; i < s->L.n; ++i)
         d[i] += s->c * s->V[i];
     return PST_OK;
@@ -63,7 +63,7 @@ int pst_fix_mean_wrap(pst_krylov *s, char *err)
 double pst_fix_mean_finish(pst_krylov *s, double *u)
 {
     double vu = pst_ksp_dot(&s->k, s->V, u), mean = vu / s->vsum;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(s->A.n))
     for (size_t i = 0; i < s->A.n; ++i)
         u[i] -= mean;
     return s->c * vu;

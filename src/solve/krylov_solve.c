@@ -15,11 +15,11 @@ static void eliminate(pst_krylov *s, const double *b, const double *u)
     size_t n = s->A.n;
     const uint8_t *kind = s->op->kind;
     double *x = s->x, *bp = s->bp;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
     for (size_t i = 0; i < n; ++i)
         x[i] = kind[i] == PST_DIRICHLET ? b[i] : 0.0;
     pst_ksp_apply(&s->k, x, bp);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
     for (size_t i = 0; i < n; ++i) {
         bp[i] = kind[i] == PST_DIRICHLET ? 0.0 : b[i] - bp[i];
         x[i] = kind[i] == PST_DIRICHLET ? 0.0 : u[i];
@@ -140,7 +140,7 @@ int pst_krylov_solve(pst_krylov *s, const double *b, double *u, pst_solve_result
     if (s->op) {
         /* u = x + u_D; x is finite (the methods keep the last finite iterate). */
         const uint8_t *kind = s->op->kind;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(k->n))
         for (size_t i = 0; i < k->n; ++i)
             u[i] = kind[i] == PST_DIRICHLET ? b[i] : k->x[i];
         if (s->o.fix_mean)

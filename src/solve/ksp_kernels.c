@@ -121,7 +121,7 @@ double pst_ksp_dot(pst_ksp *k, const double *a, const double *b)
     size_t n = k->n, nb = k->nblocks;
     double *part = k->part;
     /* the block sums in parallel, then their sum in order: memory-bound on two streams */
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
     for (size_t blk = 0; blk < nb; ++blk)
         part[blk] = block_dot(a, b, blk * PST_KSP_BLOCK, block_end(blk, n));
     return sum_blocks(part, nb);
@@ -133,7 +133,7 @@ void pst_ksp_mdot(pst_ksp *k, int m, double *const *V, const double *w, double *
     double *part = k->part;
     /* One pass over w for all m vectors: each V[j] streams from memory once while w's block
      * stays in L1, so the pass is memory-bound on m streams. */
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
     for (size_t blk = 0; blk < nb; ++blk) {
         size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
         for (int j = 0; j < m; ++j)
@@ -155,7 +155,7 @@ double pst_ksp_subtract_norm2(pst_ksp *k, int m, double *const *V, const double 
      * which would defeat the prefetchers), w's block is updated in L1, every entry in the order
      * j = 0, 1, ..., and its norm is summed before it leaves the cache: memory-bound on m
      * streams plus w read and written once. */
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
     for (size_t blk = 0; blk < nb; ++blk) {
         size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
         double *restrict wb = w;
@@ -183,7 +183,7 @@ double pst_ksp_axpy_norm2(pst_ksp *k, double a, const double *x, const double *y
     size_t n = k->n, nb = k->nblocks;
     double *part = k->part;
     /* memory-bound on three streams; the norm reads z's block back from L1 */
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
     for (size_t blk = 0; blk < nb; ++blk) {
         size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
         for (size_t i = lo; i < hi; ++i)
@@ -202,7 +202,7 @@ int pst_ksp_update_residual(pst_ksp *k, double *x, double a, const double *p, do
     /* One pass updates r, sums its norm from L1 and checks x + a p (memory-bound on five
      * streams); x is written in a second pass only when every entry is finite, so that a
      * failed update leaves the last finite iterate. */
-#pragma omp parallel for schedule(static) reduction(| : bad)
+#pragma omp parallel for schedule(static) reduction(| : bad) if (PST_KSP_THREADED(n))
     for (size_t blk = 0; blk < nb; ++blk) {
         size_t lo = blk * PST_KSP_BLOCK, hi = block_end(blk, n);
         for (size_t i = lo; i < hi; ++i) {
@@ -214,7 +214,7 @@ int pst_ksp_update_residual(pst_ksp *k, double *x, double a, const double *p, do
     *norm2 = sum_blocks(part, nb);
     if (bad)
         return 0;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
     for (size_t i = 0; i < n; ++i)
         x[i] += a * p[i];
     return 1;
@@ -238,7 +238,7 @@ double pst_ksp_residual(pst_ksp *k, const double *x, double *r)
 {
     pst_ksp_apply(k, x, r);
     const double *b = k->b;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(k->n))
     for (size_t i = 0; i < k->n; ++i)
         r[i] = b[i] - r[i];
     return sqrt(pst_ksp_dot(k, r, r));
@@ -249,12 +249,12 @@ int pst_ksp_update(pst_ksp *k, double *x, double a, const double *p, double c, c
     size_t n = k->n;
     int bad = 0;
     /* Check first, write second, so that a failed update leaves the last finite iterate. */
-#pragma omp parallel for schedule(static) reduction(| : bad)
+#pragma omp parallel for schedule(static) reduction(| : bad) if (PST_KSP_THREADED(n))
     for (size_t i = 0; i < n; ++i)
         bad |= !isfinite(x[i] + a * p[i] + (q ? c * q[i] : 0.0));
     if (bad)
         return 0;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
     for (size_t i = 0; i < n; ++i)
         x[i] += a * p[i] + (q ? c * q[i] : 0.0);
     return 1;
@@ -262,7 +262,7 @@ int pst_ksp_update(pst_ksp *k, double *x, double a, const double *p, double c, c
 
 void pst_ksp_axpby(pst_ksp *k, double a, const double *x, double c, double *y)
 {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(k->n))
     for (size_t i = 0; i < k->n; ++i)
         y[i] = a * x[i] + c * y[i];
 }

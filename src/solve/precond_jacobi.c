@@ -14,7 +14,7 @@ static void jacobi_apply(void *ctx, const double *r, double *z)
 {
     const jacobi_ctx *j = ctx;
     const double *dinv = j->dinv;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(j->n))
     for (size_t i = 0; i < j->n; ++i)
         z[i] = dinv[i] * r[i];
 }
@@ -36,7 +36,7 @@ static int inverse_diagonal(const pst_linop *A, double *d, char *err)
               "cannot allocate the Jacobi preconditioner of %zu rows", A->n);
     PST_CHECK(st != PST_OK, PST_ENUMERIC, err,
               "the operator's diagonal failed (%s): no Jacobi preconditioner", pst_strerror(st));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(A->n))
     for (size_t i = 0; i < A->n; ++i)
         d[i] = d[i] != 0 && isfinite(d[i]) ? 1.0 / d[i] : 1.0;
     return PST_OK;

@@ -114,6 +114,11 @@ int pst_ksp_bicgstab(pst_ksp *k);
  * PST_KSP_BLOCK entries (each with 8 interleaved partial sums added in a fixed order), then the
  * block sums in block order: the same bits for every thread count. */
 #define PST_KSP_BLOCK 2048
+/* The solver's loops over vectors of at most one block run on the calling thread alone: the
+ * team's fork and join (microseconds; tens of them where idle threads sleep) cost more than a
+ * pass over 2048 doubles. Their results do not depend on it: element-wise updates, and block
+ * sums in block order. */
+#define PST_KSP_THREADED(n) ((n) > PST_KSP_BLOCK)
 double pst_ksp_dot(pst_ksp *k, const double *a, const double *b);
 /* out[j] = V[j] . w for j < m, one pass over w (m <= restart + 2). */
 void pst_ksp_mdot(pst_ksp *k, int m, double *const *V, const double *w, double *out);

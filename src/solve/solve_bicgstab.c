@@ -26,7 +26,7 @@ static void bicg_pass(pst_ksp *k, double rhn, pst_ksp_break *b)
             memcpy(p, r, n * sizeof *r);
         } else {
             double beta = rho / rho_old * (alpha / omega);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
             for (size_t i = 0; i < n; ++i)
                 p[i] = r[i] + beta * (p[i] - omega * v[i]);
         }

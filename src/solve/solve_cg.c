@@ -19,7 +19,7 @@ static void cg_prec(pst_ksp *k, const double *S, const double *r, double *tmp, d
         pst_ksp_prec(k, r, z);
         return;
     }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(k->n))
     for (size_t i = 0; i < k->n; ++i)
         tmp[i] = r[i] / S[i];
     pst_ksp_prec(k, tmp, z);
@@ -30,7 +30,7 @@ static void scale(pst_ksp *k, const double *S, double *v)
 {
     if (!S)
         return;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(k->n))
     for (size_t i = 0; i < k->n; ++i)
         v[i] *= S[i];
 }

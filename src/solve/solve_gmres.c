@@ -97,7 +97,7 @@ static void cycle_update(pst_ksp *k, int j, gmres_small *a, pst_ksp_break *b)
                                "repeat it", PST_STOP_STAGNATION, 0};
         return;
     }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(k->n))
     for (size_t i = 0; i < k->n; ++i) {
         double s = 0;
         for (int l = 0; l < j; ++l)
@@ -117,7 +117,7 @@ static void gmres_cycle(pst_ksp *k, double rn, gmres_small *a, pst_ksp_break *b)
     size_t n = k->n;
     int m = k->restart;
     double **V = k->vec, inv = 1.0 / rn;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
     for (size_t i = 0; i < n; ++i)
         V[0][i] *= inv;
     memset(a->g, 0, ((size_t)m + 1) * sizeof *a->g);
@@ -135,7 +135,7 @@ static void gmres_cycle(pst_ksp *k, double rn, gmres_small *a, pst_ksp_break *b)
         if (hn <= 1e-14 * w0 || est <= k->target)
             break;
         double hinv = 1.0 / hn, *wj = V[j];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (PST_KSP_THREADED(n))
         for (size_t i = 0; i < n; ++i)
             wj[i] *= hinv;
     }
