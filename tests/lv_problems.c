@@ -176,8 +176,17 @@ int lv_solve_scheme(const lv_case *pc, const char *scheme, double *uh, int *iter
     int st = pst_op_create(&op, pc->cloud, pc->nlist, &oo, err);
     if (st != PST_OK)
         return st;
+    /* the stored weights: the matrix-free apply's bits (docs/operators.md), at a quarter of its
+     * time in solves of hundreds to thousands of iterations */
+    st = pst_op_store(op);
+    if (st != PST_OK) {
+        snprintf(err, PST_ERRLEN, "lv_solve_scheme: cannot store the weights (%s)", pst_strerror(st));
+        pst_op_destroy(op);
+        return st;
+    }
     pst_solve_opts so;
     pst_solve_defaults(&so);
+    so.stored = 1;
     /* cb: AUTO is CG on the symmetrised system when there are no Neumann rows (Jacobi-GMRES
      * stalls near 1e-9 there); every other case GMRES(50) + Jacobi */
     so.solver = strcmp(scheme, "cb") == 0 ? PST_SOLVER_AUTO : PST_SOLVER_GMRES;

@@ -62,8 +62,8 @@ double lv_exact98(double x, double y, const double psi[4]);
  * [sum V_K ((u_K - u_h,K) / u_K)^2 / sum V_J]^(1/2). */
 double lv_error95(const pst_cloud *c, const double *exact, const double *uh);
 
-/* Solve the case with `scheme` (cubic kernel, G1): GMRES(50) + Jacobi, rtol 1e-10, max 20000
- * iterations, starting from 0. iters (may be NULL) receives the iterations. Returns the
+/* Solve the case with `scheme` (cubic kernel, G1) on its stored weights: GMRES(50) + Jacobi,
+ * rtol 1e-10, max 20000 iterations, starting from 0. iters (may be NULL) receives the iterations. Returns the
  * status of pst_solve / pst_op_create with the reason in err. */
 int lv_solve_scheme(const lv_case *pc, const char *scheme, double *uh, int *iters, char *err);
 

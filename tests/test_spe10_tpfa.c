@@ -158,8 +158,10 @@ static spe10_diff compare(const pst_perm_grid *g, const char *scheme, double f, 
         st = lv_solve_dense(op, b, u, err);
         r.iters = -1;
     } else {
+        CHECK(pst_op_store(op) == PST_OK); /* the matrix-free bits, faster over 2000 iterations */
         pst_solve_opts so;
         pst_solve_defaults(&so);
+        so.stored = 1;
         so.solver = PST_SOLVER_GMRES;
         so.precond = PST_PREC_AMG;
         so.amg_source = PST_AMG_BROOKSHAW;
