@@ -40,4 +40,4 @@ CC=$cc cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DPSTENCIL_FUZZ=ON -DPS
   -DPSTENCIL_FUZZ_SECONDS="$seconds" -DPSTENCIL_BUILD_TESTS=OFF -DPSTENCIL_BUILD_BENCH=OFF
 cmake --build build-fuzz -j "$jobs"
 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir build-fuzz --output-on-failure -L fuzz -j "$jobs"
-cmake --build build-fuzz --target fuzz
+cmake --build build-fuzz --target fuzz -j "$jobs"
