@@ -87,7 +87,9 @@ PST_KHOT void pst_lanes_gather(const pst_lanes *L, const uint32_t *idx, int n, d
     }
 }
 
-/* acc[c mod 8] += t[c] du[c] for c < n: pst_dot_du's lanes, with u_J - u_I given. */
+/* acc[c mod 8] += t[c] du[c] for c < n (du: u_J - u_I), neighbour c in lane c mod 8 across
+ * consecutive calls of one row (every call but the last takes a multiple of 8), then
+ * pst_lanes_sum: the lanes of the matrix-free rows, for the rows that work a chunk at a time. */
 PST_KHOT void pst_lanes_dot(int n, const double *t, const double *du, double acc[PST_LANES])
 {
     int c = 0;
@@ -96,6 +98,14 @@ PST_KHOT void pst_lanes_dot(int n, const double *t, const double *du, double acc
             acc[l] += t[c + l] * du[c + l];
     for (; c < n; ++c)
         acc[c % PST_LANES] += t[c] * du[c];
+}
+
+/* The sum of the 8 lanes acc in pst_v8_sum's order, element by element: a vector load of the
+ * array, whose tail pst_lanes_dot writes lane by lane, waited on store forwarding (the lv
+ * matrix-free apply 2-4 % slower). */
+PST_KHOT double pst_lanes_sum(const double acc[PST_LANES])
+{
+    return ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]));
 }
 
 /* A block of 8 pairs as the matrix-free rows (and qsfdi's data moments) take it: the scaled

@@ -24,7 +24,6 @@
 #include "lanes.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
-#include "wls.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -327,8 +326,8 @@ PST_KHOT void chunk_weights(const lv_ctx *k, int D, int G, int T, int H, size_t 
 
 /* Row i into y (apply, from the packed rows: pst_lanes_gather) or its weights into w
  * (emission, from the positions), a chunk of neighbours at a time: the chunk's geometry and
- * weights in vector lanes (chunk_weights), then their dot product with u_J - u_I in
- * pst_dot_du's lanes. */
+ * weights in vector lanes (chunk_weights), then their dot product with u_J - u_I in the lanes
+ * of pst_lanes_dot. */
 PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
                     double *y, double *w, int D, int G, int T, int H)
 {
@@ -344,7 +343,7 @@ PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, si
         }
     }
     if (!w)
-        y[i] = pst_dot_sum(acc);
+        y[i] = pst_lanes_sum(acc);
 }
 
 /* Row i of a half list (operator.h, half_rows), for constant D, G, T, H: both weights of each
@@ -441,14 +440,14 @@ typedef struct {
     double A[9], N[3], Nt[3], G[9], Gs[9];
 } lv_sums;
 
-/* sum_c p_c q_c over a chunk in PST_DOT_LANES partial sums (pst_dot_du's order): vector lanes,
+/* sum_c p_c q_c over a chunk in 8 partial sums (pst_lanes_dot, pst_lanes_sum): vector lanes,
  * and one order for every vector width and thread count, so that the precompute is the same
  * in every build (the stability table's solve counts depend on its last bits). */
 PST_KHOT double chunk_dot(int n, const double *restrict p, const double *restrict q)
 {
     double acc[PST_LANES] = {0};
     pst_lanes_dot(n, p, q, acc);
-    return pst_dot_sum(acc);
+    return pst_lanes_sum(acc);
 }
 
 /* One chunk of a row's pairs as the precompute's sums read them: the geometry, the

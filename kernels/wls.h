@@ -34,28 +34,6 @@ void pst_wls_degrade(pst_op *op, size_t i);
 void pst_wls_msums(int dim, int deg, int n, const double *r, int stride, const double *w,
                    double *s);
 
-/* The dot product of a row's weights t[0..n) with u_J - u_I (J = idx[c]) in PST_DOT_LANES
- * partial sums, neighbour c into lane c mod PST_DOT_LANES across consecutive calls of one
- * row (every call but the last takes a multiple of the lanes), then pst_dot_sum: a fixed order,
- * so the result is the same for every vector width (and thread count), and the loop runs in
- * vector lanes where a single running sum would be a chain of dependent adds. */
-#define PST_DOT_LANES 8
-PST_KHOT void pst_dot_du(int n, const double *t, const uint32_t *idx, const double *u,
-                         double ui, double acc[PST_DOT_LANES])
-{
-    int c = 0;
-    for (; c + PST_DOT_LANES <= n; c += PST_DOT_LANES)
-        for (int l = 0; l < PST_DOT_LANES; ++l)
-            acc[l] += t[c + l] * (u[idx[c + l]] - ui);
-    for (; c < n; ++c)
-        acc[c % PST_DOT_LANES] += t[c] * (u[idx[c]] - ui);
-}
-
-PST_KHOT double pst_dot_sum(const double acc[PST_DOT_LANES])
-{
-    return ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]));
-}
-
 /* The fields of a WLS scheme's table other than its name, description and precompute. */
 #define PST_WLS_FALLBACK                                                                       \
     "quadric fit: too few neighbours or singular -> linear-exact reduced fit -> radial row -> " \
