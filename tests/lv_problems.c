@@ -180,7 +180,8 @@ int lv_solve_scheme(const lv_case *pc, const char *scheme, double *uh, int *iter
      * time in solves of hundreds to thousands of iterations */
     st = pst_op_store(op);
     if (st != PST_OK) {
-        snprintf(err, PST_ERRLEN, "lv_solve_scheme: cannot store the weights (%s)", pst_strerror(st));
+        snprintf(err, PST_ERRLEN, "lv_solve_scheme: cannot store the weights (%s)",
+                 pst_strerror(st));
         pst_op_destroy(op);
         return st;
     }
