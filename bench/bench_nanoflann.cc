@@ -111,12 +111,17 @@ pst_cloud *scene_cloud(int dim)
     return c;
 }
 
-// pstencil's list of c (radius kSupport h); NULL after a message.
-pst_nlist *pstencil_list(const pst_cloud *c)
+// pstencil's list of c (radius kSupport h) built on `threads` threads, its wall time in
+// *seconds; NULL after a message.
+pst_nlist *pstencil_list(const pst_cloud *c, int threads, double *seconds)
 {
     char err[PST_ERRLEN];
     pst_nlist *nl = NULL;
-    if (pst_nlist_build(&nl, c, kSupport, err) != PST_OK) {
+    omp_set_num_threads(threads);
+    double t0 = omp_get_wtime();
+    int st = pst_nlist_build(&nl, c, kSupport, err);
+    *seconds = omp_get_wtime() - t0;
+    if (st != PST_OK) {
         std::fprintf(stderr, "bench_nanoflann: %s\n", err);
         return NULL;
     }
@@ -140,17 +145,15 @@ template <int D> int compare(int reps)
     int saved = omp_get_max_threads();
     for (int k = 0; k < reps; ++k)
         for (int nt = 1; nt <= 2; ++nt) {
-            omp_set_num_threads(nt);
-            double t0 = omp_get_wtime();
-            pst_nlist *nl = pstencil_list(c);
+            double tp;
+            pst_nlist *nl = pstencil_list(c, nt, &tp);
             if (!nl)
                 return 1;
             double t1 = omp_get_wtime();
             csr peer;
             nanoflann_list<D>(pts, r * r, peer);
-            double t2 = omp_get_wtime();
-            t[nt - 1][0].push_back(t1 - t0);
-            t[nt - 1][1].push_back(t2 - t1);
+            t[nt - 1][0].push_back(tp);
+            t[nt - 1][1].push_back(omp_get_wtime() - t1);
             if (nt == 1 && k == 0) {
                 int same = same_list(nl, peer, n);
                 std::printf("  lists identical: %s (%.1f neighbours per particle)\n",
@@ -179,12 +182,11 @@ template <int D> int compare(int reps)
     std::vector<double> alone[2];
     for (int k = 0; k < reps; ++k)
         for (int nt = 1; nt <= 2; ++nt) {
-            omp_set_num_threads(nt);
-            double t0 = omp_get_wtime();
-            pst_nlist *nl = pstencil_list(c);
+            double tp;
+            pst_nlist *nl = pstencil_list(c, nt, &tp);
             if (!nl)
                 return 1;
-            alone[nt - 1].push_back(omp_get_wtime() - t0);
+            alone[nt - 1].push_back(tp);
             pst_nlist_destroy(nl);
         }
     omp_set_num_threads(saved);
