@@ -325,11 +325,17 @@ void pst_op_status_counts(const pst_op *op, size_t counts[PST_ROW_NSTATUS])
     memcpy(counts, op->counts, sizeof op->counts);
 }
 
+/* The apply's element-wise passes (u into the packed rows, the Dirichlet rows: about a
+ * nanosecond per particle) take the threads only above this many particles: below it a
+ * parallel region's fork and join cost more than the loop (tens of microseconds where the
+ * idle threads sleep, as under OMP_WAIT_POLICY=PASSIVE). Element-wise: the same bits. */
+#define APPLY_PASS_THREADED(n) ((n) > 16384)
+
 /* Dirichlet rows are the identity: their values are data. */
 static void dirichlet_rows(const pst_op *op, const double *u, double *y)
 {
     const uint8_t *kind = op->kind;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (APPLY_PASS_THREADED(op->n))
     for (size_t i = 0; i < op->n; ++i)
         if (kind[i] == PST_DIRICHLET)
             y[i] = u[i];
@@ -347,7 +353,7 @@ void pst_op_record_apply(const pst_op *op, double t0)
 static void pack_values(const pst_op *op, const double *u)
 {
     double *p = op->xyzu;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (APPLY_PASS_THREADED(op->n))
     for (size_t i = 0; i < op->n; ++i)
         p[4 * i + 3] = u[i];
 }
