@@ -325,10 +325,11 @@ void pst_op_status_counts(const pst_op *op, size_t counts[PST_ROW_NSTATUS])
     memcpy(counts, op->counts, sizeof op->counts);
 }
 
-/* The apply's element-wise passes (u into the packed rows, the Dirichlet rows: about a
- * nanosecond per particle) take the threads only above this many particles: below it a
- * parallel region's fork and join cost more than the loop (tens of microseconds where the
- * idle threads sleep, as under OMP_WAIT_POLICY=PASSIVE). Element-wise: the same bits. */
+/* The element-wise passes of an apply or a derivative (u into the packed rows, the Dirichlet
+ * rows: about a nanosecond per particle) take the threads only above this many particles:
+ * below it a parallel region's fork and join cost more than the loop (tens of microseconds
+ * where the idle threads sleep, as under OMP_WAIT_POLICY=PASSIVE). Element-wise: the same
+ * bits. */
 #define APPLY_PASS_THREADED(n) ((n) > 16384)
 
 /* Dirichlet rows are the identity: their values are data. */
