@@ -100,6 +100,29 @@ PST_KHOT void pst_lanes_dot(int n, const double *t, const double *du, double acc
         acc[c % PST_LANES] += t[c] * du[c];
 }
 
+/* pst_lanes_dot for arrays written in whole blocks of 8 (t and du up to n rounded up to a
+ * multiple of 8, the lanes past n any finite or non-finite value): acc + t du a block at a
+ * time, the last block through pst_v8_add_below, so the lanes past n add nothing. The same
+ * sums as pst_lanes_dot, without its scalar tail. */
+PST_KHOT pst_v8 pst_lanes_dot_blocks(int n, const double *t, const double *du, pst_v8 acc)
+{
+    const pst_v8 len = pst_v8_splat((double)n);
+    int c = 0;
+    for (; c + PST_LANES <= n; c += PST_LANES) {
+        pst_v8 tv, dv;
+        memcpy(&tv, t + c, sizeof tv);
+        memcpy(&dv, du + c, sizeof dv);
+        acc += tv * dv;
+    }
+    if (c < n) {
+        pst_v8 tv, dv;
+        memcpy(&tv, t + c, sizeof tv);
+        memcpy(&dv, du + c, sizeof dv);
+        acc = pst_v8_add_below(acc, tv * dv, (double)c, len);
+    }
+    return acc;
+}
+
 /* The sum of the 8 lanes acc in pst_v8_sum's order, element by element: a vector load of the
  * array, whose tail pst_lanes_dot writes lane by lane, waited on store forwarding (the lv
  * matrix-free apply 2-4 % slower). */

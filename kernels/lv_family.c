@@ -49,6 +49,7 @@ typedef struct {
     int variant;  /* opts.gradient */
     int harmonic; /* opts.mobility_mean == PST_MEAN_HARMONIC */
     const lv_data *d;
+    int64_t list_end; /* the apply's: off[n] of the whole list, else 0 (row_t) */
 } lv_ctx;
 
 static lv_ctx make_ctx(const pst_op *op)
@@ -327,23 +328,30 @@ PST_KHOT void chunk_weights(const lv_ctx *k, int D, int G, int T, int H, size_t 
 /* Row i into y (apply, from the packed rows: pst_lanes_gather) or its weights into w
  * (emission, from the positions), a chunk of neighbours at a time: the chunk's geometry and
  * weights in vector lanes (chunk_weights), then their dot product with u_J - u_I in the lanes
- * of pst_lanes_dot. */
+ * of pst_lanes_dot_blocks. The apply runs every loop of a chunk over whole blocks of 8, so
+ * that none has a scalar tail (19-20 % of the 3D apply; bench/README.md): the lanes past the
+ * row take the next row's neighbours, whose weights are computed and never summed; the list's
+ * last row, with nothing after it, computes its own pairs only and zeros the rest. */
 PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
                     double *y, double *w, int D, int G, int T, int H)
 {
-    double acc[PST_LANES] = {0}, t[LV_CHUNK], du[LV_CHUNK];
+    double t[LV_CHUNK], du[LV_CHUNK];
+    pst_v8 acc = pst_v8_splat(0.0);
     for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += LV_CHUNK) {
         int n = (int)(off[i + 1] - c0 < LV_CHUNK ? off[i + 1] - c0 : LV_CHUNK);
         if (w) {
             chunk_weights(k, D, G, T, H, i, idx + c0, n, w + (c0 - off[i]), NULL, NULL);
         } else {
+            int m = (n + PST_LANES - 1) / PST_LANES * PST_LANES, whole = c0 + m <= k->list_end;
             pst_lanes L = pst_lanes_row(&k->c, i, 1.0);
-            chunk_weights(k, D, G, T, H, i, idx + c0, n, t, &L, du);
-            pst_lanes_dot(n, t, du, acc);
+            chunk_weights(k, D, G, T, H, i, idx + c0, whole ? m : n, t, &L, du);
+            for (int c = whole ? m : n; c < m; ++c)
+                t[c] = 0.0;
+            acc = pst_lanes_dot_blocks(n, t, du, acc);
         }
     }
     if (!w)
-        y[i] = pst_lanes_sum(acc);
+        y[i] = pst_v8_sum(acc);
 }
 
 /* Row i of a half list (operator.h, half_rows), for constant D, G, T, H: both weights of each
@@ -728,6 +736,7 @@ static void lv_apply(const pst_op *op, const double *u, double *y)
     row_fn row = row_for(&k);
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
+    k.list_end = off[op->n];
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < op->n; ++i)
         if (k.c.kind[i] != PST_DIRICHLET)

@@ -58,6 +58,17 @@ PST_V8_INLINE double pst_v8_sum(pst_v8 a)
     return t[0] + t[1];
 }
 
+/* acc + terms in the lanes l with from + l < len (len in every lane), acc in the others: by a
+ * select, so the lanes past a row's end add nothing, not even a zero (the same bits as adding
+ * the row's last terms one by one). */
+PST_V8_INLINE pst_v8 pst_v8_add_below(pst_v8 acc, pst_v8 terms, double from, pst_v8 len)
+{
+    const pst_v8 lane_no = {0, 1, 2, 3, 4, 5, 6, 7};
+    pst_v8 sum = acc + terms;
+    pst_v8i keep = lane_no + pst_v8_splat(from) < len;
+    return (pst_v8)(((pst_v8i)sum & keep) | ((pst_v8i)acc & ~keep));
+}
+
 /* a[j[0]], ..., a[j[7]], as a tree of pairs (a loop of element stores also became a chain of
  * masked merges). */
 PST_V8_INLINE pst_v8 pst_v8_gather(const double *a, const uint32_t *j)

@@ -235,17 +235,6 @@ block_terms(int single, const double *wd, const float *wf, const uint32_t *idx, 
     return wv * (pst_v8_gather(u, idx + k) - uiv);
 }
 
-/* acc + terms in the lanes l with from + l < len, acc in the others (by a select, so the
- * lanes past a row's end add nothing, not even a zero). */
-static inline __attribute__((always_inline)) pst_v8 add_lanes_below(pst_v8 acc, pst_v8 terms,
-                                                                  double from, pst_v8 len)
-{
-    const pst_v8 lane_no = {0, 1, 2, 3, 4, 5, 6, 7};
-    pst_v8 sum = acc + terms;
-    pst_v8i keep = lane_no + pst_v8_splat(from) < len;
-    return (pst_v8)(((pst_v8i)sum & keep) | ((pst_v8i)acc & ~keep));
-}
-
 /* Rows of at most this many pairs (three blocks) are always taken as three blocks of 8. */
 #define SHORT_ROW (3 * PST_LANES)
 
@@ -285,14 +274,14 @@ stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *w
         if (len <= SHORT_ROW && k + SHORT_ROW <= end) {
             const pst_v8 lenv = pst_v8_splat((double)len);
             for (int b = 0; b < SHORT_ROW; b += PST_LANES)
-                acc = add_lanes_below(acc, block_terms(single, wd, wf, idx, u, k + b, uiv), b,
+                acc = pst_v8_add_below(acc, block_terms(single, wd, wf, idx, u, k + b, uiv), b,
                                       lenv);
         } else {
             for (; k + PST_LANES <= off[i + 1]; k += PST_LANES)
                 acc += block_terms(single, wd, wf, idx, u, k, uiv);
             int64_t rest = off[i + 1] - k;
             if (rest > 0 && k + PST_LANES <= end)
-                acc = add_lanes_below(acc, block_terms(single, wd, wf, idx, u, k, uiv), 0,
+                acc = pst_v8_add_below(acc, block_terms(single, wd, wf, idx, u, k, uiv), 0,
                                       pst_v8_splat((double)rest));
             else
                 for (int l = 0; k < off[i + 1]; ++k, ++l)
