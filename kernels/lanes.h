@@ -107,18 +107,11 @@ PST_KHOT void pst_lanes_dot(int n, const double *t, const double *du, double acc
 PST_KHOT pst_v8 pst_lanes_dot_blocks(int n, const double *t, const double *du, pst_v8 acc)
 {
     const pst_v8 len = pst_v8_splat((double)n);
-    int c = 0;
-    for (; c + PST_LANES <= n; c += PST_LANES) {
+    for (int c = 0; c < n; c += PST_LANES) {
         pst_v8 tv, dv;
         memcpy(&tv, t + c, sizeof tv);
         memcpy(&dv, du + c, sizeof dv);
-        acc += tv * dv;
-    }
-    if (c < n) {
-        pst_v8 tv, dv;
-        memcpy(&tv, t + c, sizeof tv);
-        memcpy(&dv, du + c, sizeof dv);
-        acc = pst_v8_add_below(acc, tv * dv, (double)c, len);
+        acc = c + PST_LANES <= n ? acc + tv * dv : pst_v8_add_below(acc, tv * dv, c, len);
     }
     return acc;
 }

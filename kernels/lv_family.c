@@ -49,7 +49,7 @@ typedef struct {
     int variant;  /* opts.gradient */
     int harmonic; /* opts.mobility_mean == PST_MEAN_HARMONIC */
     const lv_data *d;
-    int64_t list_end; /* the apply's: off[n] of the whole list, else 0 (row_t) */
+    int64_t list_end; /* the apply: off[n], how far row_t may read past a row; else 0 */
 } lv_ctx;
 
 static lv_ctx make_ctx(const pst_op *op)
