@@ -727,9 +727,9 @@ static int pre_msph(pst_op *op, char *err) { return precompute(op, LV_MSPH, err)
 /* Matrix-free apply: recompute each pair's geometry and weight from the positions and the
  * per-particle data, a chunk of neighbours at a time in vector lanes (row_t). Compute-bound: a
  * sqrt, two divisions and ~40 flops per pair (more for G2/G4 and tensors) against 4 bytes of
- * list and 8 of x_J (3 coordinates) and u_J gathered; measured (3D, cubic, G1, 2 threads, loaded
- * machine) ~4.6 ns per pair and thread (was ~10 scalar), 5.6-6x the stored apply
- * (bench/README.md). */
+ * list and 8 of x_J (3 coordinates) and u_J gathered; measured (3D 10^6, G1, 1 thread,
+ * 2026-12-05) 2.7-2.8 ns per pair (was ~10 scalar), 3.5-4.2x the stored apply
+ * (bench/README.md, "Which bound"). */
 static void lv_apply(const pst_op *op, const double *u, double *y)
 {
     lv_ctx k = make_ctx(op);

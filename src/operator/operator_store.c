@@ -275,14 +275,14 @@ stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *w
             const pst_v8 lenv = pst_v8_splat((double)len);
             for (int b = 0; b < SHORT_ROW; b += PST_LANES)
                 acc = pst_v8_add_below(acc, block_terms(single, wd, wf, idx, u, k + b, uiv), b,
-                                      lenv);
+                                       lenv);
         } else {
             for (; k + PST_LANES <= off[i + 1]; k += PST_LANES)
                 acc += block_terms(single, wd, wf, idx, u, k, uiv);
             int64_t rest = off[i + 1] - k;
             if (rest > 0 && k + PST_LANES <= end)
                 acc = pst_v8_add_below(acc, block_terms(single, wd, wf, idx, u, k, uiv), 0,
-                                      pst_v8_splat((double)rest));
+                                       pst_v8_splat((double)rest));
             else
                 for (int l = 0; k < off[i + 1]; ++k, ++l)
                     acc[l] += (single ? (double)wf[k] : wd[k]) * (u[idx[k]] - ui);
