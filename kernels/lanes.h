@@ -89,21 +89,10 @@ PST_KHOT void pst_lanes_gather(const pst_lanes *L, const uint32_t *idx, int n, d
 
 /* acc[c mod 8] += t[c] du[c] for c < n (du: u_J - u_I), neighbour c in lane c mod 8 across
  * consecutive calls of one row (every call but the last takes a multiple of 8), then
- * pst_lanes_sum: the lanes of the matrix-free rows, for the rows that work a chunk at a time. */
-PST_KHOT void pst_lanes_dot(int n, const double *t, const double *du, double acc[PST_LANES])
-{
-    int c = 0;
-    for (; c + PST_LANES <= n; c += PST_LANES)
-        for (int l = 0; l < PST_LANES; ++l)
-            acc[l] += t[c + l] * du[c + l];
-    for (; c < n; ++c)
-        acc[c % PST_LANES] += t[c] * du[c];
-}
-
-/* pst_lanes_dot for arrays written in whole blocks of 8 (t and du up to n rounded up to a
- * multiple of 8, the lanes past n any finite or non-finite value): acc + t du a block at a
- * time, the last block through pst_v8_add_below, so the lanes past n add nothing. The same
- * sums as pst_lanes_dot, without its scalar tail. */
+ * pst_v8_sum: the lanes of the rows that work a chunk at a time. t and du are read in whole
+ * blocks of 8 (up to n rounded up; the lanes past n may hold any value, finite or not): the
+ * last block adds through pst_v8_add_below, so its lanes past n add nothing and no loop runs
+ * a scalar tail. */
 PST_KHOT pst_v8 pst_lanes_dot_blocks(int n, const double *t, const double *du, pst_v8 acc)
 {
     const pst_v8 len = pst_v8_splat((double)n);
@@ -114,14 +103,6 @@ PST_KHOT pst_v8 pst_lanes_dot_blocks(int n, const double *t, const double *du, p
         acc = c + PST_LANES <= n ? acc + tv * dv : pst_v8_add_below(acc, tv * dv, c, len);
     }
     return acc;
-}
-
-/* The sum of the 8 lanes acc in pst_v8_sum's order, element by element: a vector load of the
- * array, whose tail pst_lanes_dot writes lane by lane, waited on store forwarding (the lv
- * matrix-free apply 2-4 % slower). */
-PST_KHOT double pst_lanes_sum(const double acc[PST_LANES])
-{
-    return ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]));
 }
 
 /* A block of 8 pairs as the matrix-free rows (and qsfdi's data moments) take it: the scaled

@@ -448,14 +448,12 @@ typedef struct {
     double A[9], N[3], Nt[3], G[9], Gs[9];
 } lv_sums;
 
-/* sum_c p_c q_c over a chunk in 8 partial sums (pst_lanes_dot, pst_lanes_sum): vector lanes,
- * and one order for every vector width and thread count, so that the precompute is the same
- * in every build (the stability table's solve counts depend on its last bits). */
+/* sum_c p_c q_c over a chunk in 8 partial sums (pst_lanes_dot_blocks, pst_v8_sum): vector
+ * lanes, and one order for every vector width and thread count, so that the precompute is the
+ * same in every build (the stability table's solve counts depend on its last bits). */
 PST_KHOT double chunk_dot(int n, const double *restrict p, const double *restrict q)
 {
-    double acc[PST_LANES] = {0};
-    pst_lanes_dot(n, p, q, acc);
-    return pst_lanes_sum(acc);
+    return pst_v8_sum(pst_lanes_dot_blocks(n, p, q, pst_v8_splat(0.0)));
 }
 
 /* One chunk of a row's pairs as the precompute's sums read them: the geometry, the

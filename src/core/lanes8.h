@@ -47,9 +47,8 @@ PST_V8_INLINE pst_v8 pst_v8_min_image(pst_v8 d, double P, double hP)
 }
 
 /* The lanes' sum in one fixed order, ((a0 + a4) + (a2 + a6)) + ((a1 + a5) + (a3 + a7)), as
- * halves added in registers (kernels/lanes.h's pst_lanes_sum has it for an array): element
- * reads had GCC store the vector and load its lanes back, a stalled store-to-load forwarding
- * per row (a fifth of a 17-pair row's stored apply). */
+ * halves added in registers: element reads had GCC store the vector and load its lanes back, a
+ * stalled store-to-load forwarding per row (a fifth of a 17-pair row's stored apply). */
 PST_V8_INLINE double pst_v8_sum(pst_v8 a)
 {
     pst_v4 s =
