@@ -165,9 +165,9 @@ static const struct {
 } flop_models[] = {
     {"brookshaw", {52, 60}}, {"cb", {52, 60}},      {"schwaiger", {52, 60}},
     {"lv", {52, 60}},        {"cspm", {82, 104}},   {"icspm", {82, 104}},
-    {"csph2g", {82, 104}},   {"mixed0", {101, 140}}, {"mixed1", {99, 138}},
-    {"mixed2", {133, 228}},  {"lsmps", {39, 51}},   {"lpmps", {38, 50}},
-    {"qsfdi", {49, 68}},
+    {"csph2g", {82, 104}},   {"mixed0", {103, 142}}, {"mixed1", {101, 140}},
+    {"mixed2", {135, 230}},  {"lsmps", {40, 52}},   {"lpmps", {39, 51}},
+    {"qsfdi", {50, 69}},
 };
 
 static double apply_flops_per_pair(int scheme, int dim)
