@@ -37,21 +37,16 @@ static inline int pst_sph_valid(pst_kernel k, int dim, double r, double h)
            && h < INFINITY && r >= 0.0;
 }
 
-/* max(x, 0), exact for finite x (x + |x| is 2x or +0): arithmetic, not a compare-select,
- * which GCC turns into a branch around the powers (it may not speculate FP multiplies under
- * -ftrapping-math), and that keeps kernel loops from vectorising. NaN never reaches here. */
-static inline double pst_sph_pos(double x)
-{
-    return 0.5 * (x + fabs(x));
-}
-
-/* 2 max(x, 0) = x + |x|, exact: pst_sph_pos without its multiplication. The cubic and quintic
- * shapes take their truncated powers doubled, T = 2 t, and every product of them starts with
- * its constant scaled by 2^-k (k: the power of T that follows): each rounding is then the
- * rounding of the plain product times a power of 2, and the shape is the t-formula's value bit
- * for bit (tests/test_kernel_bits.c), with 2-3 multiplications fewer per evaluation (the
- * quintic is about a third of the lpmps matrix-free apply, bench/README.md). No power
- * underflows: c - q is 0 or at least 2^-53 for 0 <= q <= c. */
+/* 2 max(x, 0) = x + |x|, exact for finite x: arithmetic, not a compare-select, which GCC turns
+ * into a branch around the powers (it may not speculate FP multiplies under -ftrapping-math),
+ * and that keeps kernel loops from vectorising. NaN never reaches here. The shapes take their
+ * truncated powers doubled, T = 2 t, and every product of them starts with its constant scaled
+ * by 2^-k (k: the power of T that follows): each rounding is then the rounding of the plain
+ * t-product times a power of 2, and the shape is the t-formula's value bit for bit
+ * (tests/test_kernel_bits.c), without the multiplication by 1/2 of max(x, 0) = (x + |x|) / 2:
+ * 2-3 multiplications fewer per cubic or quintic evaluation (the quintic is about a third of
+ * the lpmps matrix-free apply, bench/README.md). No power underflows: c - q is 0 or at least
+ * 2^-53 for 0 <= q <= c. */
 static inline double pst_sph_pos2(double x)
 {
     return x + fabs(x);
@@ -96,34 +91,35 @@ static inline double pst_sph_shape(pst_kernel k, int dim, double q, int deriv)
     }
     case PST_KERNEL_WENDLAND_C2:
     case PST_KERNEL_WENDLAND_C4: {
-        /* t = 1 - q/2 (Dehnen & Aly with H = 2h); derivatives are the sympy-factored forms. */
-        const double t = pst_sph_pos(1.0 - 0.5 * q), t2 = t * t;
+        /* t = 1 - q/2 (Dehnen & Aly with H = 2h); derivatives are the sympy-factored forms;
+         * in T = 2t and T2 = T^2 (pst_sph_pos2): t = 2^-1 T, t2 = 2^-2 T2. */
+        const double T = pst_sph_pos2(1.0 - 0.5 * q), T2 = T * T;
         if (k == PST_KERNEL_WENDLAND_C2) {
             if (dim == 1) {
                 if (deriv == 0)
-                    return t2 * t * (1.5 * q + 1.0);
+                    return 0.125 * T2 * T * (1.5 * q + 1.0);
                 if (deriv == 1)
-                    return -3.0 * q * t2;
-                return t * (4.5 * q - 3.0);
+                    return -0.75 * q * T2;
+                return 0.5 * T * (4.5 * q - 3.0);
             }
             if (deriv == 0)
-                return t2 * t2 * (2.0 * q + 1.0);
+                return 0.0625 * T2 * T2 * (2.0 * q + 1.0);
             if (deriv == 1)
-                return -5.0 * q * t2 * t;
-            return t2 * (10.0 * q - 5.0);
+                return -0.625 * q * T2 * T;
+            return 0.25 * T2 * (10.0 * q - 5.0);
         }
         if (dim == 1) {
             if (deriv == 0)
-                return t2 * t2 * t * ((2.0 * q + 2.5) * q + 1.0);
+                return 0.03125 * T2 * T2 * T * ((2.0 * q + 2.5) * q + 1.0);
             if (deriv == 1)
-                return -3.5 * q * t2 * t2 * (2.0 * q + 1.0);
-            return 1.75 * t2 * t * ((12.0 * q - 3.0) * q - 2.0);
+                return -0.21875 * q * T2 * T2 * (2.0 * q + 1.0);
+            return 0.21875 * T2 * T * ((12.0 * q - 3.0) * q - 2.0);
         }
         if (deriv == 0)
-            return t2 * t2 * t2 * ((35.0 / 12.0 * q + 3.0) * q + 1.0);
+            return 0.015625 * T2 * T2 * T2 * ((35.0 / 12.0 * q + 3.0) * q + 1.0);
         if (deriv == 1)
-            return -(7.0 / 3.0) * q * t2 * t2 * t * (5.0 * q + 2.0);
-        return (7.0 / 6.0) * t2 * t2 * ((35.0 * q - 8.0) * q - 4.0);
+            return -(7.0 / 3.0) * 0.03125 * q * T2 * T2 * T * (5.0 * q + 2.0);
+        return (7.0 / 6.0) * 0.0625 * T2 * T2 * ((35.0 * q - 8.0) * q - 4.0);
     }
     default: /* PST_KERNEL_DEFAULT and _UNKNOWN name no kernel: excluded by the preconditions */
         break;

@@ -1,8 +1,9 @@
-/* The cubic and quintic shapes (kernels/sph_kernels.h), evaluated in doubled truncated powers
+/* The kernel shapes (kernels/sph_kernels.h), evaluated in doubled truncated powers
  * T = 2 max(c - q, 0) with constants scaled by powers of 2, against the plain formulas in
  * t = max(c - q, 0) of docs/kernels.md written out here: the same bits for every q tried
  * (dense on [0, support + 0.5], the breakpoints and their neighbours, values of q that the
- * neighbour rows form), for the value and both derivatives. */
+ * neighbour rows form), for the value and both derivatives, every kernel, 1D and 3D (2D has
+ * the 3D formulas). */
 #include "check.h"
 #include "sph_kernels.h"
 
@@ -16,8 +17,26 @@ static double plain_pos(double x)
 }
 
 /* The t-formulas of docs/kernels.md, each product written from its constant. */
-static double plain_shape(pst_kernel k, double q, int deriv)
+static double plain_shape(pst_kernel k, int dim, double q, int deriv)
 {
+    if (k == PST_KERNEL_WENDLAND_C2 || k == PST_KERNEL_WENDLAND_C4) {
+        const double t = plain_pos(1.0 - 0.5 * q), t2 = t * t;
+        if (k == PST_KERNEL_WENDLAND_C2 && dim == 1)
+            return deriv == 0   ? t2 * t * (1.5 * q + 1.0)
+                   : deriv == 1 ? -3.0 * q * t2
+                                : t * (4.5 * q - 3.0);
+        if (k == PST_KERNEL_WENDLAND_C2)
+            return deriv == 0   ? t2 * t2 * (2.0 * q + 1.0)
+                   : deriv == 1 ? -5.0 * q * t2 * t
+                                : t2 * (10.0 * q - 5.0);
+        if (dim == 1)
+            return deriv == 0   ? t2 * t2 * t * ((2.0 * q + 2.5) * q + 1.0)
+                   : deriv == 1 ? -3.5 * q * t2 * t2 * (2.0 * q + 1.0)
+                                : 1.75 * t2 * t * ((12.0 * q - 3.0) * q - 2.0);
+        return deriv == 0   ? t2 * t2 * t2 * ((35.0 / 12.0 * q + 3.0) * q + 1.0)
+               : deriv == 1 ? -(7.0 / 3.0) * q * t2 * t2 * t * (5.0 * q + 2.0)
+                            : (7.0 / 6.0) * t2 * t2 * ((35.0 * q - 8.0) * q - 4.0);
+    }
     if (k == PST_KERNEL_CUBIC) {
         const double t2 = plain_pos(2.0 - q), t1 = plain_pos(1.0 - q);
         if (deriv == 0)
@@ -40,24 +59,26 @@ static int same_bits(double a, double b)
     return memcmp(&a, &b, sizeof a) == 0;
 }
 
-/* Compares the two at q; returns 1 on a difference (and says where). */
+/* Compares the two at q in 1D and 3D; returns 1 on a difference (and says where). */
 static int differs(pst_kernel k, double q)
 {
-    for (int deriv = 0; deriv <= 2; ++deriv) {
-        double a = pst_sph_shape(k, 3, q, deriv), b = plain_shape(k, q, deriv);
-        if (!same_bits(a, b)) {
-            printf("  kernel %d deriv %d q = %.17g: %.17g against %.17g\n", (int)k, deriv, q, a,
-                   b);
-            return 1;
+    for (int dim = 1; dim <= 3; dim += 2)
+        for (int deriv = 0; deriv <= 2; ++deriv) {
+            double a = pst_sph_shape(k, dim, q, deriv), b = plain_shape(k, dim, q, deriv);
+            if (!same_bits(a, b)) {
+                printf("  kernel %d dim %d deriv %d q = %.17g: %.17g against %.17g\n", (int)k,
+                       dim, deriv, q, a, b);
+                return 1;
+            }
         }
-    }
     return 0;
 }
 
 int main(void)
 {
-    const pst_kernel ks[2] = {PST_KERNEL_CUBIC, PST_KERNEL_QUINTIC};
-    for (int m = 0; m < 2; ++m) {
+    const pst_kernel ks[4] = {PST_KERNEL_CUBIC, PST_KERNEL_QUINTIC, PST_KERNEL_WENDLAND_C2,
+                              PST_KERNEL_WENDLAND_C4};
+    for (int m = 0; m < 4; ++m) {
         const double supp = pst_sph_support[ks[m]];
         long bad = 0, tried = 0;
         /* dense, and the irrational offsets a jittered cloud gives */
