@@ -107,40 +107,58 @@ PST_KHOT pst_v8 pst_lanes_dot_blocks(int n, const double *t, const double *du, p
 
 /* A block of 8 pairs as the matrix-free rows (and qsfdi's data moments) take it: the scaled
  * offsets x, y, z, u_J - u_I, the squared scaled distance d2 (x x + y y [+ z z], the schemes'
- * own order) and its square root q. */
+ * own order) and its square root q; j, its 8 neighbours (for gathers of per-particle values),
+ * and n, how many of them are the row's (8 but in a row's last block). */
 typedef struct {
     pst_v8 x, y, z, du, d2, q;
+    const uint32_t *j;
+    int n;
 } pst_lanes_block;
 
-/* The block of pairs idx[e .. e + 8) of row L in dimension D (pst_lanes_pairs, then d2 and q;
- * pad is its scratch). */
+/* The block of row L's pairs from idx[e] (dimension D; the row ends at e1): idx[e .. e + 8)
+ * where the list has them (e + 8 <= lim), the lanes past e1 then the next row's neighbours;
+ * else padded as pst_lanes_pairs pads (pad is its scratch). Then d2 and q. */
 PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int64_t e,
-                             int64_t e1, uint32_t pad[PST_LANES], pst_lanes_block *b)
+                             int64_t e1, int64_t lim, uint32_t pad[PST_LANES],
+                             pst_lanes_block *b)
 {
-    (void)pst_lanes_pairs(L, idx, e, e1, pad, &b->x, &b->y, &b->z, &b->du);
+    b->n = e1 - e < PST_LANES ? (int)(e1 - e) : PST_LANES;
+    b->j = pst_lanes_pairs(L, idx, e, e + PST_LANES <= lim ? e + PST_LANES : e1, pad, &b->x,
+                           &b->y, &b->z, &b->du);
     b->d2 = b->x * b->x + b->y * b->y + (D == 3 ? b->z * b->z : pst_v8_splat(0.0));
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l)
         b->q[l] = sqrt(b->d2[l]);
 }
 
+/* acc + terms of block b, its lanes past the row's end (b->n) kept out by a select. */
+PST_KHOT pst_v8 pst_lanes_add(pst_v8 acc, pst_v8 terms, const pst_lanes_block *b)
+{
+    return b->n == PST_LANES ? acc + terms
+                             : pst_v8_add_below(acc, terms, 0, pst_v8_splat((double)b->n));
+}
+
 /* The pairs idx[e0 .. e1) of row L (dimension D), 8 at a time: `step`, a statement in b (a
- * const pst_lanes_block *), for each block in order. Each block is taken (its loads,
+ * const pst_lanes_block *), for each block in order. The blocks read idx up to lim
+ * (pst_lanes_take): e1 pads a row's last block with the row's own particle, a degenerate pair
+ * that adds exactly 0; a farther lim (the list's length) takes the next row's neighbours there,
+ * which the step keeps out of its sums (pst_lanes_add). Each block is taken (its loads,
  * transposes and sqrt) one block ahead of the step that uses it: the latency of the loads and
  * of the sqrt then overlaps the previous block's arithmetic, where in program order the core's
  * scheduler did not reach that far (3D 10^6, 1 and 2 threads: 13-21 % off the qsfdi, lpmps
  * and lsmps applies; two blocks ahead gained nothing more). The same operations in the same
  * order as one block at a time: the same bits. */
-#define PST_LANES_EACH(L, D, idx, e0, e1, b, step)                                             \
+#define PST_LANES_EACH_TO(L, D, idx, e0, e1, lim, b, step)                                     \
     do {                                                                                       \
-        int64_t pst_e_ = (e0), pst_n_ = (e1);                                                  \
+        int64_t pst_e_ = (e0), pst_n_ = (e1), pst_l_ = (lim);                                  \
         uint32_t pst_pa_[PST_LANES], pst_pb_[PST_LANES];                                       \
         pst_lanes_block pst_a_, pst_b_;                                                        \
         if (pst_e_ < pst_n_)                                                                   \
-            pst_lanes_take(&(L), D, idx, pst_e_, pst_n_, pst_pa_, &pst_a_);                    \
+            pst_lanes_take(&(L), D, idx, pst_e_, pst_n_, pst_l_, pst_pa_, &pst_a_);            \
         for (; pst_e_ < pst_n_; pst_e_ += 2 * PST_LANES) {                                     \
             if (pst_e_ + PST_LANES < pst_n_)                                                   \
-                pst_lanes_take(&(L), D, idx, pst_e_ + PST_LANES, pst_n_, pst_pb_, &pst_b_);    \
+                pst_lanes_take(&(L), D, idx, pst_e_ + PST_LANES, pst_n_, pst_l_, pst_pb_,      \
+                               &pst_b_);                                                       \
             {                                                                                  \
                 const pst_lanes_block *b = &pst_a_;                                            \
                 step;                                                                          \
@@ -148,13 +166,17 @@ PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int
             if (pst_e_ + PST_LANES >= pst_n_)                                                  \
                 break;                                                                         \
             if (pst_e_ + 2 * PST_LANES < pst_n_)                                               \
-                pst_lanes_take(&(L), D, idx, pst_e_ + 2 * PST_LANES, pst_n_, pst_pa_, &pst_a_); \
+                pst_lanes_take(&(L), D, idx, pst_e_ + 2 * PST_LANES, pst_n_, pst_l_, pst_pa_,  \
+                               &pst_a_);                                                       \
             {                                                                                  \
                 const pst_lanes_block *b = &pst_b_;                                            \
                 step;                                                                          \
             }                                                                                  \
         }                                                                                      \
     } while (0)
+
+/* PST_LANES_EACH_TO with the row's last block padded. */
+#define PST_LANES_EACH(L, D, idx, e0, e1, b, step) PST_LANES_EACH_TO(L, D, idx, e0, e1, e1, b, step)
 
 /* The pairs idx[e0 .. e1) of row L (dimension D) into L.acc: for each block of 8 (b),
  * `weights`, an expression in b, times u_J - u_I (PST_LANES_EACH). */

@@ -127,6 +127,20 @@ PST_KHOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j,
     return gradient_from(k, D, G, i, j, x, 1, *d2, a, W, g);
 }
 
+/* w_IJ of a scalar-mobility row, s_I V_J (pair mobility) [F - eta_I . g] (the file comment),
+ * from Vs = s_I V_J, the pair mobility pm, F, eta_I and the components of g (gz not read in
+ * 2D): scalars, not an array, so that a loop over lanes calling it vectorises. */
+PST_KHOT double scalar_weight(int D, double Vs, double pm, double F, const double *eta,
+                              double gx, double gy, double gz)
+{
+    double t = F;
+    t -= eta[0] * gx;
+    t -= eta[1] * gy;
+    if (D == 3)
+        t -= eta[2] * gz;
+    return Vs * pm * t;
+}
+
 /* w_IJ of a scheme row (see the file comment) from the pair's geometry (gradient_from's
  * arguments; x and mj at stride xs) and the mobilities of I and J (mi, mj: 1 value, D for a
  * tensor). Shared by apply,
@@ -140,10 +154,8 @@ PST_KHOT double weight_from(const lv_ctx *k, int D, int G, int T, int H, size_t 
     const lv_data *d = k->d;
     double Vs = d->s[i] * k->c.V[j], w;
     if (!T) {
-        double t = F;
-        for (int c = 0; c < D; ++c)
-            t -= d->eta[(size_t)D * i + c] * g[c];
-        w = Vs * pair_mobility(mi[0], mj[0], H) * t;
+        w = scalar_weight(D, Vs, pair_mobility(mi[0], mj[0], H), F, d->eta + (size_t)D * i, g[0],
+                          g[1], D == 3 ? g[2] : 0.0);
     } else {
         const double *C = d->C + (size_t)D * D * i, *zeta = d->zeta + (size_t)D * i;
         double s = 0;
@@ -210,6 +222,14 @@ typedef struct {
     double x[3][LV_CHUNK], d2[LV_CHUNK], a[LV_CHUNK], W[LV_CHUNK];
 } lv_chunk;
 
+/* a = -dW/dr / d of a pair at distance d with h~ = ht (pair_geometry's), 0 for a degenerate
+ * pair: the chunk rows' and the lane rows' arithmetic. */
+PST_KHOT double pair_a(pst_kernel K, int D, double d, double ht, double eps)
+{
+    double av = -pst_sph_dw(K, D, d, ht) / d;
+    return d > eps * ht ? av : 0.0;
+}
+
 /* The distances d = sqrt(d2) of a chunk, and a and W for the constant kernel K
  * (pair_geometry's arithmetic), h~ of pair c at ht[c * hs]. The loop waits on the divider
  * (the sqrt and the division by d): the sqrt runs here, beside the kernel's multiplications,
@@ -220,8 +240,8 @@ PST_KHOT void chunk_kernel(pst_kernel K, int D, int needW, int n, double *d,
 {
 #pragma omp simd
     for (int c = 0; c < n; ++c) {
-        double dc = sqrt(ch->d2[c]), av = -pst_sph_dw(K, D, dc, ht[c * hs]) / dc;
-        ch->a[c] = dc > eps * ht[c * hs] ? av : 0.0;
+        double dc = sqrt(ch->d2[c]);
+        ch->a[c] = pair_a(K, D, dc, ht[c * hs], eps);
         d[c] = dc;
     }
     if (needW)
@@ -393,6 +413,86 @@ static const row_fn row_table[2][4][2][2] = {
 static row_fn row_for(const lv_ctx *k)
 {
     return row_table[k->c.dim - 2][k->variant - 1][k->c.ncomp > 1][k->harmonic];
+}
+
+/* ---- the default rows in lanes ------------------------------------------------------------ */
+
+/* What a G1 row with scalar mobility and the arithmetic pair mean reads besides its pairs, on a
+ * cloud of one h: h~ = (h_I + h) / 2, and the row's s_I, eta_I and mobility m_I. */
+typedef struct {
+    double ht, eps, s, m, eta[3];
+} lv_lane_row;
+
+/* The weights of a block of 8 pairs of such a row, lane by lane through the chunk rows' own
+ * functions (pair_a, pair_mobility, scalar_weight; the G1 gradient is a x): their weights bit
+ * for bit. V_J and m_J gathered for the block (vj, mj). Through weight_from itself GCC 12 does
+ * not vectorise the lane loop (its g array and branches; 3x slower). */
+PST_KHOT pst_v8 g1_lane_weights(pst_kernel K, int D, const lv_lane_row *r,
+                                const pst_lanes_block *b, pst_v8 vj, pst_v8 mj)
+{
+    pst_v8 w;
+#pragma omp simd
+    for (int l = 0; l < PST_LANES; ++l) {
+        double a = pair_a(K, D, b->q[l], r->ht, r->eps); /* G1 (15): g = a x, F = a */
+        double wv = scalar_weight(D, r->s * vj[l], pair_mobility(r->m, mj[l], 0), a, r->eta,
+                                  a * b->x[l], a * b->y[l], a * b->z[l]);
+        w[l] = a == 0.0 ? 0.0 : wv;
+    }
+    return w;
+}
+
+/* Row i of the matrix-free apply for such a row (not a Neumann row), 8 pairs at a time like
+ * qsfdi's, each block taken one ahead (kernels/lanes.h): the weights of row_t's chunks without
+ * their passes through arrays. The row's last block reads on into the list like row_t's (the
+ * lanes past the row computed and kept out of the sum); the list's last row pads. */
+PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, const int64_t *off,
+                          const uint32_t *idx, size_t i, double *y)
+{
+    lv_lane_row r = {.ht = 0.5 * (pst_h(&k->c, i) + k->c.h_uniform),
+                     .eps = k->c.pair_eps,
+                     .s = k->d->s[i],
+                     .m = pst_mob(&k->c, 0, i)};
+    for (int a = 0; a < D; ++a)
+        r.eta[a] = k->d->eta[(size_t)D * i + a];
+    const double *mob = k->c.ncomp ? k->c.mob[0] : NULL;
+    pst_lanes L = pst_lanes_row(&k->c, i, 1.0);
+    PST_LANES_EACH_TO(L, D, idx, off[i], off[i + 1], k->list_end, b, {
+        pst_v8 vj = pst_v8_gather(k->c.V, b->j);
+        pst_v8 mj = mob ? pst_v8_gather(mob, b->j) : pst_v8_splat(1.0);
+        L.acc = pst_lanes_add(L.acc, g1_lane_weights(K, D, &r, b, vj, mj) * b->du, b);
+    });
+    y[i] = pst_v8_sum(L.acc);
+}
+
+/* g1_lane_row for the rows [i0, i1) that are neither Dirichlet nor Neumann rows, per dimension
+ * and kernel, in the widest vector ISA. */
+typedef void (*lane_rows_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t, size_t,
+                             double *);
+#define LV_LANE_ROWS(D, K, name)                                                               \
+    PST_ISA_DISPATCH static void lane_rows_##D##_##name(const lv_ctx *k, const int64_t *off,    \
+                                                        const uint32_t *idx, size_t i0,         \
+                                                        size_t i1, double *y)                   \
+    {                                                                                          \
+        for (size_t i = i0; i < i1; ++i)                                                       \
+            if (k->c.kind[i] != PST_DIRICHLET && k->c.kind[i] != PST_NEUMANN)                  \
+                g1_lane_row(k, D, K, off, idx, i, y);                                          \
+    }
+LV_LANE_ROWS(2, PST_KERNEL_CUBIC, cubic) LV_LANE_ROWS(2, PST_KERNEL_QUINTIC, quintic)
+LV_LANE_ROWS(2, PST_KERNEL_WENDLAND_C2, wc2) LV_LANE_ROWS(2, PST_KERNEL_WENDLAND_C4, wc4)
+LV_LANE_ROWS(3, PST_KERNEL_CUBIC, cubic) LV_LANE_ROWS(3, PST_KERNEL_QUINTIC, quintic)
+LV_LANE_ROWS(3, PST_KERNEL_WENDLAND_C2, wc2) LV_LANE_ROWS(3, PST_KERNEL_WENDLAND_C4, wc4)
+static const lane_rows_fn lane_rows_table[2][4] = {
+    {lane_rows_2_cubic, lane_rows_2_quintic, lane_rows_2_wc2, lane_rows_2_wc4},
+    {lane_rows_3_cubic, lane_rows_3_quintic, lane_rows_3_wc2, lane_rows_3_wc4}};
+
+/* The lane rows serve the default operators, G1 with no mobility or a scalar one, the
+ * arithmetic pair mean and one h in the cloud; NULL otherwise (the chunk rows serve every
+ * operator, and the Neumann rows of these). */
+static lane_rows_fn lane_rows_for(const lv_ctx *k)
+{
+    if (k->variant != PST_GRAD_G1 || k->c.ncomp > 1 || k->harmonic || k->c.h)
+        return NULL;
+    return lane_rows_table[k->c.dim - 2][k->c.kernel];
 }
 
 /* ---- precompute ------------------------------------------------------------------------ */
@@ -723,22 +823,30 @@ static int pre_msph(pst_op *op, char *err) { return precompute(op, LV_MSPH, err)
 /* ---- apply, emission and the rest of the table ------------------------------------------ */
 
 /* Matrix-free apply: recompute each pair's geometry and weight from the positions and the
- * per-particle data, a chunk of neighbours at a time in vector lanes (row_t). Compute-bound: a
- * sqrt, two divisions and ~40 flops per pair (more for G2/G4 and tensors) against 4 bytes of
- * list and 8 of x_J (3 coordinates) and u_J gathered; measured (3D 10^6, G1, 1 thread,
- * 2026-12-05) 2.7-2.8 ns per pair (was ~10 scalar), 3.5-4.2x the stored apply
- * (bench/README.md, "Which bound"). */
+ * per-particle data, 8 pairs at a time (g1_lane_row) or a chunk of neighbours at a time
+ * (row_t), in vector lanes. Compute-bound: a sqrt, two divisions and ~40 flops per pair (more
+ * for G2/G4 and tensors) against 4 bytes of list and the packed row of J; measured (3D 10^6,
+ * G1, 1 thread, 2026-12-06) 2.2 ns per pair in the lane rows (2.6 in the chunk rows, ~10
+ * scalar), 3.4-3.5x the stored apply (bench/README.md, "Which bound"). */
+#define LANE_BLOCK 1024 /* rows per call of a lane worker: its dispatch is < 0.1 % of them */
 static void lv_apply(const pst_op *op, const double *u, double *y)
 {
     lv_ctx k = make_ctx(op);
     row_fn row = row_for(&k);
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
+    lane_rows_fn lanes = lane_rows_for(&k);
     k.list_end = off[op->n];
+    size_t nb = (op->n + LANE_BLOCK - 1) / LANE_BLOCK;
 #pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < op->n; ++i)
-        if (k.c.kind[i] != PST_DIRICHLET)
-            row(&k, off, idx, i, u, y, NULL, 0);
+    for (size_t b = 0; b < nb; ++b) {
+        size_t i0 = b * LANE_BLOCK, i1 = i0 + LANE_BLOCK < op->n ? i0 + LANE_BLOCK : op->n;
+        if (lanes)
+            lanes(&k, off, idx, i0, i1, y);
+        for (size_t i = i0; i < i1; ++i)
+            if (k.c.kind[i] != PST_DIRICHLET && (!lanes || k.c.kind[i] == PST_NEUMANN))
+                row(&k, off, idx, i, u, y, NULL, 0);
+    }
 }
 
 static void lv_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,

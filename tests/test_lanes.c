@@ -2,10 +2,11 @@
  * lanes"): for qsfdi, lpmps, lsmps and the LV family the matrix-free apply takes 8 pairs at a
  * time from the packed (x, y, z, u) rows and sums in the stored apply's 8 lanes, so the two
  * applies give the same numbers, row by row, not only to rounding. Checked in 2D and 3D with
- * Dirichlet and Neumann rows, uniform and per-particle h, the LV gradient variants and
- * mobilities, rows of every length modulo 8 (the padded last block) and rows longer than a
- * chunk (256 neighbours); a second apply with another u repacks u; an operator whose rows were
- * skipped refuses the apply. */
+ * Dirichlet and Neumann rows, uniform and per-particle h, the LV gradient variants, mobilities
+ * and kernels (the LV rows in lanes beside its chunk rows), rows of every length modulo 8 (the
+ * last block padded, or read past the row) and rows longer than a chunk (256 neighbours); a
+ * second apply with another u repacks u; an operator whose rows were skipped refuses the
+ * apply. */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"
@@ -80,9 +81,17 @@ static void check_schemes(int dim, int per_particle_h)
         o.scheme = quadric[s];
         check_op(c, wide, &o, &tails);
     }
-    pst_nlist_destroy(wide);
     const char *lv[] = {"brookshaw", "cb", "schwaiger", "lv"};
     pst_nlist *nl = test_nlist(c, 2.0 * 1.2); /* the cubic spline's */
+    /* the LV rows in lanes (G1, one h) have an instantiation per kernel: the other three */
+    for (int K = PST_KERNEL_QUINTIC; K <= PST_KERNEL_WENDLAND_C4; ++K) {
+        pst_op_opts o;
+        pst_op_defaults(&o);
+        o.scheme = "lv";
+        o.kernel = (pst_kernel)K;
+        check_op(c, K == PST_KERNEL_QUINTIC ? wide : nl, &o, &tails);
+    }
+    pst_nlist_destroy(wide);
     for (int s = 0; s < 4; ++s)
         for (int g = PST_GRAD_G1; g <= PST_GRAD_G4; ++g) {
             pst_op_opts o;
