@@ -425,8 +425,8 @@ typedef struct {
 
 /* The weights of a block of 8 pairs of such a row, lane by lane through the chunk rows' own
  * functions (pair_a, pair_mobility, scalar_weight; the G1 gradient is a x): their weights bit
- * for bit. V_J and m_J gathered for the block (vj, mj). Through weight_from itself GCC 12 does
- * not vectorise the lane loop (its g array and branches; 3x slower). */
+ * for bit. V_J and m_J gathered for the block (vj, mj). With g as an array (gradient_from,
+ * weight_from) GCC 12 does not vectorise the lane loop: 3x slower. */
 PST_KHOT pst_v8 g1_lane_weights(pst_kernel K, int D, const lv_lane_row *r,
                                 const pst_lanes_block *b, pst_v8 vj, pst_v8 mj)
 {
