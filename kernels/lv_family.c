@@ -828,7 +828,7 @@ static int pre_msph(pst_op *op, char *err) { return precompute(op, LV_MSPH, err)
  * for G2/G4 and tensors) against 4 bytes of list and the packed row of J; measured (3D 10^6,
  * G1, 1 thread, 2026-12-06) 2.2 ns per pair in the lane rows (2.6 in the chunk rows, ~10
  * scalar), 3.4-3.5x the stored apply (bench/README.md, "Which bound"). */
-#define LANE_BLOCK 1024 /* rows per call of a lane worker: its dispatch is < 0.1 % of them */
+#define LANE_BLOCK 256 /* rows per call of a lane worker (as qsfdi): enough blocks for 16 threads */
 static void lv_apply(const pst_op *op, const double *u, double *y)
 {
     lv_ctx k = make_ctx(op);
