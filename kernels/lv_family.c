@@ -74,6 +74,14 @@ PST_KHOT double pair_mobility(double a, double b, int H)
     return s > 0 ? v : 0.0;
 }
 
+/* a = -dW/dr / d of a pair at distance d with h~ = ht, 0 for a degenerate pair (closer than
+ * eps ht, pst_pair_live's rule): the arithmetic of every LV row, scalar, chunk or lanes. */
+PST_KHOT double pair_a(pst_kernel K, int D, double d, double ht, double eps)
+{
+    double av = -pst_sph_dw(K, D, d, ht) / d;
+    return d > eps * ht ? av : 0.0;
+}
+
 /* The pair geometry of (i, j): x = r_j - r_i, d^2, h~ = (h_i + h_j)/2 (26), the kernel value W
  * (only when needW) and a = -dW/dr / d >= 0, so that the G1 gradient (15) is a x. Degenerate
  * pairs get a = W = 0. */
@@ -86,7 +94,7 @@ PST_KHOT double pair_geometry(const lv_ctx *k, int D, int needW, size_t i, size_
     int ok = pst_pair_live(&k->c, d, ht);
     *d2out = d2;
     *W = ok && needW ? pst_sph_w(k->c.kernel, D, d, ht) : 0.0;
-    return ok ? -pst_sph_dw(k->c.kernel, D, d, ht) / d : 0.0;
+    return pair_a(k->c.kernel, D, d, ht, k->c.pair_eps);
 }
 
 /* The kernel gradient g_IJ of variant G (15)-(18) at pair (i, j), and F_IJ = x . g / d^2
@@ -221,14 +229,6 @@ PST_KHOT double row_weight(const lv_ctx *k, int D, int G, int T, int H, size_t i
 typedef struct {
     double x[3][LV_CHUNK], d2[LV_CHUNK], a[LV_CHUNK], W[LV_CHUNK];
 } lv_chunk;
-
-/* a = -dW/dr / d of a pair at distance d with h~ = ht (pair_geometry's), 0 for a degenerate
- * pair: the chunk rows' and the lane rows' arithmetic. */
-PST_KHOT double pair_a(pst_kernel K, int D, double d, double ht, double eps)
-{
-    double av = -pst_sph_dw(K, D, d, ht) / d;
-    return d > eps * ht ? av : 0.0;
-}
 
 /* The distances d = sqrt(d2) of a chunk, and a and W for the constant kernel K
  * (pair_geometry's arithmetic), h~ of pair c at ht[c * hs]. The loop waits on the divider
