@@ -87,6 +87,13 @@ PST_KHOT void pst_lanes_gather(const pst_lanes *L, const uint32_t *idx, int n, d
     }
 }
 
+/* acc + terms in the block's first n lanes (all 8 for n >= 8): the lanes past a row's end are
+ * kept out by a select (pst_v8_add_below). */
+PST_KHOT pst_v8 pst_lanes_add(pst_v8 acc, pst_v8 terms, int64_t n)
+{
+    return n >= PST_LANES ? acc + terms : pst_v8_add_below(acc, terms, 0, pst_v8_splat((double)n));
+}
+
 /* acc[c mod 8] += t[c] du[c] for c < n (du: u_J - u_I), neighbour c in lane c mod 8 across
  * consecutive calls of one row (every call but the last takes a multiple of 8), then
  * pst_v8_sum: the lanes of the rows that work a chunk at a time. t and du are read in whole
@@ -95,12 +102,11 @@ PST_KHOT void pst_lanes_gather(const pst_lanes *L, const uint32_t *idx, int n, d
  * a scalar tail. */
 PST_KHOT pst_v8 pst_lanes_dot_blocks(int n, const double *t, const double *du, pst_v8 acc)
 {
-    const pst_v8 len = pst_v8_splat((double)n);
     for (int c = 0; c < n; c += PST_LANES) {
         pst_v8 tv, dv;
         memcpy(&tv, t + c, sizeof tv);
         memcpy(&dv, du + c, sizeof dv);
-        acc = c + PST_LANES <= n ? acc + tv * dv : pst_v8_add_below(acc, tv * dv, c, len);
+        acc = pst_lanes_add(acc, tv * dv, n - c);
     }
     return acc;
 }
@@ -131,18 +137,11 @@ PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int
         b->q[l] = sqrt(b->d2[l]);
 }
 
-/* acc + terms of block b, its lanes past the row's end (b->n) kept out by a select. */
-PST_KHOT pst_v8 pst_lanes_add(pst_v8 acc, pst_v8 terms, const pst_lanes_block *b)
-{
-    return b->n == PST_LANES ? acc + terms
-                             : pst_v8_add_below(acc, terms, 0, pst_v8_splat((double)b->n));
-}
-
 /* The pairs idx[e0 .. e1) of row L (dimension D), 8 at a time: `step`, a statement in b (a
  * const pst_lanes_block *), for each block in order. The blocks read idx up to lim
  * (pst_lanes_take): e1 pads a row's last block with the row's own particle, a degenerate pair
  * that adds exactly 0; a farther lim (the list's length) takes the next row's neighbours there,
- * which the step keeps out of its sums (pst_lanes_add). Each block is taken (its loads,
+ * which the step keeps out of its sums (pst_lanes_add with b->n). Each block is taken (its loads,
  * transposes and sqrt) one block ahead of the step that uses it: the latency of the loads and
  * of the sqrt then overlaps the previous block's arithmetic, where in program order the core's
  * scheduler did not reach that far (3D 10^6, 1 and 2 threads: 13-21 % off the qsfdi, lpmps

@@ -459,7 +459,7 @@ PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, const int64_t *o
     PST_LANES_EACH_TO(L, D, idx, off[i], off[i + 1], k->list_end, b, {
         pst_v8 vj = pst_v8_gather(k->c.V, b->j);
         pst_v8 mj = mob ? pst_v8_gather(mob, b->j) : pst_v8_splat(1.0);
-        L.acc = pst_lanes_add(L.acc, g1_lane_weights(K, D, &r, b, vj, mj) * b->du, b);
+        L.acc = pst_lanes_add(L.acc, g1_lane_weights(K, D, &r, b, vj, mj) * b->du, b->n);
     });
     y[i] = pst_v8_sum(L.acc);
 }
