@@ -19,8 +19,8 @@
  * component for tensors (pair_mobility below; 0 when m_I + m_J <= 0).
  * Fallback chain (docs/schemes/): too few neighbours or a singular C / Gamma -> the Brookshaw
  * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN. */
+#include "lv_family.h"
 #include "isa.h"
-#include "kernel_common.h"
 #include "lanes.h"
 #include "small_matrix.h"
 #include "sph_kernels.h"
@@ -30,56 +30,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { LV_BROOKSHAW, LV_CB, LV_SCHWAIGER, LV_MSPH };
-
-
-typedef struct {
-    int which;     /* LV_* */
-    double *nu;    /* Shepard nu_I (13)-(14), G2-G4; NULL for G1          */
-    double *gnu;   /* grad nu_I, dim per particle, G2 only               */
-    double *C;     /* dim*dim per particle, row-major                    */
-    double *zeta;  /* dim per particle: N (schwaiger), N~ (lv), else 0   */
-    double *eta;   /* dim per particle: C^T zeta                          */
-    double *s;     /* the normalising factor s_I                          */
-} lv_data;
-
-/* Everything the pair functions read, gathered once per call (pair_eps in units of h~). */
-typedef struct {
-    pst_kctx c;
-    int variant;  /* opts.gradient */
-    int harmonic; /* opts.mobility_mean == PST_MEAN_HARMONIC */
-    const lv_data *d;
-    int64_t list_end; /* the apply: off[n], how far row_t may read past a row; else 0 */
-} lv_ctx;
-
 static lv_ctx make_ctx(const pst_op *op)
 {
     return (lv_ctx){.c = pst_kctx_of(op), .variant = op->opts.gradient,
                     .harmonic = op->opts.mobility_mean == PST_MEAN_HARMONIC, .d = op->data};
-}
-
-/* The hot pair functions (PST_KHOT) take the dimension D, the gradient variant G, the tensor
- * flag T and the harmonic-mean flag H as arguments; the applies call them with constants (one
- * instantiation per combination), so the loops carry no per-pair branches on them. Other
- * callers pass runtime values. */
-/* The pair mobility of one component: the paper's arithmetic sum a + b (29), or with H twice
- * the harmonic mean, 4 a b / (a + b) (an extension, not in the paper). The harmonic form is written
- * 4 a (b / s) so that it cannot overflow for finite a, b > 0 (b / s <= 1), and is 0 when
- * s = a + b is not positive (or NaN): no NaN from it. Equal to a + b when a == b. */
-PST_KHOT double pair_mobility(double a, double b, int H)
-{
-    if (!H)
-        return a + b;
-    double s = a + b, v = 4.0 * a * (b / s); /* evaluated always: a select, which vectorises */
-    return s > 0 ? v : 0.0;
-}
-
-/* a = -dW/dr / d of a pair at distance d with h~ = ht, 0 for a degenerate pair (closer than
- * eps ht, pst_pair_live's rule): the arithmetic of every LV row, scalar, chunk or lanes. */
-PST_KHOT double pair_a(pst_kernel K, int D, double d, double ht, double eps)
-{
-    double av = -pst_sph_dw(K, D, d, ht) / d;
-    return d > eps * ht ? av : 0.0;
 }
 
 /* The pair geometry of (i, j): x = r_j - r_i, d^2, h~ = (h_i + h_j)/2 (26), the kernel value W
@@ -135,20 +89,6 @@ PST_KHOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j,
     return gradient_from(k, D, G, i, j, x, 1, *d2, a, W, g);
 }
 
-/* w_IJ of a scalar-mobility row, s_I V_J (pair mobility) [F - eta_I . g] (the file comment),
- * from Vs = s_I V_J, the pair mobility pm, F, eta_I and the components of g (gz not read in
- * 2D): scalars, not an array, so that a loop over lanes calling it vectorises. */
-PST_KHOT double scalar_weight(int D, double Vs, double pm, double F, const double *eta,
-                              double gx, double gy, double gz)
-{
-    double t = F;
-    t -= eta[0] * gx;
-    t -= eta[1] * gy;
-    if (D == 3)
-        t -= eta[2] * gz;
-    return Vs * pm * t;
-}
-
 /* w_IJ of a scheme row (see the file comment) from the pair's geometry (gradient_from's
  * arguments; x and mj at stride xs) and the mobilities of I and J (mi, mj: 1 value, D for a
  * tensor). Shared by apply,
@@ -165,15 +105,10 @@ PST_KHOT double weight_from(const lv_ctx *k, int D, int G, int T, int H, size_t 
         w = scalar_weight(D, Vs, pair_mobility(mi[0], mj[0], H), F, d->eta + (size_t)D * i, g[0],
                           g[1], D == 3 ? g[2] : 0.0);
     } else {
-        const double *C = d->C + (size_t)D * D * i, *zeta = d->zeta + (size_t)D * i;
-        double s = 0;
-        for (int b = 0; b < D; ++b) {
-            double Cg = 0;
-            for (int e = 0; e < D; ++e)
-                Cg += C[b * D + e] * g[e];
-            s += pair_mobility(mi[b], mj[b * xs], H) * (x[b * xs] * g[b] / d2 - zeta[b] * Cg);
-        }
-        w = Vs * s;
+        double z = D == 3 ? x[2 * xs] : 0.0, gz = D == 3 ? g[2] : 0.0;
+        w = tensor_weight(D, H, Vs, mi, mj[0], mj[xs], D == 3 ? mj[2 * xs] : 0.0, d2,
+                          d->C + (size_t)D * D * i, d->zeta + (size_t)D * i, x[0], x[xs], z,
+                          g[0], g[1], gz);
     }
     return w;
 }
@@ -413,86 +348,6 @@ static const row_fn row_table[2][4][2][2] = {
 static row_fn row_for(const lv_ctx *k)
 {
     return row_table[k->c.dim - 2][k->variant - 1][k->c.ncomp > 1][k->harmonic];
-}
-
-/* ---- the default rows in lanes ------------------------------------------------------------ */
-
-/* What a G1 row with scalar mobility and the arithmetic pair mean reads besides its pairs, on a
- * cloud of one h: h~ = (h_I + h) / 2, and the row's s_I, eta_I and mobility m_I. */
-typedef struct {
-    double ht, eps, s, m, eta[3];
-} lv_lane_row;
-
-/* The weights of a block of 8 pairs of such a row, lane by lane through the chunk rows' own
- * functions (pair_a, pair_mobility, scalar_weight; the G1 gradient is a x): their weights bit
- * for bit. V_J and m_J gathered for the block (vj, mj). With g as an array (gradient_from,
- * weight_from) GCC 12 does not vectorise the lane loop: 3x slower. */
-PST_KHOT pst_v8 g1_lane_weights(pst_kernel K, int D, const lv_lane_row *r,
-                                const pst_lanes_block *b, pst_v8 vj, pst_v8 mj)
-{
-    pst_v8 w;
-#pragma omp simd
-    for (int l = 0; l < PST_LANES; ++l) {
-        double a = pair_a(K, D, b->q[l], r->ht, r->eps); /* G1 (15): g = a x, F = a */
-        double wv = scalar_weight(D, r->s * vj[l], pair_mobility(r->m, mj[l], 0), a, r->eta,
-                                  a * b->x[l], a * b->y[l], a * b->z[l]);
-        w[l] = a == 0.0 ? 0.0 : wv;
-    }
-    return w;
-}
-
-/* Row i of the matrix-free apply for such a row (not a Neumann row), 8 pairs at a time like
- * qsfdi's, each block taken one ahead (kernels/lanes.h): the weights of row_t's chunks without
- * their passes through arrays. The row's last block reads on into the list like row_t's (the
- * lanes past the row computed and kept out of the sum); the list's last row pads. */
-PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, const int64_t *off,
-                          const uint32_t *idx, size_t i, double *y)
-{
-    lv_lane_row r = {.ht = 0.5 * (pst_h(&k->c, i) + k->c.h_uniform),
-                     .eps = k->c.pair_eps,
-                     .s = k->d->s[i],
-                     .m = pst_mob(&k->c, 0, i)};
-    for (int a = 0; a < D; ++a)
-        r.eta[a] = k->d->eta[(size_t)D * i + a];
-    const double *mob = k->c.ncomp ? k->c.mob[0] : NULL;
-    pst_lanes L = pst_lanes_row(&k->c, i, 1.0);
-    PST_LANES_EACH_TO(L, D, idx, off[i], off[i + 1], k->list_end, b, {
-        pst_v8 vj = pst_v8_gather(k->c.V, b->j);
-        pst_v8 mj = mob ? pst_v8_gather(mob, b->j) : pst_v8_splat(1.0);
-        L.acc = pst_lanes_add(L.acc, g1_lane_weights(K, D, &r, b, vj, mj) * b->du, b->n);
-    });
-    y[i] = pst_v8_sum(L.acc);
-}
-
-/* g1_lane_row for the rows [i0, i1) that are neither Dirichlet nor Neumann rows, per dimension
- * and kernel, in the widest vector ISA. */
-typedef void (*lane_rows_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t, size_t,
-                             double *);
-#define LV_LANE_ROWS(D, K, name)                                                               \
-    PST_ISA_DISPATCH static void lane_rows_##D##_##name(const lv_ctx *k, const int64_t *off,    \
-                                                        const uint32_t *idx, size_t i0,         \
-                                                        size_t i1, double *y)                   \
-    {                                                                                          \
-        for (size_t i = i0; i < i1; ++i)                                                       \
-            if (k->c.kind[i] != PST_DIRICHLET && k->c.kind[i] != PST_NEUMANN)                  \
-                g1_lane_row(k, D, K, off, idx, i, y);                                          \
-    }
-LV_LANE_ROWS(2, PST_KERNEL_CUBIC, cubic) LV_LANE_ROWS(2, PST_KERNEL_QUINTIC, quintic)
-LV_LANE_ROWS(2, PST_KERNEL_WENDLAND_C2, wc2) LV_LANE_ROWS(2, PST_KERNEL_WENDLAND_C4, wc4)
-LV_LANE_ROWS(3, PST_KERNEL_CUBIC, cubic) LV_LANE_ROWS(3, PST_KERNEL_QUINTIC, quintic)
-LV_LANE_ROWS(3, PST_KERNEL_WENDLAND_C2, wc2) LV_LANE_ROWS(3, PST_KERNEL_WENDLAND_C4, wc4)
-static const lane_rows_fn lane_rows_table[2][4] = {
-    {lane_rows_2_cubic, lane_rows_2_quintic, lane_rows_2_wc2, lane_rows_2_wc4},
-    {lane_rows_3_cubic, lane_rows_3_quintic, lane_rows_3_wc2, lane_rows_3_wc4}};
-
-/* The lane rows serve the default operators, G1 with no mobility or a scalar one, the
- * arithmetic pair mean and one h in the cloud; NULL otherwise (the chunk rows serve every
- * operator, and the Neumann rows of these). */
-static lane_rows_fn lane_rows_for(const lv_ctx *k)
-{
-    if (k->variant != PST_GRAD_G1 || k->c.ncomp > 1 || k->harmonic || k->c.h)
-        return NULL;
-    return lane_rows_table[k->c.dim - 2][k->c.kernel];
 }
 
 /* ---- precompute ------------------------------------------------------------------------ */
@@ -823,11 +678,12 @@ static int pre_msph(pst_op *op, char *err) { return precompute(op, LV_MSPH, err)
 /* ---- apply, emission and the rest of the table ------------------------------------------ */
 
 /* Matrix-free apply: recompute each pair's geometry and weight from the positions and the
- * per-particle data, 8 pairs at a time (g1_lane_row) or a chunk of neighbours at a time
- * (row_t), in vector lanes. Compute-bound: a sqrt, two divisions and ~40 flops per pair (more
- * for G2/G4 and tensors) against 4 bytes of list and the packed row of J; measured (3D 10^6,
- * G1, 1 thread, 2026-12-06) 2.2 ns per pair in the lane rows (2.6 in the chunk rows, ~10
- * scalar), 3.4-3.5x the stored apply (bench/README.md, "Which bound"). */
+ * per-particle data, 8 pairs at a time (the G1 rows, kernels/lv_lanes.c) or a chunk of
+ * neighbours at a time (row_t: G2-G4 and the Neumann rows), in vector lanes. Compute-bound: a
+ * sqrt, two divisions and ~40 flops per pair (more for G2/G4 and tensors) against 4 bytes of
+ * list and the packed row of J; measured (3D 10^6, G1, 1 thread, 2026-12-06) 2.2 ns per pair
+ * in the lane rows (2.6 in the chunk rows, ~10 scalar), 3.4-3.5x the stored apply
+ * (bench/README.md, "Which bound"). */
 #define LANE_BLOCK 256 /* rows per call of a lane worker (as qsfdi): enough blocks for 16 threads */
 static void lv_apply(const pst_op *op, const double *u, double *y)
 {
@@ -835,7 +691,7 @@ static void lv_apply(const pst_op *op, const double *u, double *y)
     row_fn row = row_for(&k);
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
-    lane_rows_fn lanes = lane_rows_for(&k);
+    lv_lane_rows_fn lanes = lv_lane_rows_for(&k);
     k.list_end = off[op->n];
     size_t nb = (op->n + LANE_BLOCK - 1) / LANE_BLOCK;
 #pragma omp parallel for schedule(static)

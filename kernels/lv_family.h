@@ -1,0 +1,112 @@
+/* The Lukyanov-Vuik family's shared parts (kernels/lv_family.c has the scheme): its data, the
+ * context the pair functions read, and the pair rules that both the chunk rows (lv_family.c)
+ * and the lane rows (lv_lanes.c) call, so that their weights agree bit for bit. Internal. */
+#ifndef PSTENCIL_LV_FAMILY_H
+#define PSTENCIL_LV_FAMILY_H
+
+#include "kernel_common.h"
+#include "sph_kernels.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+enum { LV_BROOKSHAW, LV_CB, LV_SCHWAIGER, LV_MSPH };
+
+typedef struct {
+    int which;     /* LV_* */
+    double *nu;    /* Shepard nu_I (13)-(14), G2-G4; NULL for G1          */
+    double *gnu;   /* grad nu_I, dim per particle, G2 only               */
+    double *C;     /* dim*dim per particle, row-major                    */
+    double *zeta;  /* dim per particle: N (schwaiger), N~ (lv), else 0   */
+    double *eta;   /* dim per particle: C^T zeta                          */
+    double *s;     /* the normalising factor s_I                          */
+} lv_data;
+
+/* Everything the pair functions read, gathered once per call (pair_eps in units of h~). */
+typedef struct {
+    pst_kctx c;
+    int variant;  /* opts.gradient */
+    int harmonic; /* opts.mobility_mean == PST_MEAN_HARMONIC */
+    const lv_data *d;
+    int64_t list_end; /* the apply: off[n], how far row_t may read past a row; else 0 */
+} lv_ctx;
+
+/* The hot pair functions (PST_KHOT) take the dimension D, the gradient variant G, the tensor
+ * flag T and the harmonic-mean flag H as arguments; the applies call them with constants (one
+ * instantiation per combination), so the loops carry no per-pair branches on them. Other
+ * callers pass runtime values. */
+
+/* The pair mobility of one component: the paper's arithmetic sum a + b (29), or with H twice
+ * the harmonic mean, 4 a b / (a + b) (an extension, not in the paper). The harmonic form is written
+ * 4 a (b / s) so that it cannot overflow for finite a, b > 0 (b / s <= 1), and is 0 when
+ * s = a + b is not positive (or NaN): no NaN from it. Equal to a + b when a == b. */
+PST_KHOT double pair_mobility(double a, double b, int H)
+{
+    if (!H)
+        return a + b;
+    double s = a + b, v = 4.0 * a * (b / s); /* evaluated always: a select, which vectorises */
+    return s > 0 ? v : 0.0;
+}
+
+/* a = -dW/dr / d of a pair at distance d with h~ = ht, 0 for a degenerate pair (closer than
+ * eps ht, pst_pair_live's rule): the arithmetic of every LV row, scalar, chunk or lanes. */
+PST_KHOT double pair_a(pst_kernel K, int D, double d, double ht, double eps)
+{
+    double av = -pst_sph_dw(K, D, d, ht) / d;
+    return d > eps * ht ? av : 0.0;
+}
+
+/* w_IJ of a scalar-mobility row, s_I V_J (pair mobility) [F - eta_I . g] (lv_family.c's file
+ * comment),
+ * from Vs = s_I V_J, the pair mobility pm, F, eta_I and the components of g (gz not read in
+ * 2D): scalars, not an array, so that a loop over lanes calling it vectorises. */
+PST_KHOT double scalar_weight(int D, double Vs, double pm, double F, const double *eta,
+                              double gx, double gy, double gz)
+{
+    double t = F;
+    t -= eta[0] * gx;
+    t -= eta[1] * gy;
+    if (D == 3)
+        t -= eta[2] * gz;
+    return Vs * pm * t;
+}
+
+/* One component b of a diagonal-tensor row's sum, (M^b_I + M^b_J) [x^b g^b / d^2 -
+ * zeta^b (C_I g)^b] (lv_family.c's file comment), from its pair mobility pm, x^b, g^b, d^2,
+ * zeta^b, row b of C_I (Cb) and the components of g (gz not read in 2D). */
+PST_KHOT double tensor_term(int D, double pm, double xb, double gb, double d2, double zb,
+                            const double *Cb, double gx, double gy, double gz)
+{
+    double Cg = 0;
+    Cg += Cb[0] * gx;
+    Cg += Cb[1] * gy;
+    if (D == 3)
+        Cg += Cb[2] * gz;
+    return pm * (xb * gb / d2 - zb * Cg);
+}
+
+/* w_IJ of a diagonal-tensor row, s_I V_J sum_b tensor_term, from Vs = s_I V_J, the mobilities
+ * of I (mi, D values) and of J (mjx, mjy, mjz), the pair mean H, d^2, C_I, zeta_I, the offset
+ * and g (z components not read in 2D): scalars, like scalar_weight. */
+PST_KHOT double tensor_weight(int D, int H, double Vs, const double *mi, double mjx, double mjy,
+                              double mjz, double d2, const double *C, const double *zeta,
+                              double x, double y, double z, double gx, double gy, double gz)
+{
+    double s = 0;
+    s += tensor_term(D, pair_mobility(mi[0], mjx, H), x, gx, d2, zeta[0], C, gx, gy, gz);
+    s += tensor_term(D, pair_mobility(mi[1], mjy, H), y, gy, d2, zeta[1], C + D, gx, gy, gz);
+    if (D == 3)
+        s += tensor_term(D, pair_mobility(mi[2], mjz, H), z, gz, d2, zeta[2], C + 2 * D, gx, gy,
+                         gz);
+    return Vs * s;
+}
+
+/* The matrix-free apply's rows [i0, i1) that are neither Dirichlet nor Neumann rows into y,
+ * 8 pairs at a time (kernels/lv_lanes.c). */
+typedef void (*lv_lane_rows_fn)(const lv_ctx *k, const int64_t *off, const uint32_t *idx,
+                                size_t i0, size_t i1, double *y);
+
+/* The lane rows of k's operator, or NULL where only the chunk rows serve it (lv_lanes.c). */
+lv_lane_rows_fn lv_lane_rows_for(const lv_ctx *k);
+
+#endif /* PSTENCIL_LV_FAMILY_H */
