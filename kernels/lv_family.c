@@ -16,7 +16,7 @@
  * the bracket of (91)). C = (A^T)^-1, A = sum_J V_J x (x) g (23)-(25).
  * The pair mobility (m_I + m_J) is the paper's arithmetic sum (29); with opts.mobility_mean =
  * PST_MEAN_HARMONIC (an extension, not in the paper) it is 4 m_I m_J / (m_I + m_J) instead, per
- * component for tensors (pair_mobility below; 0 when m_I + m_J <= 0).
+ * component for tensors (pair_mobility in lv_family.h; 0 when m_I + m_J <= 0).
  * Fallback chain (docs/schemes/): too few neighbours or a singular C / Gamma -> the Brookshaw
  * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN. */
 #include "lv_family.h"
@@ -91,8 +91,8 @@ PST_KHOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j,
 
 /* w_IJ of a scheme row (see the file comment) from the pair's geometry (gradient_from's
  * arguments; x and mj at stride xs) and the mobilities of I and J (mi, mj: 1 value, D for a
- * tensor). Shared by apply,
- * emit_row and the half-list rows, so that their weights agree bit for bit. */
+ * tensor): scalar_weight or tensor_weight, as the G1 lane rows call them. Shared by the chunk
+ * rows (apply, emission) and the half-list rows, so that their weights agree bit for bit. */
 PST_KHOT double weight_from(const lv_ctx *k, int D, int G, int T, int H, size_t i, size_t j,
                             const double *x, int xs, double d2, double a, double W,
                             const double *mi, const double *mj, double *Fout)
