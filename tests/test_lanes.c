@@ -83,7 +83,7 @@ static void check_schemes(int dim, int per_particle_h)
     }
     const char *lv[] = {"brookshaw", "cb", "schwaiger", "lv"};
     pst_nlist *nl = test_nlist(c, 2.0 * 1.2); /* the cubic spline's */
-    /* the LV rows in lanes (G1, one h) have an instantiation per kernel: the other three */
+    /* the LV rows in lanes (G1) have an instantiation per kernel: the other three */
     for (int K = PST_KERNEL_QUINTIC; K <= PST_KERNEL_WENDLAND_C4; ++K) {
         pst_op_opts o;
         pst_op_defaults(&o);
