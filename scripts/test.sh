@@ -6,7 +6,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# Each phase's seconds go to the log, so that a slow CI shows where its time went.
+phase() { echo "== scripts/test.sh: $1 done at $SECONDS s"; }
+
 bash scripts/install-deps.sh
+phase "dependencies"
 jobs=$(nproc)
 # ctest runs tests side by side, each with every core's worth of OpenMP threads: idle threads
 # must sleep rather than spin, or they steal the cores the busy ones need (the solver tests run
@@ -15,7 +19,9 @@ export OMP_WAIT_POLICY=PASSIVE
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPSTENCIL_WERROR=ON
 cmake --build build -j "$jobs"
+phase "Release build"
 ctest --test-dir build --output-on-failure -j "$jobs"
+phase "Release tests"
 
 # One code path per kernel (generic x86-64): the ISA clones are the same source, and their
 # three instrumented copies took 5 of the build's 8 minutes (docs/building.md). The Release
@@ -23,9 +29,12 @@ ctest --test-dir build --output-on-failure -j "$jobs"
 cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=Sanitize -DPSTENCIL_WERROR=ON -DPSTENCIL_BUILD_BENCH=OFF \
   -DPSTENCIL_ISA_DISPATCH=OFF
 cmake --build build-sanitize -j "$jobs"
+phase "sanitizer build"
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:fast_unwind_on_malloc=0:print_suppressions=0" \
   ctest --test-dir build-sanitize --output-on-failure -L unit -j "$jobs"
+phase "sanitizer tests"
 
 # About 30 s per parser (PSTENCIL_FUZZ_SECONDS to change it); skipped cleanly without clang.
 bash scripts/fuzz.sh
+phase "fuzzing"
