@@ -167,36 +167,34 @@ typedef struct {
     double x[3][LV_CHUNK], d2[LV_CHUNK], a[LV_CHUNK], W[LV_CHUNK];
 } lv_chunk;
 
-/* The distances d = sqrt(d2) of a chunk, and a and W for the constant kernel K
- * (pair_geometry's arithmetic), h~ of pair c at ht[c * hs]. The loop waits on the divider
- * (the sqrt and the division by d): the sqrt runs here, beside the kernel's multiplications,
- * rather than in a loop of its own, and with hs = 0 (one h in the cloud) the kernel's 1 / h~
- * and its powers are computed once per chunk instead of once per pair (the same values). */
-PST_KHOT void chunk_kernel(pst_kernel K, int D, int needW, int n, double *d,
-                           const double *ht, int hs, double eps, lv_chunk *ch)
+/* a and W of a chunk from d = sqrt(d2) for the constant kernel K (pair_geometry's
+ * arithmetic), h~ of pair c at ht[c * hs]. The loop waits on the divider (the sqrt and the
+ * division by d): the sqrt runs here, beside the kernel's multiplications, rather than in a
+ * loop of its own; W (needW) in the same loop, where its powers of (s - q) share those of W'
+ * (G2 and G4); and with hs = 0 (one h in the cloud) the kernel's 1 / h~ and its powers are
+ * computed once per chunk instead of once per pair (the same values). */
+PST_KHOT void chunk_kernel(pst_kernel K, int D, int needW, int n, const double *ht, int hs,
+                           double eps, lv_chunk *ch)
 {
 #pragma omp simd
     for (int c = 0; c < n; ++c) {
-        double dc = sqrt(ch->d2[c]);
-        ch->a[c] = pair_a(K, D, dc, ht[c * hs], eps);
-        d[c] = dc;
-    }
-    if (needW)
-#pragma omp simd
-        for (int c = 0; c < n; ++c) {
-            double wv = pst_sph_w(K, D, d[c], ht[c * hs]);
-            ch->W[c] = d[c] > eps * ht[c * hs] ? wv : 0.0;
+        double d = sqrt(ch->d2[c]);
+        ch->a[c] = pair_a(K, D, d, ht[c * hs], eps);
+        if (needW) {
+            double wv = pst_sph_w(K, D, d, ht[c * hs]);
+            ch->W[c] = d > eps * ht[c * hs] ? wv : 0.0;
         }
+    }
 }
 
 /* chunk_kernel with the kernel and the stride of h~ as constants. */
-PST_KHOT void chunk_kernel_hs(pst_kernel K, int D, int needW, int n, double *d,
-                              const double *ht, int hs, double eps, lv_chunk *ch)
+PST_KHOT void chunk_kernel_hs(pst_kernel K, int D, int needW, int n, const double *ht, int hs,
+                              double eps, lv_chunk *ch)
 {
     if (hs)
-        chunk_kernel(K, D, needW, n, d, ht, 1, eps, ch);
+        chunk_kernel(K, D, needW, n, ht, 1, eps, ch);
     else
-        chunk_kernel(K, D, needW, n, d, ht, 0, eps, ch);
+        chunk_kernel(K, D, needW, n, ht, 0, eps, ch);
 }
 
 /* Separate loops, so that the sqrt (the library is built without math errno) with the kernel
@@ -206,7 +204,7 @@ PST_KHOT void chunk_kernel_hs(pst_kernel K, int D, int needW, int n, double *d,
 PST_KHOT void chunk_geometry(const lv_ctx *k, int D, int needW, size_t i, const uint32_t *idx,
                              int n, lv_chunk *ch, const pst_lanes *L, double *du)
 {
-    double d[LV_CHUNK], ht[LV_CHUNK], hi = pst_h(&k->c, i);
+    double ht[LV_CHUNK], hi = pst_h(&k->c, i);
     if (L)
         pst_lanes_gather(L, idx, n, ch->x[0], LV_CHUNK, du);
     else
@@ -228,15 +226,15 @@ PST_KHOT void chunk_geometry(const lv_ctx *k, int D, int needW, size_t i, const 
     const double eps = k->c.pair_eps;
     switch (k->c.kernel) {
     case PST_KERNEL_CUBIC:
-        chunk_kernel_hs(PST_KERNEL_CUBIC, D, needW, n, d, ht, hs, eps, ch);
+        chunk_kernel_hs(PST_KERNEL_CUBIC, D, needW, n, ht, hs, eps, ch);
         break;
     case PST_KERNEL_QUINTIC:
-        chunk_kernel_hs(PST_KERNEL_QUINTIC, D, needW, n, d, ht, hs, eps, ch);
+        chunk_kernel_hs(PST_KERNEL_QUINTIC, D, needW, n, ht, hs, eps, ch);
         break;
     case PST_KERNEL_WENDLAND_C2:
-        chunk_kernel_hs(PST_KERNEL_WENDLAND_C2, D, needW, n, d, ht, hs, eps, ch);
+        chunk_kernel_hs(PST_KERNEL_WENDLAND_C2, D, needW, n, ht, hs, eps, ch);
         break;
-    default: chunk_kernel_hs(PST_KERNEL_WENDLAND_C4, D, needW, n, d, ht, hs, eps, ch); break;
+    default: chunk_kernel_hs(PST_KERNEL_WENDLAND_C4, D, needW, n, ht, hs, eps, ch); break;
     }
 }
 
