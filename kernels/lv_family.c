@@ -324,9 +324,9 @@ PST_KHOT void half_row_t(const lv_ctx *k, const int64_t *off, const uint32_t *id
 typedef void (*row_fn)(const lv_ctx *, const int64_t *, const uint32_t *, size_t,
                        const double *, double *, double *, int half);
 #define LV_ROW(D, G, T, H)                                                                     \
-    PST_ISA_DISPATCH static void row_##D##_##G##_##T##_##H(const lv_ctx *k, const int64_t *off,                 \
-                                          const uint32_t *idx, size_t i, const double *u,      \
-                                          double *y, double *w, int half)                      \
+    PST_ISA_DISPATCH static void row_##D##_##G##_##T##_##H(                                    \
+        const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i, const double *u,   \
+        double *y, double *w, int half)                                                        \
     {                                                                                          \
         if (half)                                                                              \
             half_row_t(k, off, idx, i, u, y, D, G, T, H);                                      \
@@ -382,7 +382,8 @@ static int lv_min_msph(int dim) { return min_neighbours(LV_MSPH, dim); }
 static void shepard(const lv_ctx *k, size_t i, const int64_t *off, const uint32_t *idx,
                     double *nu, double *gnu)
 {
-    double s = pst_sph_w(k->c.kernel, k->c.dim, 0.0, pst_h(&k->c, i)) * k->c.V[i], gs[3] = {0, 0, 0};
+    double s = pst_sph_w(k->c.kernel, k->c.dim, 0.0, pst_h(&k->c, i)) * k->c.V[i];
+    double gs[3] = {0, 0, 0};
     for (int64_t e = off[i]; e < off[i + 1]; ++e) {
         size_t j = idx[e];
         double x[3], d2, W, a = pair_geometry(k, k->c.dim, 1, i, j, x, &d2, &W);

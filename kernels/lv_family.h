@@ -28,7 +28,8 @@ typedef struct {
     int variant;  /* opts.gradient */
     int harmonic; /* opts.mobility_mean == PST_MEAN_HARMONIC */
     const lv_data *d;
-    int64_t list_end; /* the apply: off[n], how far row_t may read past a row; else 0 */
+    int64_t list_end; /* the apply: off[n], how far row_t and the lane rows may read past a
+                         row; else 0 */
 } lv_ctx;
 
 /* The hot pair functions (PST_KHOT) take the dimension D, the gradient variant G, the tensor
@@ -37,9 +38,9 @@ typedef struct {
  * callers pass runtime values. */
 
 /* The pair mobility of one component: the paper's arithmetic sum a + b (29), or with H twice
- * the harmonic mean, 4 a b / (a + b) (an extension, not in the paper). The harmonic form is written
- * 4 a (b / s) so that it cannot overflow for finite a, b > 0 (b / s <= 1), and is 0 when
- * s = a + b is not positive (or NaN): no NaN from it. Equal to a + b when a == b. */
+ * the harmonic mean, 4 a b / (a + b) (an extension, not in the paper). The harmonic form is
+ * written 4 a (b / s) so that it cannot overflow for finite a, b > 0 (b / s <= 1), and is 0
+ * when s = a + b is not positive (or NaN): no NaN from it. Equal to a + b when a == b. */
 PST_KHOT double pair_mobility(double a, double b, int H)
 {
     if (!H)
@@ -57,9 +58,8 @@ PST_KHOT double pair_a(pst_kernel K, int D, double d, double ht, double eps)
 }
 
 /* w_IJ of a scalar-mobility row, s_I V_J (pair mobility) [F - eta_I . g] (lv_family.c's file
- * comment),
- * from Vs = s_I V_J, the pair mobility pm, F, eta_I and the components of g (gz not read in
- * 2D): scalars, not an array, so that a loop over lanes calling it vectorises. */
+ * comment), from Vs = s_I V_J, the pair mobility pm, F, eta_I and the components of g (gz not
+ * read in 2D): scalars, not an array, so that a loop over lanes calling it vectorises. */
 PST_KHOT double scalar_weight(int D, double Vs, double pm, double F, const double *eta,
                               double gx, double gy, double gz)
 {
