@@ -253,10 +253,6 @@ int pst_qsfdi_interpolate(const pst_op *op, const double *const pts[3], size_t m
 {
     qs_ctx k = make_ctx(op);
     int D = op->dim;
-    for (size_t q = 0; q < m; ++q)
-        for (int a = 0; a < D; ++a)
-            PST_CHECK(!isfinite(pts[a][q]), PST_EINVAL, err,
-                      "interpolation point %zu has a non-finite coordinate", q);
     double h = pst_cloud_h_max(op->cloud);
     int64_t *off;
     uint32_t *idx;

@@ -743,56 +743,73 @@ void pst_wls_hessian(const pst_op *op, const double *u, double *const hess[6])
 
 /* A local cell grid answers the point queries (the operator's list has rows for particles
  * only): edge = support * h_max, so a point's neighbours lie in the 3^D cells around it. */
-static size_t cell_rank(const pst_cells *g, const long *cc)
+static size_t cell_rank(const pst_cells *g, uint32_t ix, uint32_t iy, uint32_t iz)
 {
-    return g->rank[((size_t)cc[2] * g->dims[1] + (size_t)cc[1]) * g->dims[0] + (size_t)cc[0]];
+    return g->rank[((size_t)iz * g->dims[1] + iy) * g->dims[0] + ix];
 }
 
-/* Nearest particle to X: rings of cells around X's cell until the best distance is below the
- * ring's lower bound (r cells). */
-static size_t nearest(const wls_ctx *k, const pst_cells *g, const double *X)
+/* The runs of cells (pst_cell_box_runs) that hold every particle within R of X: through the
+ * faces of a periodic box, whose offsets pst_offset takes as minimum images. */
+static void near_runs(const pst_op *op, const wls_ctx *k, const pst_cells *g, const double *X,
+                      double R, pst_cell_run runs[3][3], int nr[3])
+{
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (int a = 0; a < k->c.dim; ++a) {
+        lo[a] = X[a] - R;
+        hi[a] = X[a] + R;
+    }
+    pst_cell_box_runs(g, &k->c.im, op->cloud->box_lo, op->cloud->box_hi, lo, hi, runs, nr);
+}
+
+/* Whether the runs hold every cell of the grid. */
+static int all_cells(const pst_cells *g, pst_cell_run runs[3][3], const int nr[3])
+{
+    for (int a = 0; a < g->dim; ++a) {
+        uint32_t cells = 0;
+        for (int r = 0; r < nr[a]; ++r)
+            cells += runs[a][r].u - runs[a][r].l + 1;
+        if (cells < g->dims[a])
+            return 0;
+    }
+    return 1;
+}
+
+/* Nearest particle to X (the smallest index among equals), by minimum image in a periodic box:
+ * the cells within R of X, R doubling from the distance of X to the grid plus one cell edge,
+ * until the best distance is at most R or every cell was seen. */
+static size_t nearest(const pst_op *op, const wls_ctx *k, const pst_cells *g, const double *X)
 {
     int D = k->c.dim;
-    long c0[3] = {0, 0, 0}, maxr = 0;
+    double out2 = 0; /* squared distance from X to the grid's box */
     for (int a = 0; a < D; ++a) {
-        c0[a] = pst_cell_coord(X[a], g->lo[a], g->inv, g->dims[a]);
-        long ext = (long)g->dims[a] - 1 - c0[a] > c0[a] ? (long)g->dims[a] - 1 - c0[a] : c0[a];
-        maxr = ext > maxr ? ext : maxr;
+        double below = g->lo[a] - X[a], above = X[a] - (g->lo[a] + g->dims[a] * g->size);
+        double t = below > 0 ? below : above > 0 ? above : 0;
+        out2 += t * t;
     }
     double best = INFINITY;
     size_t who = 0;
-    for (long r = 0; r <= maxr; ++r) {
-        long lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, cc[3] = {0, 0, 0};
-        for (int a = 0; a < D; ++a) {
-            lo[a] = c0[a] - r < 0 ? 0 : c0[a] - r;
-            hi[a] = c0[a] + r > (long)g->dims[a] - 1 ? (long)g->dims[a] - 1 : c0[a] + r;
-        }
-        for (cc[2] = lo[2]; cc[2] <= hi[2]; ++cc[2])
-            for (cc[1] = lo[1]; cc[1] <= hi[1]; ++cc[1])
-                for (cc[0] = lo[0]; cc[0] <= hi[0]; ++cc[0]) {
-                    long cheb = 0;
-                    for (int a = 0; a < D; ++a) {
-                        long dd = labs(cc[a] - c0[a]);
-                        cheb = dd > cheb ? dd : cheb;
-                    }
-                    if (cheb != r)
-                        continue;
-                    size_t rk = cell_rank(g, cc);
-                    for (uint32_t p = g->start[rk]; p < g->start[rk + 1]; ++p) {
-                        size_t j = g->order[p];
-                        double d2 = 0;
-                        for (int a = 0; a < D; ++a)
-                            d2 += (k->c.x[a][j] - X[a]) * (k->c.x[a][j] - X[a]);
-                        if (d2 < best || (d2 == best && j < who)) {
-                            best = d2;
-                            who = j;
-                        }
-                    }
+    for (double R = g->size + sqrt(out2);; R *= 2) {
+        pst_cell_run runs[3][3];
+        int nr[3];
+        near_runs(op, k, g, X, R, runs, nr);
+        PST_FOR_EACH_CELL(runs, nr, rx, ry, rz, ix, iy, iz) {
+            size_t rk = cell_rank(g, ix, iy, iz);
+            for (uint32_t p = g->start[rk]; p < g->start[rk + 1]; ++p) {
+                size_t j = g->order[p];
+                double d2 = 0;
+                for (int a = 0; a < D; ++a) {
+                    double t = pst_offset(&k->c, a, k->c.x[a][j], X[a]);
+                    d2 += t * t;
                 }
-        if (best <= (double)r * g->size * ((double)r * g->size))
-            break;
+                if (d2 < best || (d2 == best && j < who)) {
+                    best = d2;
+                    who = j;
+                }
+            }
+        }
+        if (best <= R * R || all_cells(g, runs, nr))
+            return who;
     }
-    return who;
 }
 
 /* Type B at a point X: fit u_j - u_K (K the nearest particle) on p^(x_j - X) over the particles
@@ -805,35 +822,29 @@ static int fit_point_B(const pst_op *op, const wls_ctx *k, const pst_cells *g, c
     int D = d->dim, nb = d->nb, nm = WLS_NMOM(D);
     const signed char *par = wls_par[D - 2], *var = wls_var[D - 2];
     double acc[35] = {0}, b[WLS_NBMAX] = {0}, ih = 1.0 / h;
-    long lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, cc[3];
-    double R = pst_sph_support[d->kernel] * h;
-    for (int a = 0; a < D; ++a) {
-        lo[a] = pst_cell_coord(X[a] - R, g->lo[a], g->inv, g->dims[a]);
-        hi[a] = pst_cell_coord(X[a] + R, g->lo[a], g->inv, g->dims[a]);
+    pst_cell_run runs[3][3];
+    int nr[3], count = 0;
+    near_runs(op, k, g, X, pst_sph_support[d->kernel] * h, runs, nr);
+    PST_FOR_EACH_CELL(runs, nr, rx, ry, rz, ix, iy, iz) {
+        size_t rk = cell_rank(g, ix, iy, iz);
+        for (uint32_t p = g->start[rk]; p < g->start[rk + 1]; ++p) {
+            size_t j = g->order[p];
+            double xh[3], wm[35];
+            wm[0] = pair_weight(k, D, d->kernel, X, j, ih, xh);
+            if (wm[0] == 0.0 &&
+                xh[0] * xh[0] + xh[1] * xh[1] + (D == 3 ? xh[2] * xh[2] : 0.0) > 1e-16)
+                continue; /* outside the support */
+            if (wm[0] == 0.0) /* a particle at X: the centre, weight f(0) */
+                wm[0] = pst_sph_shape(d->kernel, D, 0.0, 0);
+            ++count;
+            for (int m = 1; m < nm; ++m)
+                wm[m] = wm[par[m]] * xh[var[m]];
+            for (int m = 0; m < nm; ++m)
+                acc[m] += wm[m];
+            for (int q = 0; q < nb; ++q)
+                b[q] += wm[q] * (u[j] - u[K]);
+        }
     }
-    int count = 0;
-    for (cc[2] = lo[2]; cc[2] <= hi[2]; ++cc[2])
-        for (cc[1] = lo[1]; cc[1] <= hi[1]; ++cc[1])
-            for (cc[0] = lo[0]; cc[0] <= hi[0]; ++cc[0]) {
-                size_t rk = cell_rank(g, cc);
-                for (uint32_t p = g->start[rk]; p < g->start[rk + 1]; ++p) {
-                    size_t j = g->order[p];
-                    double xh[3], wm[35];
-                    wm[0] = pair_weight(k, D, d->kernel, X, j, ih, xh);
-                    if (wm[0] == 0.0 && xh[0] * xh[0] + xh[1] * xh[1] +
-                                                (D == 3 ? xh[2] * xh[2] : 0.0) > 1e-16)
-                        continue; /* outside the support */
-                    if (wm[0] == 0.0) /* a particle at X: the centre, weight f(0) */
-                        wm[0] = pst_sph_shape(d->kernel, D, 0.0, 0);
-                    ++count;
-                    for (int m = 1; m < nm; ++m)
-                        wm[m] = wm[par[m]] * xh[var[m]];
-                    for (int m = 0; m < nm; ++m)
-                        acc[m] += wm[m];
-                    for (int q = 0; q < nb; ++q)
-                        b[q] += wm[q] * (u[j] - u[K]);
-                }
-            }
     if (count < pst_wls_min_neighbours(D))
         return 0;
     double M[WLS_NBMAX * WLS_NBMAX], fac[WLS_NBMAX * WLS_NBMAX];
@@ -862,7 +873,7 @@ static int fit_point_A(const pst_op *op, const wls_ctx *k, const double *X, cons
     fit_row(op, k, K, u, c);
     /* in K's scaled coordinates the fit is sum c_e p_e(x^), whose Laplacian is 2 sum c_squares */
     for (int a = 0; a < D; ++a)
-        xh[a] = (X[a] - k->c.x[a][K]) * ih;
+        xh[a] = pst_offset(&k->c, a, X[a], k->c.x[a][K]) * ih;
     double p[WLS_NBMAX], v = 0, l = 0;
     basis(D, 0, xh, p);
     for (int e = 0; e < d->nb; ++e)
@@ -884,14 +895,9 @@ int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,
     *fallbacks = 0;
     PST_CHECK(op->n == 0, PST_EINVAL, err,
               "%s: cannot interpolate on an empty cloud", op->scheme->name);
-    /* its cell search around a point does not wrap through a periodic box's faces */
-    PST_CHECK(k.c.im.any, PST_EINVAL, err,
-              "%s: interpolation at points in a periodic box is not available (qsfdi's is); "
-              "the operator, gradient and Hessian at the particles are",
-              op->scheme->name);
-    int st = pst_cells_build(&g, op->cloud, pst_sph_support[k.d->kernel] * h, err);
-    if (st != PST_OK)
-        return st;
+    double R = pst_sph_support[k.d->kernel] * h;
+    PST_TRY(pst_points_check(op->cloud, pts, m, R, err));
+    PST_TRY(pst_cells_build(&g, op->cloud, R, err));
     size_t fb = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : fb)
     for (size_t b = 0; b < pst_chunks(m, PST_CHUNK); ++b)
@@ -899,7 +905,7 @@ int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,
             double X[3] = {0, 0, 0}, v, l;
             for (int a = 0; a < k.c.dim; ++a)
                 X[a] = pts[a][p];
-            size_t K = nearest(&k, &g, X);
+            size_t K = nearest(op, &k, &g, X);
             int ok = k.d->typeB ? fit_point_B(op, &k, &g, X, h, u, K, &v, &l)
                                 : fit_point_A(op, &k, X, u, K, &v, &l);
             if (!ok) {

@@ -146,6 +146,32 @@ static void test_exactness(void)
             CHECK_INT(fb, 0);
             CHECK(t[PST_PHASE_MOMENTS] > 0 && t[PST_PHASE_INVERSION] > 0 &&
                   t[PST_PHASE_WEIGHTS] > 0);
+            /* far outside the cloud: type B has no particle within the support there, so the
+             * nearest particle's value (found by brute force here) and a Laplacian of 0, counted
+             * as a fallback; type A and lpmps extrapolate the nearest particle's quadric fit,
+             * exact on the quadratic */
+            double far[3] = {40.0, -25.0, 9.0}, best = INFINITY, fv = NAN, fl = NAN;
+            const double *fpts[3] = {&far[0], &far[1], &far[2]};
+            size_t K = 0;
+            for (size_t j = 0; j < n; ++j) {
+                double x[3], d2 = 0;
+                test_position(c, j, x);
+                for (int a = 0; a < dim; ++a)
+                    d2 += (x[a] - far[a]) * (x[a] - far[a]);
+                if (d2 < best) {
+                    best = d2;
+                    K = j;
+                }
+            }
+            CHECK_INT(pst_op_interpolate(op, fpts, 1, u, &fv, &fl, &fb, err), PST_OK);
+            if (cfg == 0) {
+                CHECK(fv == u[K] && fl == 0.0);
+                CHECK_INT(fb, 1);
+            } else {
+                CHECK(fabs(fv - quad(dim, far)) <= 1e-9 * fabs(quad(dim, far)));
+                CHECK(fabs(fl - lap_exact) <= 1e-9 * fabs(lap_exact));
+                CHECK_INT(fb, 0);
+            }
             pst_op_destroy(op);
         }
         free(u);

@@ -4,8 +4,8 @@
  * faces); every scheme translation-invariant on a periodic box (a row at a face computes what
  * an interior row computes), exact on the polynomials of the pair offsets it is exact for
  * (rows at the faces and corners), matrix-free = stored, bit-identical for 1 and 2 threads;
- * qsfdi's fitted order on a periodic field; a fully periodic Poisson problem with its mean
- * fixed; the refusals. */
+ * qsfdi's fitted order on a periodic field; interpolation at points by the faces exact on
+ * quadratics; a fully periodic Poisson problem with its mean fixed; the refusals. */
 #include "check.h"
 #include "support.h"
 
@@ -281,6 +281,67 @@ static double face_rows_error(const pst_cloud *c, const pst_op *op, double s0)
     return rows >= 6 ? worst : INFINITY;
 }
 
+/* Interpolation at points on the faces and corners of a periodic box, by every scheme that
+ * interpolates: exact on a quadratic of the minimum-image offset x_j - X around each point X
+ * (value q(0), Laplacian lap q), so a search or an offset that does not wrap through the
+ * faces fails; points outside the box or not finite are refused. */
+static void test_interpolation(void)
+{
+    for (int dim = 2; dim <= 3; ++dim) {
+        double s0 = dim == 2 ? 1.0 / 16 : 1.0 / 15, e = 1 - 0.3 * s0;
+        double lap = 2 * (1.5 + 0.7) + (dim == 3 ? -1.8 : 0.0);
+        static const double at[5][3] = {{0.1, 0.2, 0.3}, {0.9, 0.5, 0.0}, {0.5, 0.95, 0.9},
+                                        {0.97, 0.02, 0.5}, {0.5, 0.5, 0.5}};
+        pst_cloud *c = periodic_lattice(dim, s0, 1.2, 0.25, 7, 13);
+        size_t n = pst_cloud_size(c);
+        double *u = malloc(n * sizeof *u);
+        for (int k = 0; k < pst_scheme_count(); ++k) {
+            const char *scheme = pst_scheme_name(k);
+            if (!pst_scheme_supports(scheme, PST_SUPPORTS_INTERPOLATE))
+                continue;
+            pst_nlist *nl = test_nlist(c, pst_kernel_support(pst_scheme_default_kernel(scheme)));
+            pst_op *op = test_op(c, nl, scheme, PST_GRAD_G1, 0);
+            double worst = 0;
+            size_t fallbacks = 0;
+            char err[PST_ERRLEN] = "";
+            for (int p = 0; p < 5; ++p) {
+                double X[3] = {0, 0, 0}, v = NAN, l = NAN;
+                for (int d = 0; d < dim; ++d) /* the first four points within 0.3 s0 of a face */
+                    X[d] = p < 4 ? (at[p][d] < 0.5 ? at[p][d] * 3 * s0 : e + (1 - e) * at[p][d])
+                                 : at[p][d];
+                const double *pts[3] = {&X[0], &X[1], &X[2]};
+                for (size_t j = 0; j < n; ++j) {
+                    double r[3] = {0, 0, 0};
+                    for (int d = 0; d < dim; ++d) {
+                        r[d] = pst_cloud_coord_const(c, d)[j] - X[d];
+                        r[d] -= r[d] > 0.5 ? 1.0 : r[d] < -0.5 ? -1.0 : 0.0;
+                    }
+                    u[j] = quad(r);
+                }
+                size_t fb = 99;
+                CHECK_INT(pst_op_interpolate(op, pts, 1, u, &v, &l, &fb, err), PST_OK);
+                fallbacks += fb;
+                worst = fmax(worst, fmax(fabs(v - 0.3), fabs(l - lap) / lap));
+            }
+            printf("interpolation %dD %-6s at 4 face and corner points and 1 inside: worst error "
+                   "%.2e, %zu fallbacks\n", dim, scheme, worst, fallbacks);
+            CHECK(worst <= 1e-9);
+            CHECK_INT(fallbacks, 0);
+            double X[3] = {0.5, 1.0, 0.5}, v;
+            const double *pts[3] = {&X[0], &X[1], &X[2]};
+            CHECK_INT(pst_op_interpolate(op, pts, 1, u, &v, NULL, NULL, err), PST_EINPUT);
+            CHECK(strstr(err, "outside the periodic box") != NULL);
+            X[1] = NAN;
+            CHECK_INT(pst_op_interpolate(op, pts, 1, u, &v, NULL, NULL, err), PST_EINPUT);
+            CHECK(strstr(err, "is not finite") != NULL);
+            pst_op_destroy(op);
+            pst_nlist_destroy(nl);
+        }
+        free(u);
+        pst_cloud_destroy(c);
+    }
+}
+
 static void test_schemes(void)
 {
     for (int dim = 2; dim <= 3; ++dim)
@@ -480,6 +541,7 @@ int main(void)
     test_verlet();
     test_schemes();
     test_order();
+    test_interpolation();
     test_poisson("qsfdi");
     test_poisson("lv");
     test_fix_mean_with_dirichlet();

@@ -414,7 +414,8 @@ static void test_errors(void)
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_OK);
     double nan = NAN, zero = 0, u[121] = {0}, v;
     const double *pts[3] = {&nan, &zero, &zero};
-    CHECK_INT(pst_op_interpolate(op, pts, 1, u, &v, NULL, NULL, err), PST_EINVAL);
+    CHECK_INT(pst_op_interpolate(op, pts, 1, u, &v, NULL, NULL, err), PST_EINPUT);
+    CHECK(strstr(err, "point 0: x = nan is not finite") != NULL);
     pst_op_destroy(op);
     pst_nlist_destroy(nl);
     pst_cloud_destroy(c);

@@ -384,7 +384,9 @@ int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6]);
  * and the schemes' own fits): pts[d][k] is coordinate d of point k; value and lap (either may
  * be NULL) receive m values each. The smoothing length at a point is the largest h of the
  * cloud. Points with too few neighbours get the nearest particle's value and a Laplacian of 0,
- * and are counted in *fallbacks (may be NULL). PST_EINVAL for schemes without interpolation. */
+ * and are counted in *fallbacks (may be NULL). In a periodic box the search and the offsets
+ * wrap through its faces. PST_EINVAL for schemes without interpolation; PST_EINPUT for a point
+ * with a coordinate that is not finite, or outside the box along a periodic axis. */
 int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, const double *u,
                        double *value, double *lap, size_t *fallbacks, char *err);
 

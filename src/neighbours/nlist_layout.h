@@ -28,9 +28,16 @@ size_t pst_verlet_bytes(const struct pst_verlet *v, size_t n);
  * range, a representable radius. PST_EINVAL, PST_EINPUT (message in err, particle by id). */
 int pst_nlist_check_cloud(const pst_cloud *c, double support, char *err);
 
+/* The points a search of radius `radius` around them accepts (points.c, for interpolation):
+ * finite coordinates pts[d][k] (d < dim, k < m); along a periodic axis of c, inside the box and
+ * a radius below half the period. PST_EINPUT (message in err, the point by index). */
+int pst_points_check(const pst_cloud *c, const double *const pts[3], size_t m, double radius,
+                     char *err);
+
 /* Neighbours of arbitrary points (points.c, for interpolation): for each of the m points
  * (pts[d][k], d < dim) the particles of c with |x - p| < radius, as CSR: off (m + 1 entries)
- * and idx, each row increasing. Free both with pst_free. PST_ENOMEM (message in err). */
+ * and idx, each row increasing; the points as pst_points_check accepts them (PST_EINPUT). Free
+ * both with pst_free. PST_ENOMEM (message in err). */
 int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t m,
                           double radius, int64_t **off, uint32_t **idx, char *err);
 

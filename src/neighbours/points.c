@@ -49,16 +49,19 @@ static size_t visit(const pst_cells *g, const pst_cloud *c, const pst_image *im,
     return count;
 }
 
-/* Points along a periodic axis must lie in the box, and the radius below half the period. */
-static int check_points(const pst_cloud *c, const pst_image *im, const double *const pts[3],
-                        size_t m, double radius, char *err)
+int pst_points_check(const pst_cloud *c, const double *const pts[3], size_t m, double radius,
+                     char *err)
 {
+    const pst_image im = pst_cloud_image(c);
     for (int d = 0; d < c->dim; ++d) {
-        if (im->P[d] == 0)
+        for (size_t k = 0; k < m; ++k)
+            PST_CHECK(!isfinite(pts[d][k]), PST_EINPUT, err, "point %zu: %c = %g is not finite",
+                      k, "xyz"[d], pts[d][k]);
+        if (im.P[d] == 0)
             continue;
-        PST_CHECK(!(2 * radius < im->P[d]), PST_EINPUT, err,
+        PST_CHECK(!(2 * radius < im.P[d]), PST_EINPUT, err,
                   "point neighbours: the period %g along %c must exceed twice the radius %g",
-                  im->P[d], "xyz"[d], radius);
+                  im.P[d], "xyz"[d], radius);
         for (size_t k = 0; k < m; ++k)
             PST_CHECK(!(pts[d][k] >= c->box_lo[d] && pts[d][k] < c->box_hi[d]), PST_EINPUT, err,
                       "point %zu: %c = %g lies outside the periodic box [%g, %g)", k, "xyz"[d],
@@ -73,7 +76,7 @@ int pst_points_neighbours(const pst_cloud *c, const double *const pts[3], size_t
     *off_out = NULL;
     *idx_out = NULL;
     const pst_image im = pst_cloud_image(c);
-    PST_TRY(check_points(c, &im, pts, m, radius, err));
+    PST_TRY(pst_points_check(c, pts, m, radius, err));
     int64_t *off = pst_calloc(m + 1, sizeof *off);
     PST_CHECK_ALLOC(off, err, "point neighbours: cannot allocate %zu rows", m);
     if (c->n == 0 || m == 0) {
