@@ -281,8 +281,9 @@ static double face_rows_error(const pst_cloud *c, const pst_op *op, double s0)
     return rows >= 6 ? worst : INFINITY;
 }
 
-/* Interpolation at points on the faces and corners of a periodic box, by every scheme that
- * interpolates: exact on a quadratic of the minimum-image offset x_j - X around each point X
+/* Interpolation at points by the corners of a periodic box (every coordinate within 1.5 s0 of
+ * a face) and at its centre, by every scheme that interpolates: exact on a quadratic of the
+ * minimum-image offset x_j - X around each point X
  * (value q(0), Laplacian lap q), so a search or an offset that does not wrap through the
  * faces fails; points outside the box or not finite are refused. */
 static void test_interpolation(void)
@@ -306,7 +307,7 @@ static void test_interpolation(void)
             char err[PST_ERRLEN] = "";
             for (int p = 0; p < 5; ++p) {
                 double X[3] = {0, 0, 0}, v = NAN, l = NAN;
-                for (int d = 0; d < dim; ++d) /* the first four points within 0.3 s0 of a face */
+                for (int d = 0; d < dim; ++d) /* points 0-3: every coordinate by a face */
                     X[d] = p < 4 ? (at[p][d] < 0.5 ? at[p][d] * 3 * s0 : e + (1 - e) * at[p][d])
                                  : at[p][d];
                 const double *pts[3] = {&X[0], &X[1], &X[2]};
@@ -323,7 +324,7 @@ static void test_interpolation(void)
                 fallbacks += fb;
                 worst = fmax(worst, fmax(fabs(v - 0.3), fabs(l - lap) / lap));
             }
-            printf("interpolation %dD %-6s at 4 face and corner points and 1 inside: worst error "
+            printf("interpolation %dD %-6s at 4 points by the corners and 1 inside: worst error "
                    "%.2e, %zu fallbacks\n", dim, scheme, worst, fallbacks);
             CHECK(worst <= 1e-9);
             CHECK_INT(fallbacks, 0);
