@@ -122,6 +122,20 @@ expect 0 "run --help" -- "$exe" run --help
 expect 0 "run --plan" -- "$exe" run --plan
 contains out "1030301 particles" "plan of the built-in scene"
 contains out "memory     about" "plan prints the memory estimate"
+# under mpirun (its environment) the plan is one rank's, printed once, without starting MPI
+ranks_env=(env OMPI_COMM_WORLD_SIZE=4 OMPI_COMM_WORLD_LOCAL_SIZE=2)
+expect 0 "run --plan over 4 ranks, rank 0" -- "${ranks_env[@]}" OMPI_COMM_WORLD_RANK=0 "$exe" \
+  run "$scenes/large/poisson_3d_1e7.json" "cloud.hi=[0.3,0.3,0.3]" --plan
+contains out "ranks      4 (2 on this node)" "the plan names the ranks"
+contains out "owned and [0-9]* ghost particles (estimated)" "the plan gives a rank's part"
+contains out "in PETSc over 4 ranks" "a solve over ranks runs in PETSc"
+contains out "available to the 2 ranks on this node" "the node's ranks share its memory"
+expect 0 "run --plan over 4 ranks, rank 3" -- "${ranks_env[@]}" OMPI_COMM_WORLD_RANK=3 "$exe" \
+  run "$scenes/large/poisson_3d_1e7.json" "cloud.hi=[0.3,0.3,0.3]" --plan
+check "the other ranks print no plan" '[ ! -s "$work/out" ]'
+expect 2 "run --plan over 2 ranks: a task that does not run over ranks" -- \
+  env OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=0 "$exe" run --plan
+contains err "only solve tasks run" "the plan refuses what the run would"
 expect 0 "help scene" -- "$exe" help scene
 contains out "cloud.spacing" "help scene lists the keys"
 expect 0 "run a scene file with outputs" -- "$exe" --quiet run "$scenes/qsfdi_test_c.json" \

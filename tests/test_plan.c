@@ -1,8 +1,9 @@
 /* The planner and the scene runner: a run computes what its scene asks for and nothing more
  * (the counters), the answers do not change when unneeded work is skipped, the plan's
  * decisions (stored weights, solver, mobility factor, derivatives-only operator), a run that
- * cannot fit is refused before allocating, bad expressions are clear errors, and periodic
- * clouds fix the mean of a solve without Dirichlet particles. */
+ * cannot fit is refused before allocating, bad expressions are clear errors, periodic
+ * clouds fix the mean of a solve without Dirichlet particles, and a plan over several ranks is
+ * one rank's. */
 #include "check.h"
 #include "plan.h"
 #include "run.h"
@@ -515,7 +516,7 @@ static void test_amg_matrix_memory(void)
             pst_scene s = cube_solve(task, schemes[k]);
             pst_plan p;
             char err[1024];
-            CHECK_INT(pst_plan_make(&p, &s, 1000000, err, sizeof err), PST_OK);
+            CHECK_INT(pst_plan_make(&p, &s, 1000000, NULL, err, sizeof err), PST_OK);
             bytes[k][a] = p.bytes_solver;
             pst_scene_free(&s);
         }
@@ -536,11 +537,11 @@ static void test_amg_source_to_fit(void)
     pst_plan p;
     char err[1024];
     size_t n = 1000000;
-    CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
+    CHECK_INT(pst_plan_make(&p, &s, n, NULL, err, sizeof err), PST_OK);
     CHECK_INT(p.task_amg_source[0], PST_AMG_AUTO);
     double own = p.bytes_total, solver = p.bytes_solver;
     s.memory_fraction = 0.8 * own / p.bytes_available;
-    CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
+    CHECK_INT(pst_plan_make(&p, &s, n, NULL, err, sizeof err), PST_OK);
     CHECK_INT(p.task_amg_source[0], PST_AMG_BROOKSHAW);
     CHECK(p.task_amg_radius[0] == -1 && p.task_restart[0] == 50);
     CHECK(p.bytes_total <= s.memory_fraction * p.bytes_available && p.bytes_solver < solver);
@@ -577,7 +578,8 @@ static void test_half_list(void)
         pst_run_counters cnt;
         pst_plan p;
         char err[1024];
-        CHECK_INT(pst_plan_make(&p, &s, pst_plan_particles(&s), err, sizeof err), PST_OK);
+        CHECK_INT(pst_plan_make(&p, &s, pst_plan_particles(&s), NULL, err, sizeof err),
+                  PST_OK);
         CHECK_INT(p.half_list, 0); /* it fits: the whole list */
         /* a budget the whole list misses by a quarter of the list: the half list fits it */
         s.memory_fraction = (p.bytes_total - 0.25 * p.bytes_neighbours) / p.bytes_available;
@@ -616,7 +618,7 @@ static void test_half_list(void)
         pst_scene s = scene(ov, 4);
         pst_plan p;
         char err[1024];
-        CHECK_INT(pst_plan_make(&p, &s, 10000, err, sizeof err), PST_OK);
+        CHECK_INT(pst_plan_make(&p, &s, 10000, NULL, err, sizeof err), PST_OK);
         CHECK_INT(p.half_list, 0);
         pst_scene_free(&s);
     }
@@ -636,7 +638,7 @@ static void test_fit_memory(void)
     pst_plan p;
     char err[1024];
     size_t n = 1000000;
-    CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
+    CHECK_INT(pst_plan_make(&p, &s, n, NULL, err, sizeof err), PST_OK);
     CHECK(p.task_amg_radius[0] == -1 && p.task_restart[0] == 50); /* room enough: as asked */
     /* the data, the status byte and the matrix-free apply's packed rows (32 bytes) */
     CHECK_INT(pst_scheme_apply_bytes("lpmps"), 32);
@@ -647,7 +649,7 @@ static void test_fit_memory(void)
     const double cut[3] = {0.9, 0.7, 0.6};
     for (int k = 0; k < 3; ++k) {
         s.memory_fraction = cut[k] * loose / avail;
-        CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_OK);
+        CHECK_INT(pst_plan_make(&p, &s, n, NULL, err, sizeof err), PST_OK);
         /* first the half list, then the tight radius, then a shorter restart */
         CHECK_INT(p.half_list, 1);
         /* the half-list apply packs nothing */
@@ -661,7 +663,79 @@ static void test_fit_memory(void)
                p.bytes_total / (double)n);
     }
     s.memory_fraction = 0.5 * loose / avail; /* no shortening reaches it */
-    CHECK_INT(pst_plan_make(&p, &s, n, err, sizeof err), PST_ENOMEM);
+    CHECK_INT(pst_plan_make(&p, &s, n, NULL, err, sizeof err), PST_ENOMEM);
+    pst_scene_free(&s);
+}
+
+/* Over several ranks the plan is one rank's: a part of n / ranks owned particles and an upper
+ * estimate of the ghosts of the largest part (checked against the parts pst_part_create cuts:
+ * at least them, at most 3 times them), every solve in PETSc, matrix-free on the whole list, the
+ * part counted beside the whole cloud that every rank builds, and a budget that the node's
+ * ranks share. */
+static void test_ranks(void)
+{
+    const char *const schemes[2] = {"operator.scheme=qsfdi", "operator.scheme=lv"};
+    for (int k = 0; k < 2; ++k) {
+        const char *ov[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]", "cloud.spacing=0.025",
+                            "tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\"}]",
+                            "fields={}", schemes[k]};
+        pst_scene s = scene(ov, 7);
+        pst_cloud *c = NULL;
+        pst_nlist *nl = NULL;
+        pst_op *op = NULL;
+        char err[1024];
+        CHECK_INT(pst_run_build_operator(&s, 1, 0, &c, &nl, &op, err, sizeof err), PST_OK);
+        size_t n = pst_cloud_size(c);
+        const double *normal[3] = {NULL, NULL, NULL};
+        pst_plan one, p;
+        CHECK_INT(pst_plan_make(&one, &s, n, NULL, err, sizeof err), PST_OK);
+        CHECK(one.ranks == 1 && one.task_petsc[0] == 0 && one.task_stored[0] == 1);
+        for (int R = 2; R <= 64; R *= 2) {
+            size_t owned = 0, ghosts = 0;
+            for (int r = 0; r < R; ++r) {
+                pst_part *part = NULL;
+                CHECK_INT(pst_part_create(&part, c, pst_cloud_kinds_const(c), normal, R, r,
+                                          pst_nlist_support(nl), err),
+                          PST_OK);
+                pst_part_info pi;
+                pst_part_layout(part, &pi);
+                owned = pi.hi - pi.lo > owned ? pi.hi - pi.lo : owned;
+                ghosts = pi.nghost > ghosts ? pi.nghost : ghosts;
+                pst_part_destroy(part);
+            }
+            pst_plan_where w = {.ranks = R, .node_ranks = 1};
+            CHECK_INT(pst_plan_make(&p, &s, n, &w, err, sizeof err), PST_OK);
+            CHECK(p.ranks == R && p.node_ranks == 1);
+            CHECK(p.part_owned == owned);
+            CHECK(p.part_ghosts >= ghosts && p.part_ghosts <= 3 * ghosts);
+            CHECK(p.task_petsc[0] == 1 && p.task_stored[0] == 0 && p.half_list == 0);
+            CHECK(p.bytes_cloud > one.bytes_cloud && p.bytes_neighbours < one.bytes_neighbours);
+            printf("%s, %zu particles over %d ranks: owned %zu, ghosts %zu, estimated %zu "
+                   "(%.2f)\n",
+                   schemes[k] + 16, n, R, owned, ghosts, p.part_ghosts,
+                   (double)p.part_ghosts / (double)ghosts);
+        }
+        /* four ranks on this node share its memory: a budget one rank's plan fits alone, four
+         * such plans do not */
+        pst_plan_where alone = {.ranks = 4, .node_ranks = 1}, shared = {.ranks = 4, .node_ranks = 4};
+        CHECK_INT(pst_plan_make(&p, &s, n, &alone, err, sizeof err), PST_OK);
+        s.memory_fraction = 1.2 * p.bytes_total / p.bytes_available;
+        CHECK_INT(pst_plan_make(&p, &s, n, &alone, err, sizeof err), PST_OK);
+        CHECK_INT(pst_plan_make(&p, &s, n, &shared, err, sizeof err), PST_ENOMEM);
+        CHECK(strstr(err, "per rank") && strstr(err, "this rank's share, 1/4,"));
+        pst_op_destroy(op);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+        pst_scene_free(&s);
+    }
+    /* one process with every solve in PETSc (pstencil run --petsc): matrix-free, whole list */
+    const char *ov[] = {"tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\"}]"};
+    pst_scene s = scene(ov, 1);
+    pst_plan_where petsc = {.petsc = 1};
+    pst_plan p;
+    char err[1024];
+    CHECK_INT(pst_plan_make(&p, &s, 1000, &petsc, err, sizeof err), PST_OK);
+    CHECK(p.ranks == 1 && p.task_petsc[0] == 1 && p.task_stored[0] == 0 && p.half_list == 0);
     pst_scene_free(&s);
 }
 
@@ -678,5 +752,6 @@ int main(void)
     test_amg_matrix_memory();
     test_amg_source_to_fit();
     test_periodic();
+    test_ranks();
     return check_summary("test_plan");
 }

@@ -4,7 +4,7 @@
 # lv and lsmps on the 2D and 3D scenes of tests/ranks/, Dirichlet, mixed Neumann and periodic
 # without Dirichlet particles (the mean of u fixed), solved to
 # rtol 1e-13 (2D) and 1e-14 (3D); so does one process solving in PETSc (--petsc); 1 and 2
-# threads per rank give the same bits; bad requests are refused.
+# threads per rank give the same bits; the plan is one rank's; bad requests are refused.
 # Usage: test_ranks.sh PATH_TO_PSTENCIL MPIEXEC
 set -u
 exe=$1
@@ -102,6 +102,33 @@ for case in dirichlet_3d/qsfdi neumann_2d/lsmps; do
   fi
   rm -f "$work/t1.csv" "$work/t2.csv"
 done
+
+# the plan over two ranks: printed once, by rank 0; the run's report gives the plan's part
+# beside rank 0's own (the estimated ghosts an upper estimate, docs/distributed.md)
+"$mpiexec" -n 2 "$exe" run "$scenes/dirichlet_3d.json" --plan > "$work/log" 2>&1
+if [ "$(grep -c '^plan for' "$work/log")" -eq 1 ] && grep -q '^  ranks      2 ' "$work/log"; then
+  passed=$((passed + 1))
+else
+  failed=$((failed + 1))
+  echo "FAIL: mpirun -n 2 run --plan: not one plan with its ranks line"
+  sed 's/^/  | /' "$work/log" | tail -8
+fi
+"$mpiexec" -n 2 "$exe" --quiet run "$scenes/dirichlet_3d.json" "outputs={}" \
+  "outputs.report=$work/r.json" > "$work/log" 2>&1
+if python3 - "$work/r.json" <<'PY'; then
+import json, sys
+r = json.load(open(sys.argv[1]))
+p, t = r["plan"], r["tasks"][0]["petsc"]
+print(f"ok: plan's part {p['part_owned_estimate']} owned + {p['part_ghosts_estimate']} ghosts, "
+      f"rank 0's {t['rank0_owned']} + {t['rank0_ghosts']}")
+sys.exit(not (p["ranks"] == 2 and p["part_owned_estimate"] >= t["rank0_owned"] and
+              t["rank0_ghosts"] <= p["part_ghosts_estimate"] <= 3 * t["rank0_ghosts"]))
+PY
+  passed=$((passed + 1))
+else
+  failed=$((failed + 1))
+  echo "FAIL: two ranks: the plan's part against rank 0's"
+fi
 
 # refusals: a derivative task, a two-hop scheme and another command over two ranks
 refused() {

@@ -29,6 +29,49 @@
 #define PLAN_MIN_RESTART 20
 #define PLAN_AMG_TIGHT_RADIUS 1.3
 
+/* The ghosts of the largest Morton range of a cloud cut into parts of equal counts, against
+ * the shell of the box model below (part_ghosts): 1.0-2.9 on 41^3 and 81^3 jittered lattices
+ * cut into 2 to 64 parts, with the quintic's and the cubic's supports at h = 1.2 s0 (a range
+ * is a union of Morton blocks of many sizes, and a cut of equal counts falls inside a block:
+ * its faces are staircases of cells). Times this factor the estimate is 1.0-2.9 times the
+ * ghosts (tests/test_plan.c): an upper estimate, as a memory check wants. */
+#define PLAN_GHOST_FACTOR 2.9
+
+/* The particles whose rows, list and solver vectors this process holds: the whole cloud on
+ * one process, its largest part over several ranks. */
+static double plan_rows(const pst_plan *p)
+{
+    return p->ranks > 1 ? (double)(p->part_owned + p->part_ghosts) : (double)p->particles;
+}
+
+/* The ghosts of the largest part when the n particles of a D-dimensional cloud are cut into
+ * `ranks` Morton ranges, each holding the particles within `reach` spacings of it (the
+ * support). The model: the cloud a cube, cut by k = ceil(log2 ranks) bisections taken along
+ * the axes in turn (as the Morton key's bits are) into boxes of n / ranks particles; a box is
+ * grown by `reach` on each face that borders another part (none along an axis never cut, one
+ * along an axis cut once, or two on a periodic axis, two along an axis cut more often), and
+ * the grown box's shell, times PLAN_GHOST_FACTOR, is the estimate. At most the particles the
+ * part does not own. */
+static size_t part_ghosts(const pst_scene *s, size_t n, int ranks, size_t owned, double reach)
+{
+    const int D = s->dim;
+    int k = 0;
+    while ((1L << k) < ranks)
+        ++k;
+    /* 2^k boxes of the bisections' shape, each scaled to the n / ranks particles it owns */
+    double side = pow((double)n, 1.0 / D) * pow((double)(1L << k) / ranks, 1.0 / D);
+    double box = 1, grown = 1;
+    for (int a = 0; a < D; ++a) {
+        int cuts = k / D + (a < k % D);
+        int faces = cuts == 0 ? 0 : cuts >= 2 || s->cloud.periodic[a] ? 2 : 1;
+        double ext = side / (double)(1L << cuts);
+        box *= ext;
+        grown *= ext + faces * reach;
+    }
+    double ghosts = ceil(PLAN_GHOST_FACTOR * (grown - box));
+    return ghosts < (double)(n - owned) ? (size_t)ghosts : n - owned;
+}
+
 size_t pst_plan_particles(const pst_scene *s)
 {
     const sc_cloud *c = &s->cloud;
@@ -185,7 +228,7 @@ static double amg_bytes_per_row(const pst_plan *p, const pst_scene *s)
  * lv and lpmps (qsfdi's automatic radius is 1.3 h already; docs/solving.md). */
 static void fit_amg_radius(pst_plan *p, const pst_scene *s, double other, double budget)
 {
-    double n = (double)p->particles;
+    double n = plan_rows(p);
     for (int k = 0; k < s->ntasks; ++k)
         if (other + n * amg_bytes_per_row(p, s) > budget && s->tasks[k].type == SC_TASK_SOLVE &&
             p->task_amg_source[k] == PST_AMG_AUTO && !amg_uses_proxy(p, s, k))
@@ -221,7 +264,7 @@ static double solver_vectors(const pst_plan *p, const pst_scene *s)
  * AMG solves (they converge in tens of iterations) down to PLAN_MIN_RESTART. */
 static void fit_restarts(pst_plan *p, const pst_scene *s, double room)
 {
-    double n = (double)p->particles, room_vectors = floor(room / (8.0 * n)) - 8;
+    double n = plan_rows(p), room_vectors = floor(room / (8.0 * n)) - 8;
     if (!(room_vectors < INT_MAX)) /* no particles known yet, or room for any restart */
         return;
     int fits = (int)room_vectors;
@@ -260,7 +303,7 @@ static int half_list_serves(const pst_plan *p, const pst_scene *s, int nops)
     for (int k = 0; k < s->ntasks; ++k) {
         const sc_task *t = &s->tasks[k];
         if (t->type == SC_TASK_SOLVE) {
-            if (p->task_stored[k] ||
+            if (p->task_stored[k] || p->task_petsc[k] || /* PETSc takes the whole rows */
                 (p->task_precond[k] == PST_PREC_AMG && !amg_uses_proxy(p, s, k)))
                 return 0;
         } else if (t->type != SC_TASK_LAPLACIAN && t->type != SC_TASK_DIVERGENCE) {
@@ -295,7 +338,7 @@ static int whole_list_gives_up(const pst_plan *p, const pst_scene *s, double bud
  * library does. Fills bytes_solver and bytes_weights; returns the bytes of the solve phase. */
 static double fit_solves(pst_plan *p, const pst_scene *s, double list, double budget, int half)
 {
-    double n = (double)p->particles;
+    double n = plan_rows(p);
     for (int k = 0; k < s->ntasks; ++k) {
         p->task_restart[k] = s->tasks[k].restart;
         p->task_amg_radius[k] = s->tasks[k].amg_radius;
@@ -316,18 +359,38 @@ static double fit_solves(pst_plan *p, const pst_scene *s, double list, double bu
         if (t->type != SC_TASK_SOLVE && t->type != SC_TASK_DIFFUSE)
             continue;
         double w = 8.0 * n * p->neighbours;
-        p->task_stored[k] = half              ? 0
-                            : t->stored >= 0  ? t->stored
-                                              : without + p->bytes_weights + w <= budget;
+        p->task_stored[k] = half || p->task_petsc[k] ? 0 /* PETSc's MatShell: matrix-free */
+                            : t->stored >= 0         ? t->stored
+                                                     : without + p->bytes_weights + w <= budget;
         if (p->task_stored[k])
             p->bytes_weights += w;
     }
     return without + p->bytes_weights;
 }
 
-/* The plan for `particles` particles with h = h_ratio s0. */
-static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h_ratio, char *err,
-                     size_t errlen)
+/* The refusal of a plan over its budget: PST_ENOMEM, with the estimate in err. */
+static int refuse_memory(const pst_plan *p, const pst_scene *s, char *err, size_t errlen)
+{
+    char share[96] = "";
+    if (p->node_ranks > 1)
+        snprintf(share, sizeof share, "this rank's share, 1/%d, of ", p->node_ranks);
+    snprintf(err, errlen, "the run needs about %.2f GB%s (cloud %.2f, neighbours %.2f, "
+                          "half list %.2f, operators %.2f, weights %.2f, solver %.2f), more "
+                          "than %.0f %% of %sthe %.2f GB available (limits.memory_fraction; "
+                          "the limit that applies: %s); use a coarser spacing%s or fewer "
+                          "tasks",
+             p->bytes_total * 1e-9, p->ranks > 1 ? " per rank" : "", p->bytes_cloud * 1e-9,
+             p->bytes_neighbours * 1e-9, p->bytes_half_list * 1e-9,
+             p->bytes_operators * 1e-9, p->bytes_weights * 1e-9, p->bytes_solver * 1e-9,
+             100 * s->memory_fraction, share, p->bytes_available * 1e-9, p->memory_limit,
+             p->ranks > 1 ? ", more nodes" : "");
+    return PST_ENOMEM;
+}
+
+/* The plan for `particles` particles with h = h_ratio s0, run where w says (NULL: one
+ * process). */
+static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h_ratio,
+                     const pst_plan_where *w, char *err, size_t errlen)
 {
     memset(p, 0, sizeof *p);
     int bad = pst_scene_compile_exprs(s, err, errlen);
@@ -336,6 +399,10 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
     const int dim = s->dim;
     p->particles = particles;
     p->h_ratio = h_ratio;
+    p->ranks = w && w->ranks > 1 ? w->ranks : 1;
+    p->node_ranks = p->ranks == 1                                   ? 1
+                    : w->node_ranks >= 1 && w->node_ranks <= p->ranks ? w->node_ranks
+                                                                      : p->ranks;
     p->kernel = s->op.kernel >= 0 ? s->op.kernel : pst_scheme_default_kernel(s->op.scheme);
     p->support = pst_kernel_support(p->kernel);
     double reach = p->support * p->h_ratio; /* in spacings */
@@ -374,6 +441,7 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
             p->skin = t->nvelocity ? t->skin : p->skin;
         }
         if (t->type == SC_TASK_SOLVE) {
+            p->task_petsc[k] = p->ranks > 1 || (w && w->petsc) || t->petsc;
             int neumann = 0;
             for (int g = 0; g < t->ngroups; ++g)
                 neumann |= t->groups[g].neumann;
@@ -389,8 +457,14 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
                                                                : PST_PREC_JACOBI;
         }
     }
-    double n = (double)particles;
-    p->bytes_cloud = n * (8.0 * doubles + 1);
+    p->bytes_cloud = (double)particles * (8.0 * doubles + 1);
+    if (p->ranks > 1) { /* every rank builds the whole cloud, then its part (positions, V,
+                           normals, ids, mobility, kinds) */
+        p->part_owned = (particles + (size_t)p->ranks - 1) / (size_t)p->ranks;
+        p->part_ghosts = part_ghosts(s, particles, p->ranks, p->part_owned, reach);
+        p->bytes_cloud += plan_rows(p) * (8.0 * (2 * dim + 2 + p->mobility_ncomp) + 1);
+    }
+    double n = plan_rows(p);
     p->bytes_neighbours = p->need_neighbours ? n * (8.0 + 4.0 * p->neighbours) : 0;
     int nops = p->base_operator;
     for (int k = 0; k < s->ntasks; ++k)
@@ -403,7 +477,7 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
     pst_memory_probe(&avail);
     p->bytes_available = avail.bytes;
     p->memory_limit = avail.limit;
-    double budget = s->memory_fraction * p->bytes_available;
+    double budget = s->memory_fraction * p->bytes_available / p->node_ranks;
     p->base_keep = base_keep(p, s);
     p->bytes_total = fit_solves(p, s, p->bytes_neighbours, budget, 0);
     double kept = n * pst_scheme_keep_bytes(s->op.scheme, dim, p->base_keep);
@@ -422,35 +496,27 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
         p->bytes_total = fmax(solves, p->bytes_cloud + p->bytes_neighbours +
                                           p->bytes_half_list + p->bytes_operators + packed);
     }
-    if (p->bytes_total > budget) {
-        snprintf(err, errlen, "the run needs about %.2f GB (cloud %.2f, neighbours %.2f, "
-                              "half list %.2f, operators %.2f, weights %.2f, solver %.2f), more "
-                              "than %.0f %% of the %.2f GB available (limits.memory_fraction; the limit "
-                              "that applies: %s); use a coarser spacing or fewer tasks",
-                 p->bytes_total * 1e-9, p->bytes_cloud * 1e-9, p->bytes_neighbours * 1e-9,
-                 p->bytes_half_list * 1e-9, p->bytes_operators * 1e-9, p->bytes_weights * 1e-9,
-                 p->bytes_solver * 1e-9, 100 * s->memory_fraction, p->bytes_available * 1e-9,
-                 p->memory_limit);
-        return PST_ENOMEM;
-    }
+    if (p->bytes_total > budget)
+        return refuse_memory(p, s, err, errlen);
     return PST_OK;
 }
 
-int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen)
+int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, const pst_plan_where *w,
+                  char *err, size_t errlen)
 {
-    return plan_make(p, s, particles, s->cloud.source == SC_CLOUD_FILE ? 0 : s->cloud.h_ratio,
+    return plan_make(p, s, particles, s->cloud.source == SC_CLOUD_FILE ? 0 : s->cloud.h_ratio, w,
                      err, errlen);
 }
 
-int pst_plan_make_for_cloud(pst_plan *p, const pst_scene *s, const pst_cloud *c, char *err,
-                            size_t errlen)
+int pst_plan_make_for_cloud(pst_plan *p, const pst_scene *s, const pst_cloud *c,
+                            const pst_plan_where *w, char *err, size_t errlen)
 {
     size_t n = pst_cloud_size(c);
     const double *V = pst_cloud_volume_const(c), *h = pst_cloud_h_array(c);
     double sum = 0, e = 1.0 / pst_cloud_dim(c), hu = pst_cloud_h_uniform(c);
     for (size_t i = 0; i < n; ++i)
         sum += (h ? h[i] : hu) / pow(V[i], e);
-    return plan_make(p, s, n, n ? sum / (double)n : 0, err, errlen);
+    return plan_make(p, s, n, n ? sum / (double)n : 0, w, err, errlen);
 }
 
 static const char *task_type_name(int type)
@@ -485,6 +551,10 @@ static void print_solve(FILE *f, const pst_plan *p, int k, const sc_task *t)
         fprintf(f, " on pairs within %g h (to fit)", p->task_amg_radius[k]);
     fprintf(f, ", rtol %g, %s operator%s", t->rtol,
             p->task_stored[k] ? "stored" : "matrix-free", t->ngroups ? ", own boundary groups" : "");
+    if (p->task_petsc[k] && p->ranks > 1)
+        fprintf(f, ", in PETSc over %d ranks", p->ranks);
+    else if (p->task_petsc[k])
+        fprintf(f, ", in PETSc");
 }
 
 static void print_steps(FILE *f, const pst_plan *p, int k, const sc_task *t)
@@ -511,6 +581,10 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
     else if (p->particles)
         fprintf(f, "  cloud      %dD, %zu particles from %s, h = %.3g s0 (mean h / V^(1/%d))\n",
                 s->dim, p->particles, s->cloud.file, p->h_ratio, s->dim);
+    if (p->ranks > 1)
+        fprintf(f, "  ranks      %d (%d on this node), each with its part of the cloud: about %zu "
+                   "owned and %zu ghost particles (estimated); the memory below is one rank's\n",
+                p->ranks, p->node_ranks, p->part_owned, p->part_ghosts);
     if (pst_scene_periodic_axes(s)) {
         fprintf(f, "  periodic  ");
         for (int d = 0; d < s->dim; ++d)
@@ -556,7 +630,10 @@ void pst_plan_print(FILE *f, const pst_plan *p, const pst_scene *s)
             gb ? "GB" : "MB", p->bytes_cloud * unit, p->bytes_neighbours * unit);
     if (p->half_list)
         fprintf(f, ", half list %.2f", p->bytes_half_list * unit);
-    fprintf(f, ", operators %.2f, weights %.2f, solver %.2f) of %.2f GB available (%s)\n",
+    fprintf(f, ", operators %.2f, weights %.2f, solver %.2f) of %.2f GB available",
             p->bytes_operators * unit, p->bytes_weights * unit, p->bytes_solver * unit,
-            p->bytes_available * 1e-9, p->memory_limit);
+            p->bytes_available * 1e-9);
+    if (p->node_ranks > 1)
+        fprintf(f, " to the %d ranks on this node", p->node_ranks);
+    fprintf(f, " (%s)\n", p->memory_limit);
 }

@@ -54,6 +54,7 @@ typedef struct {
     int moving;
     double skin;
     int task_stored[SC_MAX_TASKS];  /* 1: stored weights, 0: matrix-free                      */
+    int task_petsc[SC_MAX_TASKS];   /* 1: a solve that runs in PETSc (matrix-free, whole list) */
     int task_solver[SC_MAX_TASKS];  /* pst_solver a solve task will use                        */
     int task_precond[SC_MAX_TASKS]; /* pst_precond a solve task will use                       */
     int task_restart[SC_MAX_TASKS]; /* its GMRES restart (the scene's, shortened to fit)       */
@@ -65,21 +66,38 @@ typedef struct {
     double bytes_cloud, bytes_neighbours, bytes_half_list, bytes_operators, bytes_weights;
     double bytes_solver, bytes_total, bytes_available;
     const char *memory_limit; /* what bounds bytes_available (pst_memory_avail.limit)         */
+    /* Over several ranks (pst_plan_where.ranks > 1) the bytes above are one rank's: the whole
+     * cloud (every rank builds it) and its largest part, part_owned + part_ghosts particles
+     * (the ghosts estimated), which the list, operator and solver parts count; the budget is
+     * this node's share, bytes_available / node_ranks. 1 and 1 on one process. */
+    int ranks, node_ranks;
+    size_t part_owned, part_ghosts;
 } pst_plan;
 
+/* Where a run will go: over how many ranks (1 or 0: one process), how many of them share this
+ * node's memory (0: all of them), and whether every solve runs in PETSc (pstencil run
+ * --petsc; over several ranks they all do). NULL: one process, PETSc only for the tasks that
+ * ask for it (tasks[].petsc). */
+typedef struct {
+    int ranks, node_ranks;
+    int petsc;
+} pst_plan_where;
+
 /* Make the plan of scene `s` for a cloud of `particles` particles (pst_plan_particles gives
- * the count of a generated cloud before generating it). Errors (PST_EINPUT, with the reason
- * in err) for an expression that does not compile (pst_scene_compile_exprs) and for tasks the
- * scheme cannot do (a Hessian from a scheme without one, CG on a non-symmetrisable operator, a
- * divergence task without mobility, ...); PST_ENOMEM with the
- * estimate when the plan does not fit in limits.memory_fraction of the available memory. */
-int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, char *err, size_t errlen);
+ * the count of a generated cloud before generating it), run where w says. Errors (PST_EINPUT,
+ * with the reason in err) for an expression that does not compile (pst_scene_compile_exprs)
+ * and for tasks the scheme cannot do (a Hessian from a scheme without one, CG on a
+ * non-symmetrisable operator, a divergence task without mobility, ...); PST_ENOMEM with the
+ * estimate when the plan does not fit in limits.memory_fraction of the available memory (of a
+ * rank's share of it over several ranks). */
+int pst_plan_make(pst_plan *p, const pst_scene *s, size_t particles, const pst_plan_where *w,
+                  char *err, size_t errlen);
 
 /* pst_plan_make for a cloud already read from the scene's cloud.file: its size, and h / s0
  * measured on it (the mean of h_i / V_i^(1/D), s0 = V^(1/D) being the spacing of a regular
  * cloud of volumes V) instead of the scene's cloud.h_ratio. */
-int pst_plan_make_for_cloud(pst_plan *p, const pst_scene *s, const pst_cloud *c, char *err,
-                            size_t errlen);
+int pst_plan_make_for_cloud(pst_plan *p, const pst_scene *s, const pst_cloud *c,
+                            const pst_plan_where *w, char *err, size_t errlen);
 
 /* The number of particles the scene's generated cloud will have (0 for a file cloud). */
 size_t pst_plan_particles(const pst_scene *s);

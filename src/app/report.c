@@ -125,6 +125,11 @@ void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt
                                  {"mobility_components", p->mobility_ncomp},
                                  {"mobility_factor", p->mobility_factor}};
     add_numbers(pl, plan, sizeof plan / sizeof plan[0]);
+    cJSON_AddNumberToObject(pl, "ranks", p->ranks);
+    if (p->ranks > 1) { /* the plan's part, beside the task's petsc.rank0_owned and _ghosts */
+        cJSON_AddNumberToObject(pl, "part_owned_estimate", (double)p->part_owned);
+        cJSON_AddNumberToObject(pl, "part_ghosts_estimate", (double)p->part_ghosts);
+    }
     cJSON_AddBoolToObject(pl, "base_operator", p->base_operator);
     cJSON_AddBoolToObject(pl, "base_laplacian_rows", p->base_laplacian);
     cJSON_AddBoolToObject(pl, "half_list", p->half_list);

@@ -143,8 +143,8 @@ static int build(run_state *r)
     const pst_scene *s = r->s;
     double t0 = omp_get_wtime();
     int st = run_make_cloud(r);
-    if (st == PST_OK && s->cloud.source == SC_CLOUD_FILE)
-        st = pst_plan_make_for_cloud(&r->plan, s, r->c, r->err, r->errlen); /* the file's */
+    if (st == PST_OK && s->cloud.source == SC_CLOUD_FILE) /* the file's size and h */
+        st = pst_plan_make_for_cloud(&r->plan, s, r->c, &r->where, r->err, r->errlen);
     if (st == PST_OK)
         st = run_make_mobility(r);
     if (st == PST_OK)
@@ -178,30 +178,31 @@ static int build(run_state *r)
 int pst_run_scene(const pst_scene *s, const pst_run_opts *o, pst_plan *plan,
                   pst_run_counters *counters, pst_cloud **cloud, char *err, size_t errlen)
 {
-    run_state r = {.s = s, .o = o, .err = err, .errlen = errlen, .dist = o->ranks > 1};
+    run_state r = {.s = s, .o = o, .err = err, .errlen = errlen, .dist = o->ranks > 1,
+                   .where = {.ranks = o->ranks, .node_ranks = o->node_ranks,
+                             .petsc = o->petsc_options != NULL}};
     err[0] = '\0';
     if (o->report)
         *o->report = NULL;
     if (cloud)
         *cloud = NULL;
-    int st = pst_plan_make(&r.plan, s, pst_plan_particles(s), err, errlen);
+    int st = check_ranks(&r);
+    if (st == PST_OK)
+        st = pst_plan_make(&r.plan, s, pst_plan_particles(s), &r.where, err, errlen);
     if (st == PST_OK && o->plan_only && s->cloud.source == SC_CLOUD_FILE) {
         st = run_make_cloud(&r); /* a file cloud's plan needs its size and its h */
         if (st == PST_OK)
-            st = pst_plan_make_for_cloud(&r.plan, s, r.c, err, errlen);
+            st = pst_plan_make_for_cloud(&r.plan, s, r.c, &r.where, err, errlen);
         pst_cloud_destroy(r.c);
         r.c = NULL;
     }
     if (st == PST_OK && o->plan_only) {
-        pst_plan_print(stdout, &r.plan, s);
+        if (o->rank == 0) /* over several ranks, one plan (every rank's is the same) */
+            pst_plan_print(stdout, &r.plan, s);
         if (plan)
             *plan = r.plan;
         return PST_OK;
     }
-    for (int k = 0; k < s->ntasks; ++k) /* PETSc assembles the operator: the whole list */
-        r.plan.half_list = r.plan.half_list && !run_in_petsc(&r, k);
-    if (st == PST_OK)
-        st = check_ranks(&r);
     r.report = report_begin(s);
     r.tasks = cJSON_AddArrayToObject(r.report, "tasks");
     double t0 = omp_get_wtime(), cpu0 = cpu_seconds();
@@ -279,7 +280,7 @@ int pst_run_build_operator(const pst_scene *s, int quiet, size_t max_unknowns, p
     *cloud = NULL;
     *nl = NULL;
     *op = NULL;
-    int st = pst_plan_make(&r.plan, s, pst_plan_particles(s), err, errlen);
+    int st = pst_plan_make(&r.plan, s, pst_plan_particles(s), NULL, err, errlen);
     r.report = report_begin(s);
     r.plan.need_neighbours = 1;
     r.plan.half_list = 0; /* the caller reads the whole rows (the analysis assembles them) */

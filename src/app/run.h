@@ -7,7 +7,8 @@
 
 typedef struct {
     int quiet;          /* no progress lines and no summary on stdout                      */
-    int plan_only;      /* print the plan and stop before allocating anything big           */
+    int plan_only;      /* print the plan and stop before allocating anything big (rank 0  */
+                        /* prints it over several ranks, the plan of one rank)             */
     /* When not NULL, receives the run's JSON report (docs/running.md; cJSON_Delete it), also
      * after a solve that did not converge; NULL after any other failure. */
     struct cJSON **report;
@@ -20,6 +21,9 @@ typedef struct {
      * the neighbours and the operator of its own part of the cloud (docs/distributed.md), and
      * rank 0 alone writes the outputs. 0 or 1: one process. */
     int ranks, rank;
+    /* How many of the ranks share this node's memory (their plans each take a share of it);
+     * 0: all of them. */
+    int node_ranks;
     /* PETSc options from the command line, read after each solve's own (tasks[].petsc); not
      * NULL: every solve runs in PETSc. */
     const char *petsc_options;

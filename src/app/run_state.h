@@ -26,6 +26,7 @@ typedef struct {
     cJSON *report, *tasks;
     int solve_failed;
     int dist;        /* more than one rank (pst_run_opts.ranks): every solve on the rank's part */
+    pst_plan_where where; /* the ranks and PETSc, as the plan takes them */
     uint8_t *status; /* the row status of a solve's own operator, when there is no base one */
     char *err;
     size_t errlen;

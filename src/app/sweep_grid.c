@@ -141,7 +141,7 @@ int pst_sweep_check(const pst_sweep *sw, size_t *nfailed, char *err, size_t errl
         int st = sweep_combo_scene(sw, k, &s, msg, sizeof msg);
         if (st == PST_OK) {
             pst_plan p;
-            st = pst_plan_make(&p, &s, pst_plan_particles(&s), msg, sizeof msg);
+            st = pst_plan_make(&p, &s, pst_plan_particles(&s), NULL, msg, sizeof msg);
             pst_scene_free(&s);
         }
         if (st != PST_OK) {

@@ -52,7 +52,7 @@ int sweep_combo_is_small(const pst_sweep *sw, size_t k, int jobs)
     if (n == 0 && s.cloud.file) {
         struct stat sb;
         small = stat(s.cloud.file, &sb) == 0 && sb.st_size <= SMALL_FILE_BYTES;
-    } else if (pst_plan_make(&p, &s, n, msg, sizeof msg) == PST_OK) {
+    } else if (pst_plan_make(&p, &s, n, NULL, msg, sizeof msg) == PST_OK) {
         small = (double)p.particles * (p.neighbours + 1) <= SMALL_PAIRS &&
                 jobs * p.bytes_total <= s.memory_fraction * p.bytes_available;
     }

@@ -29,6 +29,14 @@ int cli_start_petsc(char *err);
  * environment: 1 when it was not started by mpirun. */
 int cli_launched_ranks(void);
 
+/* This process's rank among them (0 when not started by mpirun), from the same environment,
+ * before MPI is started. */
+int cli_launched_rank(void);
+
+/* How many of the ranks mpirun started on this node (Open MPI's, MPICH's or PMIx's local
+ * size); 0 when the launcher does not say. */
+int cli_node_ranks(void);
+
 /* Passive OpenMP waiting unless the user set OMP_WAIT_POLICY: re-executes the program with
  * OMP_WAIT_POLICY=PASSIVE, so it must run first in main, before any OpenMP call (libgomp reads
  * the variable when it is loaded). Returns only in the re-executed program, when the user set

@@ -65,8 +65,12 @@ int cli_run(const cli_ctx *ctx, int argc, char **argv)
     if (st != PST_OK)
         return cli_fail(st, "scene", err);
     pst_run_opts ro = {.quiet = ctx->quiet, .plan_only = plan_only, .start_mpi = cli_start_mpi,
-                       .petsc_options = petsc, .start_petsc = cli_start_petsc};
-    if (cli_launched_ranks() > 1 && !plan_only) { /* every rank runs the scene on its part */
+                       .petsc_options = petsc, .start_petsc = cli_start_petsc,
+                       .node_ranks = cli_node_ranks()};
+    if (cli_launched_ranks() > 1 && plan_only) { /* the plan of one rank, without MPI */
+        ro.ranks = cli_launched_ranks();
+        ro.rank = cli_launched_rank();
+    } else if (cli_launched_ranks() > 1) { /* every rank runs the scene on its part */
         st = cli_start_petsc(err) == 0 ? PST_OK : PST_EINVAL;
         pst_mpi_rank(&ro.rank, &ro.ranks);
         ro.quiet = ro.quiet || ro.rank > 0;

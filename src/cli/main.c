@@ -153,16 +153,36 @@ int cli_start_petsc(char *err)
     return pst_petsc_start(NULL, NULL, err) == PST_OK ? 0 : -1;
 }
 
-int cli_launched_ranks(void)
+/* The first of Open MPI's, MPICH's and PMIx's variables for one count that is set to a
+ * number in [lo, PST_PART_MAX_RANKS], or `none`. */
+static int launcher_count(const char *const vars[3], long lo, int none)
 {
-    static const char *const vars[] = {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"};
-    for (size_t k = 0; k < sizeof vars / sizeof *vars; ++k) {
+    for (size_t k = 0; k < 3; ++k) {
         const char *v = getenv(vars[k]);
         long n;
-        if (v && cli_parse_long(v, &n) == 0 && n >= 1 && n <= PST_PART_MAX_RANKS)
+        if (v && cli_parse_long(v, &n) == 0 && n >= lo && n <= PST_PART_MAX_RANKS)
             return (int)n;
     }
-    return 1;
+    return none;
+}
+
+int cli_launched_ranks(void)
+{
+    static const char *const vars[3] = {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"};
+    return launcher_count(vars, 1, 1);
+}
+
+int cli_launched_rank(void)
+{
+    static const char *const vars[3] = {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"};
+    return launcher_count(vars, 0, 0);
+}
+
+int cli_node_ranks(void)
+{
+    static const char *const vars[3] = {"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS",
+                                        "PMIX_LOCAL_SIZE"};
+    return launcher_count(vars, 1, 0);
 }
 
 /* SIGINT, SIGTERM, SIGHUP: remove the temporary files of the writes in progress, then die of
