@@ -85,6 +85,8 @@ petsc_case() {
 petsc_case "gmres + ilu" --petsc "-pc_type ilu"
 petsc_case "bcgs + jacobi" "tasks.0.petsc=-ksp_type bcgs -pc_type jacobi"
 petsc_case "gmres + ilu" "tasks.0.petsc=-pc_type jacobi" --petsc "-pc_type ilu"
+# GAMG (PETSc's AMG without hypre) smooths on the proxy, not on the scheme's rows
+petsc_case "gmres + gamg" --petsc "-pc_type gamg"
 
 # one and two threads per rank give the same bits (the applies and the part's operator are
 # thread-count independent; PETSc and hypre are serial inside a rank)
