@@ -7,8 +7,8 @@
 
 typedef struct {
     int quiet;          /* no progress lines and no summary on stdout                      */
-    int plan_only;      /* print the plan and stop before allocating anything big (rank 0  */
-                        /* prints it over several ranks, the plan of one rank)             */
+    int plan_only;      /* print the plan and stop before allocating anything big; over     */
+                        /* several ranks, rank 0 prints one rank's plan                     */
     /* When not NULL, receives the run's JSON report (docs/running.md; cJSON_Delete it), also
      * after a solve that did not converge; NULL after any other failure. */
     struct cJSON **report;
