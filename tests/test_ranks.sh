@@ -87,6 +87,27 @@ petsc_case "bcgs + jacobi" "tasks.0.petsc=-ksp_type bcgs -pc_type jacobi"
 petsc_case "gmres + ilu" "tasks.0.petsc=-pc_type jacobi" --petsc "-pc_type ilu"
 # GAMG (PETSc's AMG without hypre) smooths on the proxy, not on the scheme's rows
 petsc_case "gmres + gamg" --petsc "-pc_type gamg"
+# the options of the objects a PC makes in its set-up reach them (GAMG's levels)
+if "$exe" run "$scenes/dirichlet_3d.json" "outputs={}" \
+     --petsc "-pc_type gamg -mg_levels_pc_type sor -ksp_view" > "$work/log" 2>&1 &&
+   grep -A1 "PC Object: (mg_levels_1_)" "$work/log" | grep -q "type: sor"; then
+  passed=$((passed + 1))
+else
+  failed=$((failed + 1))
+  echo "FAIL: -mg_levels_pc_type sor did not reach GAMG's smoother"
+fi
+# a fixed mean (periodic, no Dirichlet particle): GAMG's coarse solver relaxes, as BoomerAMG's
+one=$work/one.csv
+"$exe" --quiet run "$scenes/periodic_2d.json" "outputs.csv=$one" > /dev/null 2>&1
+rm -f "$work/p.csv"
+if "$exe" run "$scenes/periodic_2d.json" "outputs.csv=$work/p.csv" --petsc "-pc_type gamg" \
+     > "$work/log" 2>&1 && grep -q "PETSc gmres + gamg: CONVERGED" "$work/log"; then
+  agree "periodic_2d/qsfdi with --petsc -pc_type gamg" "$one" "$work/p.csv"
+else
+  failed=$((failed + 1))
+  echo "FAIL: periodic_2d/qsfdi with --petsc -pc_type gamg: no 'PETSc gmres + gamg: CONVERGED'"
+  sed 's/^/  | /' "$work/log" | tail -8
+fi
 
 # one and two threads per rank give the same bits (the applies and the part's operator are
 # thread-count independent; PETSc and hypre are serial inside a rank)

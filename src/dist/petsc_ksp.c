@@ -255,10 +255,11 @@ static int make_ksp(MPI_Comm comm, int dim, Mat A, Mat P, const pst_petsc_opts *
 {
     int st = PST_OK;
     PC pc;
-    char amg[384];
+    char amg[512];
     /* with a fixed mean the matrix is singular (no Dirichlet row): elimination on the coarsest
      * grid would return a huge multiple of the constants, four smoothing sweeps stay bounded,
-     * as in pstencil's own AMG. -pc_use_amat false: the smoothers of PETSc's multigrid PCs
+     * as in pstencil's own AMG (BoomerAMG's and GAMG's coarse solvers; GAMG's LU broke down on
+     * the periodic test scene). -pc_use_amat false: the smoothers of PETSc's multigrid PCs
      * relax on the preconditioner's matrix (the low-order proxy), not on the MatShell, whose
      * rows (qsfdi's: not symmetric) GAMG's Chebyshev smoother diverged on by default (3D qsfdi
      * test scene: residual 2.1 after 5000 iterations; on the proxy 29) */
@@ -268,7 +269,8 @@ static int make_ksp(MPI_Comm comm, int dim, Mat A, Mat P, const pst_petsc_opts *
              "-pc_hypre_boomeramg_P_max 4 -pc_hypre_boomeramg_strong_threshold %g%s",
              dim == 2 ? 0.25 : 0.5,
              o->fix_mean ? " -pc_hypre_boomeramg_relax_type_coarse symmetric-SOR/Jacobi "
-                           "-pc_hypre_boomeramg_grid_sweeps_coarse 4"
+                           "-pc_hypre_boomeramg_grid_sweeps_coarse 4 -mg_coarse_ksp_type "
+                           "richardson -mg_coarse_pc_type jacobi -mg_coarse_ksp_max_it 4"
                          : "");
     PETSC_TRY(PetscOptionsCreate(db));
     PETSC_TRY(PetscOptionsInsertString(*db, amg));
@@ -436,6 +438,7 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
     IS isfrom = NULL;
     KSP ksp = NULL;
     PetscOptions db = NULL;
+    int pushed = 0;
     double *hist = NULL;
     PetscReal bnorm = 0;
     monitor_ctx mc = {o, 0};
@@ -472,6 +475,11 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
     mc.bnorm = bnorm;
     PST_TRY_GOTO(st, preconditioner_matrix(op, comm, &pi, global, o, &P, err), done);
     PST_TRY_GOTO(st, make_ksp(comm, op->dim, A, P, o, &db, &ksp, err), done);
+    /* the objects a PC makes in its set-up (GAMG's levels and coarse solver, block Jacobi's
+     * blocks) read the default options database, not their parent's: this solve's while it
+     * sets up and runs, so that -mg_levels_... and -sub_... options reach them */
+    PETSC_TRY(PetscOptionsPush(db));
+    pushed = 1;
     if (o->monitor)
         PETSC_TRY(KSPMonitorSet(ksp, ksp_monitor, &mc, NULL));
     if (o->history) {
@@ -505,6 +513,8 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
         pst_set_err(err, "%s", r->message);
     }
 done:
+    if (pushed)
+        PetscOptionsPop();
     KSPDestroy(&ksp);
     PetscOptionsDestroy(&db);
     MatDestroy(&P);
