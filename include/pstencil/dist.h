@@ -119,8 +119,10 @@ void pst_petsc_defaults(pst_petsc_opts *o);
  * through pst_op_diagonal) with identity Dirichlet rows, and the preconditioner is built from
  * S times the low-order matrix of o->amg_source (the Brookshaw proxy or op's own stencil,
  * assembled) as an AIJ matrix. Defaults: GMRES(restart) with right
- * preconditioning and BoomerAMG (-pc_type hypre) where PETSc has hypre, else GAMG; o->options
- * change any of it. With p NULL, op is the whole cloud's operator on one process and b, u
+ * preconditioning and BoomerAMG (-pc_type hypre) where PETSc has hypre, else GAMG, whose
+ * smoothers relax on that matrix (-pc_use_amat false); o->options change any of it, the
+ * options of the objects a PC makes in its set-up included (-mg_levels_..., -sub_...). With p
+ * NULL, op is the whole cloud's operator on one process and b, u
  * hold its n values; with a part, op is built on pst_part_cloud(p), every rank of
  * MPI_COMM_WORLD calls this together (p's ranks must be its size), b and u hold the local
  * cloud's nlocal values and only the owned ones are read and written (the ghosts' values of
