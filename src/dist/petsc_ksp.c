@@ -297,6 +297,26 @@ done:
     return st;
 }
 
+/* The solve's monitor (o->monitor, through mc) and residual history (o->history: into *hist,
+ * which the caller frees, and r->history). */
+static int watch(KSP ksp, const pst_petsc_opts *o, monitor_ctx *mc, double **hist,
+                 pst_solve_result *r, char *err)
+{
+    int st = PST_OK;
+    if (o->monitor)
+        PETSC_TRY(KSPMonitorSet(ksp, ksp_monitor, mc, NULL));
+    if (o->history) {
+        size_t len = o->max_iter < PST_PETSC_HISTORY ? (size_t)o->max_iter + 1 : PST_PETSC_HISTORY;
+        *hist = malloc(len * sizeof **hist);
+        r->history = malloc(len * sizeof *r->history);
+        PST_CHECK_GOTO(!*hist || !r->history, st, PST_ENOMEM, done, err,
+                       "petsc solve: out of memory for the history");
+        PETSC_TRY(KSPSetResidualHistory(ksp, *hist, (PetscInt)len, PETSC_TRUE));
+    }
+done:
+    return st;
+}
+
 /* A fixed mean: c = -(mean |diag L|) / sum V over all ranks, as pst_solve takes it; refused
  * when a rank owns a Dirichlet row. */
 static int fix_mean_setup(shell_ctx *s, size_t n, char *err)
@@ -480,16 +500,7 @@ int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double
      * sets up and runs, so that -mg_levels_... and -sub_... options reach them */
     PETSC_TRY(PetscOptionsPush(db));
     pushed = 1;
-    if (o->monitor)
-        PETSC_TRY(KSPMonitorSet(ksp, ksp_monitor, &mc, NULL));
-    if (o->history) {
-        size_t len = o->max_iter < PST_PETSC_HISTORY ? (size_t)o->max_iter + 1 : PST_PETSC_HISTORY;
-        hist = malloc(len * sizeof *hist);
-        r->history = malloc(len * sizeof *r->history);
-        PST_CHECK_GOTO(!hist || !r->history, st, PST_ENOMEM, done, err,
-                       "petsc solve: out of memory for the history");
-        PETSC_TRY(KSPSetResidualHistory(ksp, hist, (PetscInt)len, PETSC_TRUE));
-    }
+    PST_TRY_GOTO(st, watch(ksp, o, &mc, &hist, r, err), done);
     double t1 = MPI_Wtime();
     PETSC_TRY(KSPSetUp(ksp));
     r->setup_seconds = MPI_Wtime() - t1;
