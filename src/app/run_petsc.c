@@ -13,11 +13,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-int run_in_petsc(const run_state *r, int k)
-{
-    return r->dist || r->s->tasks[k].petsc || r->o->petsc_options;
-}
-
 /* The task's options then the command line's (which override them), into buf. */
 static int petsc_options(run_state *r, const sc_task *t, char *buf, size_t len)
 {

@@ -202,7 +202,7 @@ int run_solve(run_state *r, int k, cJSON *tj)
         st = run_make_operator(r, 1, &bnd, &op);
     const uint8_t *kind = grouped ? bnd.kind : pst_cloud_kinds_const(r->c);
     int fix_mean = st == PST_OK && needs_fixed_mean(r, kind);
-    int petsc = run_in_petsc(r, k);
+    int petsc = r->plan.task_petsc[k]; /* several ranks, tasks[k].petsc or --petsc */
     double *normal[3] = {NULL, NULL, NULL};
     for (int d = 0; d < r->s->dim; ++d)
         normal[d] = grouped ? bnd.normal[d] : pst_cloud_normal(r->c, d);

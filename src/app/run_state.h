@@ -88,10 +88,6 @@ void run_solve_monitor(int it, double rel, void *ctx);
 int run_solve_finish(run_state *r, int k, cJSON *tj, pst_solve_result *res, int fix_mean,
                      int st, const char *msg);
 
-/* 1 when solve task k runs in PETSc: several ranks, tasks[k].petsc given or PETSc options on
- * the command line (run_petsc.c). */
-int run_in_petsc(const run_state *r, int k);
-
 /* Solve task k in PETSc (run_petsc.c): b into u over the whole cloud, on the task's boundary
  * (kind, normal), with the mean of u fixed when fix_mean; op is the task's operator on one
  * process, NULL over several ranks (each builds its part's). */
