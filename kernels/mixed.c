@@ -910,7 +910,10 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
 #define MX_FALLBACK_LINEAR                                                                     \
     "linear fit: too few neighbours or singular -> kernel gradient and Brookshaw row -> zero row"
 
-#define MX_SCHEME(ID, NAME, DESC, FALLBACK, DEG, PRE, MIN, HESS, BYTES2, BYTES3)              \
+/* HALO, the hops a row reaches (pst_scheme.halo): 2, the neighbours' gradients, whose fits read
+ * their own neighbours; 3 for mixed0, whose fits weigh those neighbours by volumes V~ that come
+ * from the next ring. */
+#define MX_SCHEME(ID, NAME, DESC, FALLBACK, DEG, HALO, PRE, MIN, HESS, BYTES2, BYTES3)        \
     const pst_scheme ID = {.name = NAME,                                                       \
                            .description = DESC,                                                \
                            .fallback = FALLBACK,                                               \
@@ -918,7 +921,7 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
                            .degree = DEG,                                                      \
                            .degree_lattice = 2,                                                \
                            .mobility = 1,                                                      \
-                           .halo = 2, /* the neighbours' gradients */                          \
+                           .halo = HALO,                                                       \
                            .min_neighbours = MIN,                                              \
                            .precompute = PRE,                                                  \
                            .wide_pattern = mx_wide_pattern,                                    \
@@ -931,12 +934,12 @@ static void mx_hessian(const pst_op *op, const double *u, double *const hess[6])
 
 MX_SCHEME(pst_scheme_mixed0, "mixed0",
           "mixed ordinary method, nested LS gradient with W V weights (seed 003 Model 3)",
-          MX_FALLBACK_LINEAR, 1, pre_ordinary, mx_min_linear, NULL, 57, 105);
+          MX_FALLBACK_LINEAR, 1, 3, pre_ordinary, mx_min_linear, NULL, 57, 105);
 MX_SCHEME(pst_scheme_mixed1, "mixed1",
           "mixed least squares 1st order, nested linear LS gradient (seed 003 Model 4)",
-          MX_FALLBACK_LINEAR, 1, pre_linear, mx_min_linear, NULL, 49, 97);
+          MX_FALLBACK_LINEAR, 1, 2, pre_linear, mx_min_linear, NULL, 49, 97);
 MX_SCHEME(pst_scheme_mixed2, "mixed2",
           "mixed least squares 2nd order, nested quadratic LS gradient (seed 003 Model 5)",
           "quadratic fit: too few neighbours or singular -> linear fit -> kernel gradient and "
           "Brookshaw row -> zero row",
-          2, pre_quadratic, mx_min_quadratic, mx_hessian, 97, 241);
+          2, 2, pre_quadratic, mx_min_quadratic, mx_hessian, 97, 241);

@@ -669,14 +669,16 @@ static void test_fit_memory(void)
 
 /* Over several ranks the plan is one rank's: a part of n / ranks owned particles and an upper
  * estimate of the ghosts of the largest part (checked against the parts pst_part_create cuts
- * at 2, 8 and 64 ranks: at least them, at most 3 times them; the estimate's factor was fitted
- * on 2 to 64), every solve in PETSc, matrix-free on the whole list, the
+ * at 2, 8 and 64 ranks, with one ring of ghosts (qsfdi, lv), two (cspm) and three (mixed0): at
+ * least them, at most 3 times them; the estimate's factor was fitted on one ring at 2 to 64
+ * ranks), every solve in PETSc, matrix-free on the whole list, the
  * part counted beside the whole cloud that every rank builds, and a budget that the node's
  * ranks share. */
 static void test_ranks(void)
 {
-    const char *const schemes[2] = {"operator.scheme=qsfdi", "operator.scheme=lv"};
-    for (int k = 0; k < 2; ++k) {
+    const char *const schemes[4] = {"operator.scheme=qsfdi", "operator.scheme=lv",
+                                    "operator.scheme=cspm", "operator.scheme=mixed0"};
+    for (int k = 0; k < 4; ++k) {
         const char *ov[] = {"dim=3", "cloud.lo=[0,0,0]", "cloud.hi=[1,1,1]", "cloud.spacing=0.025",
                             "tasks=[{\"type\":\"solve\",\"rhs\":\"0\",\"exact\":\"x\"}]",
                             "fields={}", schemes[k]};
@@ -696,7 +698,8 @@ static void test_ranks(void)
             for (int r = 0; r < R; ++r) {
                 pst_part *part = NULL;
                 CHECK_INT(pst_part_create(&part, c, pst_cloud_kinds_const(c), normal, R, r,
-                                          pst_nlist_support(nl), err),
+                                          pst_nlist_support(nl), pst_scheme_halo(s.op.scheme),
+                                          err),
                           PST_OK);
                 pst_part_info pi;
                 pst_part_layout(part, &pi);
@@ -708,9 +711,14 @@ static void test_ranks(void)
             CHECK_INT(pst_plan_make(&p, &s, n, &w, err, sizeof err), PST_OK);
             CHECK(p.ranks == R && p.node_ranks == 1);
             CHECK(p.part_owned == owned);
-            CHECK(p.part_ghosts >= ghosts && p.part_ghosts <= 3 * ghosts);
+            /* on 64 parts of this small cloud the two-ring halo reaches past the cloud's faces
+             * that the box model takes for borders with other parts: up to 3.24 x there */
+            CHECK(p.part_ghosts >= ghosts &&
+                  p.part_ghosts <= (pst_scheme_halo(s.op.scheme) == 1 ? 3.0 : 3.5) * ghosts);
             CHECK(p.task_petsc[0] == 1 && p.task_stored[0] == 0 && p.half_list == 0);
-            CHECK(p.bytes_cloud > one.bytes_cloud && p.bytes_neighbours < one.bytes_neighbours);
+            /* the part's list, unless the estimate is the whole cloud (thick halos on 2 ranks) */
+            CHECK(p.bytes_cloud > one.bytes_cloud &&
+                  (p.bytes_neighbours < one.bytes_neighbours || p.part_owned + p.part_ghosts == n));
             printf("%s, %zu particles over %d ranks: owned %zu, ghosts %zu, estimated %zu "
                    "(%.2f)\n",
                    schemes[k] + 16, n, R, owned, ghosts, p.part_ghosts,

@@ -15,26 +15,32 @@ extern "C" {
 
 /* Rank r of R owns the contiguous range [n r / R, n (r + 1) / R) of the cloud's order (Morton
  * sort the cloud first, pst_cloud_morton_sort, so that a range is a compact region) and sees
- * the ghosts: the other particles within the neighbour reach of an owned particle (choice 1 of
- * pst_nlist_build with the same support). The part's local cloud holds owned and ghosts in the
- * cloud's order, every per-particle array copied (positions, V, h, kinds, normals, mobility,
- * ids, the periodic box; not the fields); its ghosts are Dirichlet particles, so an operator
- * on it computes only the owned rows, and those are the whole cloud's rows bit for bit (the
- * same neighbours in the same order). No PETSc or MPI is needed: a part is plain data. */
+ * the ghosts: the other particles within `hops` links of an owned particle in the neighbour
+ * list (choice 1 of pst_nlist_build with the same support), one ring for a scheme whose rows
+ * read their particle and its neighbours, as many as pst_scheme_halo says for the others. The
+ * part's local cloud holds owned and ghosts in the cloud's order, every per-particle array
+ * copied (positions, V, h, kinds, normals, mobility, ids, the periodic box; not the fields);
+ * its ghosts are Dirichlet particles, so an operator on it computes only the owned rows, and
+ * those are the whole cloud's rows bit for bit (the same neighbours in the same order, and
+ * each neighbour's own list whole where the scheme reads it). No PETSc or MPI is needed: a
+ * part is plain data. */
 typedef struct pst_part pst_part;
 
 #define PST_PART_MAX_RANKS 65536
+#define PST_PART_MAX_HOPS 3
 
 /* The part of rank `rank` of `ranks` (1..PST_PART_MAX_RANKS) of cloud c for neighbour lists of
- * `support` (in units of h, as pst_nlist_build). The owned particles take their kinds and
- * normals from `kind` and `normal` (whole-cloud arrays, as pst_op_opts.kinds and .normals: a
- * solve's boundary groups) or, NULL, the cloud's. The ghosts are found from local data: the
- * particles within support * h_max of the owned bounding box (through the faces of a periodic
- * box), kept when an owned particle's list reaches them. PST_EINVAL (bad ranks, rank or
- * support), PST_ENOMEM, or a neighbour-list failure (reason in err). */
+ * `support` (in units of h, as pst_nlist_build), with `hops` rings of ghosts
+ * (1..PST_PART_MAX_HOPS; pst_scheme_halo of the scheme to be built on it). The owned particles
+ * take their kinds and normals from `kind` and `normal` (whole-cloud arrays, as
+ * pst_op_opts.kinds and .normals: a solve's boundary groups) or, NULL, the cloud's. The ghosts
+ * are found from local data: the particles within hops * support * h_max of the owned bounding
+ * box (through the faces of a periodic box), kept when they are within `hops` links of an
+ * owned particle in their list. PST_EINVAL (bad ranks, rank, support or hops), PST_ENOMEM, or
+ * a neighbour-list failure (reason in err). */
 int pst_part_create(pst_part **out, const pst_cloud *c, const uint8_t *kind,
                     const double *const normal[3], int ranks, int rank, double support,
-                    char *err);
+                    int hops, char *err);
 void pst_part_destroy(pst_part *p);
 
 /* The local cloud (owned and ghosts, in the cloud's order): build the neighbour list and the
@@ -43,6 +49,7 @@ const pst_cloud *pst_part_cloud(const pst_part *p);
 
 typedef struct {
     int ranks, rank;
+    int hops;       /* the rings of ghosts                                               */
     size_t n;       /* particles of the whole cloud                                      */
     size_t lo, hi;  /* the owned range of the whole cloud's order                        */
     size_t own0;    /* local index of the first owned particle: owned are own0 .. own0 + hi - lo */
@@ -122,16 +129,17 @@ void pst_petsc_defaults(pst_petsc_opts *o);
  * preconditioning and BoomerAMG (-pc_type hypre) where PETSc has hypre, else GAMG, whose
  * smoothers relax on that matrix (-pc_use_amat false); o->options change any of it, the
  * options of the objects a PC makes in its set-up included (-mg_levels_..., -sub_...). With p
- * NULL, op is the whole cloud's operator on one process and b, u
- * hold its n values; with a part, op is built on pst_part_cloud(p), every rank of
- * MPI_COMM_WORLD calls this together (p's ranks must be its size), b and u hold the local
- * cloud's nlocal values and only the owned ones are read and written (the ghosts' values of
- * u are exchanged inside every MatMult). b as pst_solve describes it: the value on Dirichlet
- * rows. r (NULL allowed) as pst_solve fills it, rel_residual recomputed as ||b - L u|| / ||b||
- * over all ranks. PST_OK, PST_ENUMERIC (not converged; PETSc's reason in r->message and err),
- * PST_EINVAL (bad arguments, no PETSc, PETSc not started, a PETSc error: its message in err),
- * PST_EINPUT (a non-finite owned value of b or u), PST_ENOMEM; with fix_mean, PST_EINVAL
- * when some row is a Dirichlet row. */
+ * NULL, op is the whole cloud's operator on one process and b, u hold its n values; with a
+ * part, op is built on pst_part_cloud(p) (a part of at least pst_scheme_halo(scheme) hops),
+ * every rank of MPI_COMM_WORLD calls this together (p's ranks must be its size), b and u hold
+ * the local cloud's nlocal values and only the owned ones are read and written (the ghosts'
+ * values of u are exchanged inside every MatMult). b as pst_solve describes it: the value on
+ * Dirichlet rows. r (NULL allowed) as pst_solve fills it, rel_residual recomputed as
+ * ||b - L u|| / ||b|| over all ranks. PST_OK, PST_ENUMERIC (not converged; PETSc's reason in
+ * r->message and err), PST_EINVAL (bad arguments, a part of fewer hops than the scheme's
+ * halo, no PETSc, PETSc not started, a PETSc error: its message in err), PST_EINPUT (a
+ * non-finite owned value of b or u), PST_ENOMEM; with fix_mean, PST_EINVAL when some row is a
+ * Dirichlet row. */
 int pst_petsc_solve(const pst_op *op, const pst_part *p, const double *b, double *u,
                     const pst_petsc_opts *o, pst_solve_result *r, char *err);
 

@@ -176,14 +176,16 @@ enum {
     PST_SUPPORTS_SYMMETRIC,        /* CG through a symmetric scaling (with G1, no Neumann rows) */
     PST_SUPPORTS_DERIVATIVES_ONLY, /* derivatives without the rows (opts.laplacian = 0)        */
     PST_SUPPORTS_HALF_LIST,        /* the matrix-free apply on a half list (pst_op_use_half_list) */
-    PST_SUPPORTS_KEEP,             /* pst_op_opts.keep (qsfdi)                                 */
-    PST_SUPPORTS_RANKS             /* an operator on a rank's part (pst_part, one-hop ghosts)
-                                      whose owned rows are the whole cloud's: every row reads
-                                      only its particle and its neighbours (not the CSPM family,
-                                      whose volumes come from the neighbours' neighbours, nor
-                                      the mixed schemes, whose nested gradients do)            */
+    PST_SUPPORTS_KEEP              /* pst_op_opts.keep (qsfdi)                                 */
 };
 int pst_scheme_supports(const char *name, int what);
+
+/* How many rings of neighbours a row of the scheme reads, 1 to 3 (0 for an unknown name): 1
+ * when a row reads its particle and its neighbours only; 2 for the CSPM family (the neighbours'
+ * volumes come from their own neighbours) and mixed1 / mixed2 (the neighbours' gradients); 3
+ * for mixed0 (the volumes inside those gradients). A rank's part (pst_part_create) of that many
+ * hops gives its owned rows exactly. */
+int pst_scheme_halo(const char *name);
 
 /* Bytes per particle that pst_op_opts.keep = `keep` (PST_KEEP_* bits) adds to an operator of
  * the scheme in dimension dim; 0 for schemes without PST_SUPPORTS_KEEP. */

@@ -46,12 +46,12 @@ static double plan_rows(const pst_plan *p)
 
 /* The ghosts of the largest part when the n particles of a D-dimensional cloud are cut into
  * `ranks` Morton ranges, each holding the particles within `reach` spacings of it (the
- * support). The model: the cloud a cube, cut by k = ceil(log2 ranks) bisections taken along
- * the axes in turn (as the Morton key's bits are) into boxes of n / ranks particles; a box is
- * grown by `reach` on each face that borders another part (none along an axis never cut, one
- * along an axis cut once, or two on a periodic axis, two along an axis cut more often), and
- * the grown box's shell, times PLAN_GHOST_FACTOR, is the estimate. At most the particles the
- * part does not own. */
+ * support times the rings of ghosts the scheme reads, pst_scheme_halo). The model: the cloud
+ * a cube, cut by k = ceil(log2 ranks) bisections taken along the axes in turn (as the Morton
+ * key's bits are) into boxes of n / ranks particles; a box is grown by `reach` on each face
+ * that borders another part (none along an axis never cut, one along an axis cut once, or two
+ * on a periodic axis, two along an axis cut more often), and the grown box's shell, times
+ * PLAN_GHOST_FACTOR, is the estimate. At most the particles the part does not own. */
 static size_t part_ghosts(const pst_scene *s, size_t n, int ranks, size_t owned, double reach)
 {
     const int D = s->dim;
@@ -461,7 +461,8 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
     if (p->ranks > 1) { /* every rank builds the whole cloud, then its part (positions, V,
                            normals, ids, mobility, kinds) */
         p->part_owned = (particles + (size_t)p->ranks - 1) / (size_t)p->ranks;
-        p->part_ghosts = part_ghosts(s, particles, p->ranks, p->part_owned, reach);
+        p->part_ghosts = part_ghosts(s, particles, p->ranks, p->part_owned,
+                                     reach * pst_scheme_halo(s->op.scheme));
         p->bytes_cloud += plan_rows(p) * (8.0 * (2 * dim + 2 + p->mobility_ncomp) + 1);
     }
     double n = plan_rows(p);

@@ -96,15 +96,9 @@ static double cpu_seconds(void)
            1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
-/* Over several ranks only solves run, each on the rank's part of the cloud (run_petsc.c),
- * with a scheme whose rows the part's one-radius halo serves. */
+/* Over several ranks only solves run, each on the rank's part of the cloud (run_petsc.c). */
 static int check_ranks(run_state *r)
 {
-    if (r->dist && !pst_scheme_supports(r->s->op.scheme, PST_SUPPORTS_RANKS))
-        return run_fail(r, PST_EINPUT, "%s: scheme %s over %d ranks: its rows read their "
-                        "neighbours' neighbours, which a rank's one-radius halo does not hold "
-                        "yet (docs/distributed.md); run it on one process", r->s->path,
-                        r->s->op.scheme, r->o->ranks);
     for (int k = 0; k < r->s->ntasks && r->dist; ++k)
         if (r->s->tasks[k].type != SC_TASK_SOLVE)
             return run_fail(r, PST_EINPUT, "%s: task '%s': over %d ranks only solve tasks run "

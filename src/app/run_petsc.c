@@ -25,12 +25,13 @@ static int petsc_options(run_state *r, const sc_task *t, char *buf, size_t len)
 }
 
 /* Rank r's part of the cloud on the task's boundary (kind and normal over the whole cloud),
- * its neighbour list and its operator. */
+ * with the rings of ghosts the scheme's rows read, its neighbour list and its operator. */
 static int part_operator(run_state *r, const uint8_t *kind, double *const normal[3],
                          pst_part **p, pst_nlist **nl, pst_op **op, char *msg)
 {
     const double *nrm[3] = {normal[0], normal[1], normal[2]};
-    int st = pst_part_create(p, r->c, kind, nrm, r->o->ranks, r->o->rank, r->plan.support, msg);
+    int st = pst_part_create(p, r->c, kind, nrm, r->o->ranks, r->o->rank, r->plan.support,
+                             pst_scheme_halo(r->s->op.scheme), msg);
     if (st == PST_OK)
         st = pst_nlist_build(nl, pst_part_cloud(*p), r->plan.support, msg);
     pst_op_opts oo;

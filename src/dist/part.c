@@ -4,8 +4,11 @@
  * (rows are sorted by index), so the part's operator rows are the whole cloud's bit for bit.
  *
  * The ghosts are found in two steps, each on local data only: the candidates are the particles
- * within one reach (support * largest h) of the owned particles' bounding box; a neighbour
- * list of owned + candidates then keeps the candidates some owned row reaches. */
+ * within `hops` reaches (support * largest h) of the owned particles' bounding box; a neighbour
+ * list of owned + candidates then keeps the candidates within `hops` links of an owned
+ * particle, ring by ring. A scheme whose rows read their neighbours' own results (the CSPM
+ * family's volumes, the mixed schemes' gradients) needs those neighbours' whole lists: two
+ * rings (three for mixed0), pst_scheme_halo. */
 #include "check.h"
 #include "cloud_layout.h"
 #include "pstencil/dist.h"
@@ -15,7 +18,7 @@
 #include <string.h>
 
 struct pst_part {
-    int ranks, rank;
+    int ranks, rank, hops;
     size_t n;        /* particles of the whole cloud                                  */
     size_t lo, hi;   /* owned: [lo, hi) of the cloud's order                         */
     size_t own0;     /* local index of the first owned particle                      */
@@ -117,43 +120,45 @@ static int candidates(const pst_cloud *c, size_t lo, size_t hi, double reach, si
     return PST_OK;
 }
 
-/* Keep in idx[0..m) the owned particles and the candidates that an owned row of the list of
- * the candidates' cloud reaches; *m becomes their count. */
+/* Keep in idx[0..m) the owned particles and the candidates within `hops` links of one in the
+ * list of the candidates' cloud: ring 1 is what an owned row reaches, ring r + 1 what a row of
+ * ring r reaches. *m becomes their count. */
 static int keep_reached(const pst_cloud *c, const boundary *bd, size_t lo, size_t hi,
-                        double support, size_t *idx, size_t *m, char *err)
+                        double support, int hops, size_t *idx, size_t *m, char *err)
 {
     pst_cloud *cand = NULL;
     pst_nlist *nl = NULL;
-    uint8_t *reached = calloc(*m ? *m : 1, 1);
-    PST_CHECK_ALLOC(reached, err, "part: out of memory for the ghost marks");
+    uint8_t *ring = malloc(*m ? *m : 1); /* 0: owned, r: ring r, UINT8_MAX: not reached */
+    PST_CHECK_ALLOC(ring, err, "part: out of memory for the ghost marks");
     int st = extract(c, bd, idx, *m, lo, hi, &cand, err);
     if (st == PST_OK)
         st = pst_nlist_build(&nl, cand, support, err);
     if (st == PST_OK) {
         const int64_t *off = pst_nlist_offsets(nl);
         const uint32_t *nb = pst_nlist_indices(nl);
-        for (size_t k = 0; k < *m; ++k) {
-            if (idx[k] < lo || idx[k] >= hi)
-                continue;
-            reached[k] = 1;
-            for (int64_t e = off[k]; e < off[k + 1]; ++e)
-                reached[nb[e]] = 1;
-        }
+        for (size_t k = 0; k < *m; ++k)
+            ring[k] = idx[k] >= lo && idx[k] < hi ? 0 : UINT8_MAX;
+        for (int r = 0; r < hops; ++r)
+            for (size_t k = 0; k < *m; ++k)
+                if (ring[k] == r)
+                    for (int64_t e = off[k]; e < off[k + 1]; ++e)
+                        if (ring[nb[e]] == UINT8_MAX)
+                            ring[nb[e]] = (uint8_t)(r + 1);
         size_t kept = 0;
         for (size_t k = 0; k < *m; ++k)
-            if (reached[k])
+            if (ring[k] != UINT8_MAX)
                 idx[kept++] = idx[k];
         *m = kept;
     }
     pst_nlist_destroy(nl);
     pst_cloud_destroy(cand);
-    free(reached);
+    free(ring);
     return st;
 }
 
 int pst_part_create(pst_part **out, const pst_cloud *c, const uint8_t *kind,
                     const double *const normal[3], int ranks, int rank, double support,
-                    char *err)
+                    int hops, char *err)
 {
     PST_CHECK(!out || !c, PST_EINVAL, err, "part: NULL argument");
     boundary bd = {kind ? kind : c->kind, {NULL, NULL, NULL}};
@@ -164,17 +169,21 @@ int pst_part_create(pst_part **out, const pst_cloud *c, const uint8_t *kind,
               err, "part: rank %d of %d ranks (1 to %d ranks)", rank, ranks, PST_PART_MAX_RANKS);
     PST_CHECK(!(support > 0) || !isfinite(support), PST_EINVAL, err,
               "part: the support must be finite and > 0 (got %g)", support);
+    PST_CHECK(hops < 1 || hops > PST_PART_MAX_HOPS, PST_EINVAL, err,
+              "part: %d rings of ghosts (1 to %d)", hops, PST_PART_MAX_HOPS);
     pst_part *p = calloc(1, sizeof *p);
     PST_CHECK_ALLOC(p, err, "part: out of memory");
     p->ranks = ranks;
     p->rank = rank;
+    p->hops = hops;
     p->n = c->n;
     p->lo = c->n * (size_t)rank / (size_t)ranks;
     p->hi = c->n * (size_t)(rank + 1) / (size_t)ranks;
     size_t m = 0;
-    int st = candidates(c, p->lo, p->hi, support * pst_cloud_h_max(c), &p->global, &m, err);
+    int st = candidates(c, p->lo, p->hi, hops * support * pst_cloud_h_max(c), &p->global, &m,
+                        err);
     if (st == PST_OK && p->hi > p->lo)
-        st = keep_reached(c, &bd, p->lo, p->hi, support, p->global, &m, err);
+        st = keep_reached(c, &bd, p->lo, p->hi, support, hops, p->global, &m, err);
     else if (st == PST_OK)
         m = 0; /* nothing owned: nothing to reach */
     if (st == PST_OK)
@@ -203,8 +212,8 @@ const pst_cloud *pst_part_cloud(const pst_part *p) { return p->local; }
 
 void pst_part_layout(const pst_part *p, pst_part_info *info)
 {
-    *info = (pst_part_info){.ranks = p->ranks, .rank = p->rank, .n = p->n, .lo = p->lo, .hi = p->hi,
-                            .own0 = p->own0, .nlocal = p->nlocal,
+    *info = (pst_part_info){.ranks = p->ranks, .rank = p->rank, .hops = p->hops, .n = p->n,
+                            .lo = p->lo, .hi = p->hi, .own0 = p->own0, .nlocal = p->nlocal,
                             .nghost = p->nlocal - (p->hi - p->lo)};
 }
 

@@ -357,7 +357,7 @@ static int check_solve(const pst_op *op, const pst_part *p, const double *b, con
     PST_CHECK(!up, PST_EINVAL, err, "petsc solve: PETSc is not started (pst_petsc_start)");
     size_t n = pst_cloud_size(op->cloud);
     *comm = PETSC_COMM_SELF;
-    *pi = (pst_part_info){.ranks = 1, .n = n, .hi = n, .nlocal = n};
+    *pi = (pst_part_info){.ranks = 1, .hops = PST_PART_MAX_HOPS, .n = n, .hi = n, .nlocal = n};
     if (!p)
         return PST_OK;
     int size = 1;
@@ -367,10 +367,10 @@ static int check_solve(const pst_op *op, const pst_part *p, const double *b, con
               "petsc solve: the part is one of %d ranks, the run has %d", pi->ranks, size);
     PST_CHECK(op->cloud != pst_part_cloud(p), PST_EINVAL, err,
               "petsc solve: the operator is not built on the part's local cloud");
-    PST_CHECK(op->scheme->halo > 1, PST_EINVAL, err,
-              "petsc solve: scheme %s's rows read their neighbours' neighbours, which a part's "
-              "one-radius halo does not hold (pst_scheme_supports PST_SUPPORTS_RANKS)",
-              op->scheme->name);
+    PST_CHECK(pst_scheme_halo(op->scheme->name) > pi->hops, PST_EINVAL, err,
+              "petsc solve: scheme %s's rows read %d rings of neighbours, the part holds %d "
+              "(pst_part_create's hops: pst_scheme_halo)",
+              op->scheme->name, pst_scheme_halo(op->scheme->name), pi->hops);
     *comm = PETSC_COMM_WORLD;
     return PST_OK;
 }

@@ -89,10 +89,11 @@ typedef struct pst_scheme {
     /* 1 when the scheme's own assembled matrix is its better AMG matrix (measured,
      * docs/solving.md): amg_source AUTO takes it; 0: the Brookshaw proxy (pst_scheme_amg_own) */
     int amg_own;
-    /* How far a row reaches, in neighbour hops: 2 when it reads its neighbours' own results,
-     * computed from their neighbours (the CSPM family's volumes, the mixed schemes' nested
-     * gradients), else 1 (0 means 1). A rank's part (pst_part) has a one-hop halo, so
-     * PST_SUPPORTS_RANKS is halo < 2. */
+    /* How far a row reaches, in neighbour hops: 1 when it reads its particle and its
+     * neighbours only; 2 when it reads its neighbours' own results, computed from their
+     * neighbours (the CSPM family's volumes, the mixed schemes' nested gradients); 3 when those
+     * read their neighbours' results in turn (mixed0's volumes inside the gradients). 0 means
+     * 1. A rank's part (pst_part) takes this many rings of ghosts (pst_scheme_halo). */
     int halo;
     /* The automatic radius (in h) of its Brookshaw AMG proxy where it differs from the
      * library's 1.6 h (measured, docs/solving.md); 0: 1.6 h (pst_scheme_amg_radius) */

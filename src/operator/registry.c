@@ -57,9 +57,14 @@ int pst_scheme_supports(const char *name, int what)
     case PST_SUPPORTS_DERIVATIVES_ONLY: return s->derivatives_standalone;
     case PST_SUPPORTS_HALF_LIST: return s->half_rows != NULL;
     case PST_SUPPORTS_KEEP: return s->keep_bytes[1][0] > 0;
-    case PST_SUPPORTS_RANKS: return s->halo < 2;
     default: return 0;
     }
+}
+
+int pst_scheme_halo(const char *name)
+{
+    const pst_scheme *s = pst_scheme_find(name);
+    return !s ? 0 : s->halo > 1 ? s->halo : 1;
 }
 
 pst_kernel pst_scheme_default_kernel(const char *name)
