@@ -4,8 +4,9 @@
 # lv and lsmps on the 2D and 3D scenes of tests/ranks/, Dirichlet, mixed Neumann and periodic
 # without Dirichlet particles (the mean of u fixed), solved to
 # rtol 1e-13 (2D) and 1e-14 (3D); so does one process solving in PETSc (--petsc); so do schemes
-# whose rows read two and three rings of neighbours (csph2g, mixed1, mixed0) over two ranks; 1
-# and 2 threads per rank give the same bits; the plan is one rank's; bad requests are refused.
+# whose rows read two and three rings of neighbours (the CSPM family, mixed1, mixed0) over two
+# ranks; 1 and 2 threads per rank give the same bits; the plan is one rank's; bad requests are
+# refused.
 # Usage: test_ranks.sh PATH_TO_PSTENCIL MPIEXEC
 set -u
 exe=$1
@@ -67,20 +68,22 @@ done
 
 # the rows of the CSPM family (the neighbours' volumes) and of the mixed schemes (the
 # neighbours' gradients; mixed0's weigh by volumes of the ring past them) read two and three
-# rings: the parts hold as many rings of ghosts (pst_scheme_halo). The mixed schemes converge
-# with their own matrix for AMG (docs/solving.md).
-for pair in "csph2g dirichlet_2d" "csph2g neumann_3d" "mixed0 dirichlet_2d" "mixed1 neumann_2d"; do
+# rings: the parts hold as many rings of ghosts (pst_scheme_halo). cspm and icspm at their
+# stable setting, h = 0.9 s0 and K = 0.2 (docs/schemes/icspm.md); the mixed schemes with
+# their own matrix for AMG, with which they converge (docs/distributed.md).
+for pair in "icspm dirichlet_2d cloud.h_ratio=0.9 cloud.jitter=0.2" \
+            "cspm dirichlet_2d cloud.h_ratio=0.9 cloud.jitter=0.2" "csph2g neumann_3d" \
+            "mixed0 dirichlet_2d tasks.0.amg_source=own" "mixed1 neumann_2d tasks.0.amg_source=own"; do
   set -- $pair
   scheme=$1 scene=$2
-  amg=()
-  case $scheme in mixed*) amg=(tasks.0.amg_source=own) ;; esac
+  shift 2
   one=$work/one.csv two=$work/two.csv
   rm -f "$one" "$two"
   run "$one" "$scene/$scheme, one process" -- "$exe" --quiet run "$scenes/$scene.json" \
-    "operator.scheme=$scheme" "${amg[@]}" "outputs.csv=$one" || continue
+    "operator.scheme=$scheme" "$@" "outputs.csv=$one" || continue
   run "$two" "$scene/$scheme, two ranks" -- "$mpiexec" -n 2 "$exe" --quiet run \
-    "$scenes/$scene.json" "operator.scheme=$scheme" "${amg[@]}" "outputs.csv=$two" &&
-    agree "$scene/$scheme: two ranks" "$one" "$two"
+    "$scenes/$scene.json" "operator.scheme=$scheme" "$@" "outputs.csv=$two" &&
+    agree "$scene/$scheme${*:+ ($*)}: two ranks" "$one" "$two"
 done
 
 # PETSc's own choices through the command line and the scene key, which the command line
