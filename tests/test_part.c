@@ -1,10 +1,11 @@
 /* A rank's part of a cloud (pst_part, docs/distributed.md), without MPI: for every scheme and
- * every rank of 1, 2, 3 and 5, the part with the scheme's rings of ghosts (pst_scheme_halo)
- * gives the whole cloud's rows bit for bit on its owned particles (assembled entries, columns
- * mapped back, and the matrix-free apply), the owned ranges tile the cloud, and every ghost is
- * within that many links of an owned particle in the whole list; on 2D and 3D clouds with
- * Neumann particles, per-particle h, a rough mobility and a periodic box. One ring fewer
- * changes the rows of the schemes that read their neighbours' own results. */
+ * every rank of 1, 2, 3 and 5 (2 and 5 for the schemes of two and three rings), the part with
+ * the scheme's rings of ghosts (pst_scheme_halo) gives the whole cloud's rows bit for bit on
+ * its owned particles (assembled entries, columns mapped back, and the matrix-free apply), the
+ * owned ranges tile the cloud, and every ghost is within that many links of an owned particle
+ * in the whole list; on 2D and 3D clouds with Neumann particles, per-particle h, a rough
+ * mobility and a periodic box. One ring fewer changes the rows of the schemes that read their
+ * neighbours' own results. */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"
@@ -182,6 +183,9 @@ int main(void)
                 int mob = pst_scheme_supports(schemes[s], PST_SUPPORTS_MOBILITY);
                 const pst_cloud *cc = mob ? cm : c;
                 for (int ranks = 1; ranks <= 5; ranks += ranks < 3 ? 1 : 2) {
+                    /* thick halos cost time under the sanitizer: 2 and 5 ranks (3 below) */
+                    if (hops > 1 && ranks != 2 && ranks != 5)
+                        continue;
                     int same = check_scheme(cc, schemes[s], ranks, hops);
                     CHECK(same);
                     if (!same)
