@@ -149,12 +149,14 @@ static void test_bad_arguments(void)
     CHECK(pst_part_create(&p, c, NULL, NULL, 0, 0, 3.0, 1, err) == PST_EINVAL);
     CHECK(strstr(err, "ranks") != NULL);
     CHECK(pst_part_create(&p, c, NULL, NULL, 2, 2, 3.0, 1, err) == PST_EINVAL);
-    CHECK(pst_part_create(&p, c, NULL, NULL, PST_PART_MAX_RANKS + 1, 0, 3.0, 1, err) == PST_EINVAL);
+    CHECK(pst_part_create(&p, c, NULL, NULL, PST_PART_MAX_RANKS + 1, 0, 3.0, 1, err) ==
+          PST_EINVAL);
     CHECK(pst_part_create(&p, c, NULL, NULL, 2, 0, -1.0, 1, err) == PST_EINVAL);
     CHECK(strstr(err, "support") != NULL);
     CHECK(pst_part_create(&p, c, NULL, NULL, 2, 0, 3.0, 0, err) == PST_EINVAL);
     CHECK(strstr(err, "rings") != NULL);
-    CHECK(pst_part_create(&p, c, NULL, NULL, 2, 0, 3.0, PST_PART_MAX_HOPS + 1, err) == PST_EINVAL);
+    CHECK(pst_part_create(&p, c, NULL, NULL, 2, 0, 3.0, PST_PART_MAX_HOPS + 1, err) ==
+          PST_EINVAL);
     CHECK(pst_part_create(&p, NULL, NULL, NULL, 2, 0, 3.0, 1, err) == PST_EINVAL);
     CHECK(p == NULL);
     /* more ranks than particles: empty parts own nothing and see nothing */
@@ -170,9 +172,8 @@ static void test_bad_arguments(void)
 int main(void)
 {
     test_rng_seed(5);
-    const char *schemes[] = {"qsfdi", "lv",    "lsmps",  "lpmps",  "brookshaw", "cb",
-                             "schwaiger", "cspm", "icspm", "csph2g", "mixed0", "mixed1",
-                             "mixed2"};
+    const char *schemes[] = {"qsfdi", "lv", "lsmps", "lpmps", "brookshaw", "cb", "schwaiger",
+                             "cspm", "icspm", "csph2g", "mixed0", "mixed1", "mixed2"};
     const int ns = (int)(sizeof schemes / sizeof *schemes);
     for (int dim = 2; dim <= 3; ++dim)
         for (int periodic = 0; periodic <= 1; ++periodic) {

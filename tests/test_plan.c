@@ -670,8 +670,8 @@ static void test_fit_memory(void)
 /* Over several ranks the plan is one rank's: a part of n / ranks owned particles and an upper
  * estimate of the ghosts of the largest part (checked against the parts pst_part_create cuts
  * at 2, 8 and 64 ranks, with one ring of ghosts (qsfdi, lv), two (cspm) and three (mixed0): at
- * least them, at most 3 times them; the estimate's factor was fitted on one ring at 2 to 64
- * ranks), every solve in PETSc, matrix-free on the whole list, the
+ * least them, at most 3 times them for one ring and 3.5 for more; the estimate's factor was
+ * fitted on one ring at 2 to 64 ranks), every solve in PETSc, matrix-free on the whole list, the
  * part counted beside the whole cloud that every rank builds, and a budget that the node's
  * ranks share. */
 static void test_ranks(void)
@@ -717,8 +717,8 @@ static void test_ranks(void)
                   p.part_ghosts <= (pst_scheme_halo(s.op.scheme) == 1 ? 3.0 : 3.5) * ghosts);
             CHECK(p.task_petsc[0] == 1 && p.task_stored[0] == 0 && p.half_list == 0);
             /* the part's list, unless the estimate is the whole cloud (thick halos on 2 ranks) */
-            CHECK(p.bytes_cloud > one.bytes_cloud &&
-                  (p.bytes_neighbours < one.bytes_neighbours || p.part_owned + p.part_ghosts == n));
+            CHECK(p.bytes_cloud > one.bytes_cloud && (p.bytes_neighbours < one.bytes_neighbours ||
+                                                      p.part_owned + p.part_ghosts == n));
             printf("%s, %zu particles over %d ranks: owned %zu, ghosts %zu, estimated %zu "
                    "(%.2f)\n",
                    schemes[k] + 16, n, R, owned, ghosts, p.part_ghosts,

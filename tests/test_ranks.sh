@@ -72,8 +72,10 @@ done
 # stable setting, h = 0.9 s0 and K = 0.2 (docs/schemes/icspm.md); the mixed schemes with
 # their own matrix for AMG, with which they converge (docs/distributed.md).
 for pair in "icspm dirichlet_2d cloud.h_ratio=0.9 cloud.jitter=0.2" \
-            "cspm dirichlet_2d cloud.h_ratio=0.9 cloud.jitter=0.2" "csph2g neumann_3d" \
-            "mixed0 dirichlet_2d tasks.0.amg_source=own" "mixed1 neumann_2d tasks.0.amg_source=own"; do
+            "cspm dirichlet_2d cloud.h_ratio=0.9 cloud.jitter=0.2" \
+            "csph2g neumann_3d" \
+            "mixed0 dirichlet_2d tasks.0.amg_source=own" \
+            "mixed1 neumann_2d tasks.0.amg_source=own"; do
   set -- $pair
   scheme=$1 scene=$2
   shift 2
