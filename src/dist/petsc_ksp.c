@@ -357,7 +357,7 @@ static int check_solve(const pst_op *op, const pst_part *p, const double *b, con
     PST_CHECK(!up, PST_EINVAL, err, "petsc solve: PETSc is not started (pst_petsc_start)");
     size_t n = pst_cloud_size(op->cloud);
     *comm = PETSC_COMM_SELF;
-    *pi = (pst_part_info){.ranks = 1, .hops = PST_PART_MAX_HOPS, .n = n, .hi = n, .nlocal = n};
+    *pi = (pst_part_info){.ranks = 1, .n = n, .hi = n, .nlocal = n};
     if (!p)
         return PST_OK;
     int size = 1;
