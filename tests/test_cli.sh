@@ -124,15 +124,27 @@ contains out "1030301 particles" "plan of the built-in scene"
 contains out "memory     about" "plan prints the memory estimate"
 # under mpirun (its environment) the plan is one rank's, printed once, without starting MPI
 ranks_env=(env OMPI_COMM_WORLD_SIZE=4 OMPI_COMM_WORLD_LOCAL_SIZE=2)
-expect 0 "run --plan over 4 ranks, rank 0" -- "${ranks_env[@]}" OMPI_COMM_WORLD_RANK=0 "$exe" \
-  run "$scenes/large/poisson_3d_1e7.json" "cloud.hi=[0.3,0.3,0.3]" --plan
-contains out "ranks      4 (2 on this node)" "the plan names the ranks"
-contains out "owned and [0-9]* ghost particles (estimated)" "the plan gives a rank's part"
-contains out "in PETSc over 4 ranks" "a solve over ranks runs in PETSc"
-contains out "available to the 2 ranks on this node" "the node's ranks share its memory"
-expect 0 "run --plan over 4 ranks, rank 3" -- "${ranks_env[@]}" OMPI_COMM_WORLD_RANK=3 "$exe" \
-  run "$scenes/large/poisson_3d_1e7.json" "cloud.hi=[0.3,0.3,0.3]" --plan
-check "the other ranks print no plan" '[ ! -s "$work/out" ]'
+if "$exe" sysinfo | grep -q "^PETSc *not built in"; then
+  # a build without PETSc refuses the solves the plan would put in PETSc, before any work
+  expect 1 "run --plan over 4 ranks without PETSc" -- "${ranks_env[@]}" OMPI_COMM_WORLD_RANK=0 \
+    "$exe" run "$scenes/large/poisson_3d_1e7.json" "cloud.hi=[0.3,0.3,0.3]" --plan
+  contains err "solves in PETSc (over mpirun's ranks), but this pstencil was built without it" \
+    "the plan refuses ranks without PETSc"
+  expect 1 "run --petsc --plan without PETSc" -- "$exe" run "$scenes/qsfdi_test_c.json" \
+    --petsc "-ksp_type gmres" --plan
+  contains err "solves in PETSc (--petsc), but this pstencil was built without it" \
+    "the plan refuses --petsc without PETSc"
+else
+  expect 0 "run --plan over 4 ranks, rank 0" -- "${ranks_env[@]}" OMPI_COMM_WORLD_RANK=0 "$exe" \
+    run "$scenes/large/poisson_3d_1e7.json" "cloud.hi=[0.3,0.3,0.3]" --plan
+  contains out "ranks      4 (2 on this node)" "the plan names the ranks"
+  contains out "owned and [0-9]* ghost particles (estimated)" "the plan gives a rank's part"
+  contains out "in PETSc over 4 ranks" "a solve over ranks runs in PETSc"
+  contains out "available to the 2 ranks on this node" "the node's ranks share its memory"
+  expect 0 "run --plan over 4 ranks, rank 3" -- "${ranks_env[@]}" OMPI_COMM_WORLD_RANK=3 "$exe" \
+    run "$scenes/large/poisson_3d_1e7.json" "cloud.hi=[0.3,0.3,0.3]" --plan
+  check "the other ranks print no plan" '[ ! -s "$work/out" ]'
+fi
 expect 2 "run --plan over 2 ranks: a task that does not run over ranks" -- \
   env OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=0 "$exe" run --plan
 contains err "only solve tasks run" "the plan refuses what the run would"

@@ -387,6 +387,20 @@ static int refuse_memory(const pst_plan *p, const pst_scene *s, char *err, size_
     return PST_ENOMEM;
 }
 
+/* The refusal of a solve that the plan puts in PETSc when the library has no PETSc: the run
+ * would stop when it starts PETSc (with --petsc, after building the cloud and the operator),
+ * and --plan would show a solve that cannot run. */
+static int refuse_petsc(const pst_plan *p, const sc_task *t, char *err, size_t errlen)
+{
+    snprintf(err, errlen, "task '%s' solves in PETSc (%s), but this pstencil was built without "
+                          "it ('pstencil sysinfo' says so): solve on one process without "
+                          "PETSc, or build pstencil with petsc-dev installed",
+             t->name, p->ranks > 1 ? "over mpirun's ranks"
+                      : t->petsc   ? "tasks[].petsc"
+                                   : "--petsc");
+    return PST_EINVAL;
+}
+
 /* The plan for `particles` particles with h = h_ratio s0, run where w says (NULL: one
  * process). */
 static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h_ratio,
@@ -442,6 +456,8 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
         }
         if (t->type == SC_TASK_SOLVE) {
             p->task_petsc[k] = p->ranks > 1 || (w && w->petsc) || t->petsc;
+            if (p->task_petsc[k] && !pst_petsc_available())
+                return refuse_petsc(p, t, err, errlen);
             int neumann = 0;
             for (int g = 0; g < t->ngroups; ++g)
                 neumann |= t->groups[g].neumann;
