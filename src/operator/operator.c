@@ -713,32 +713,33 @@ static const pst_op *progress_view(const pst_op *op, uint64_t total, pst_op *cop
  * them). */
 static int rows_lost(const pst_op *op) { return !op->rows && !op->scheme->derivatives_standalone; }
 
-int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
+/* A derivative hook of the scheme (gradient or Hessian) at every particle, with the packed
+ * values and the progress view the applies have. */
+typedef void (*derivative_fn)(const pst_op *op, const double *u, double *const out[]);
+
+static int run_derivative(const pst_op *op, derivative_fn hook, const double *u,
+                          double *const out[])
 {
-    if (!op->scheme->gradient || op->half || rows_lost(op))
+    if (!hook || op->half || rows_lost(op))
         return PST_EINVAL;
     if (op->xyzu)
         pack_values(op, u);
     pst_op copy;
     pst_tally tally;
     const pst_op *v = progress_view(op, op->n, &copy, &tally);
-    op->scheme->gradient(v, u, grad);
+    hook(v, u, out);
     pst_tally_finish(v->tally);
     return PST_OK;
 }
 
+int pst_op_gradient(const pst_op *op, const double *u, double *const grad[3])
+{
+    return run_derivative(op, op->scheme->gradient, u, grad);
+}
+
 int pst_op_hessian(const pst_op *op, const double *u, double *const hess[6])
 {
-    if (!op->scheme->hessian || op->half || rows_lost(op))
-        return PST_EINVAL;
-    if (op->xyzu)
-        pack_values(op, u);
-    pst_op copy;
-    pst_tally tally;
-    const pst_op *v = progress_view(op, op->n, &copy, &tally);
-    op->scheme->hessian(v, u, hess);
-    pst_tally_finish(v->tally);
-    return PST_OK;
+    return run_derivative(op, op->scheme->hessian, u, hess);
 }
 
 int pst_op_interpolate(const pst_op *op, const double *const pts[3], size_t m, const double *u,
