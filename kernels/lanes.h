@@ -137,6 +137,23 @@ PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int
         b->q[l] = sqrt(b->d2[l]);
 }
 
+/* The nk coefficients of the block's 8 neighbours, rows of nk doubles in coef (row J at
+ * coef + nk J), as vectors: c[m][l] = coef[nk j[l] + m] for m < nk (8 < nk <= 16: two 8 x 8
+ * transposes, the second of the row's last 8 coefficients; nk = 8: one). The half-list rows
+ * read the other row's coefficients this way: 16 loads and 48 shuffles per block, where
+ * per-element gathers took 15 x 8 loads and GCC left the loop scalar. */
+PST_KHOT void pst_lanes_coefs(const double *coef, int nk, const uint32_t *j, pst_v8 c[16])
+{
+    const double *p[PST_LANES], *q[PST_LANES];
+    for (int l = 0; l < PST_LANES; ++l) {
+        p[l] = coef + (size_t)nk * j[l];
+        q[l] = p[l] + (nk - PST_LANES);
+    }
+    pst_v8_transpose8(p, c);
+    if (nk > PST_LANES)
+        pst_v8_transpose8(q, c + (nk - PST_LANES));
+}
+
 /* The pairs idx[e0 .. e1) of row L (dimension D), 8 at a time: `step`, a statement in b (a
  * const pst_lanes_block *), for each block in order. The blocks read idx up to lim
  * (pst_lanes_take): e1 pads a row's last block with the row's own particle, a degenerate pair

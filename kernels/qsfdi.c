@@ -326,37 +326,56 @@ static void qs_apply(const pst_op *op, const double *u, double *y)
         rows(&k, op->data, b * block, b * block + block < n ? b * block + block : n, y);
 }
 
-/* Half-list row i with one h for the cloud: a pair's geometry serves both of its weights
- * (r_JI = -r_IJ exactly, the same omegas), so one sqrt and one division give two weights, each
- * bit for bit apply's. The weights of a chunk are formed in vector lanes (kappa_J gathered);
- * the scatter to the rows J stays a scalar loop. */
-PST_KHOT void qs_half_row_uniform(const qs_ctx *k, const qs_data *d, int D, const int64_t *off,
-                                  const uint32_t *idx, size_t i, const double *u, double *y)
+/* Both weights of a block of half-list pairs (i, j[l] > i): a_IJ from row i's coefficients
+ * kap_i, a_JI from each J's (gathered as vectors, pst_lanes_coefs) at the negated offset. With
+ * one h for the cloud r_JI = -r_IJ exactly and the omegas are the same, so one sqrt and one
+ * division serve both, and each weight is apply's bit for bit. */
+PST_KHOT void qs_lane_half_weights(pst_kernel K, int D, double supp, double eps,
+                                   const pst_lanes_block *b, const double *kap_i,
+                                   const double *kap, pst_v8 *wij, pst_v8 *wji)
 {
-    const int nk = QS_NK(D);
-    const uint8_t *kind = k->c.kind;
-    const double *kap = d->kap + (size_t)nk * i;
-    double xi[3] = {0, 0, 0}, ih = 1.0 / pst_h(&k->c, i), ui = u[i], s = 0;
-    for (int a = 0; a < D; ++a)
-        xi[a] = k->c.x[a][i];
-    for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += QS_CHUNK) {
-        int n = (int)(off[i + 1] - c0 < QS_CHUNK ? off[i + 1] - c0 : QS_CHUNK);
-        const uint32_t *ic = idx + c0;
-        double r[3][QS_CHUNK], o2[QS_CHUNK], id2[QS_CHUNK], wji[QS_CHUNK], du[QS_CHUNK];
-        qs_gather(k, D, xi, ih, ic, n, r, o2, id2);
-#pragma omp simd reduction(+ : s)
-        for (int c = 0; c < n; ++c) {
-            double x = r[0][c], yy = r[1][c], z = D == 3 ? r[2][c] : 0.0;
-            du[c] = u[ic[c]] - ui;
-            s += qs_weight_xyz(D, x, yy, z, o2[c], id2[c], kap) * du[c];
-            wji[c] = qs_weight_xyz(D, -x, -yy, -z, o2[c], id2[c], d->kap + (size_t)nk * ic[c]);
-        }
-        for (int c = 0; c < n; ++c)
-            if (kind[ic[c]] != PST_DIRICHLET)
-                y[ic[c]] -= wji[c] * du[c];
+    pst_v8 c[16], a, r;
+    pst_lanes_coefs(kap, QS_NK(D), b->j, c);
+    const double *cj = (const double *)c;
+#pragma omp simd
+    for (int l = 0; l < PST_LANES; ++l) {
+        double o2, id2;
+        qs_omega_q(K, D, supp, eps, b->d2[l], b->q[l], &o2, &id2);
+        a[l] = qs_weight_xyz(D, b->x[l], b->y[l], b->z[l], o2, id2, kap_i);
+        r[l] = qs_weight_strided(D, -b->x[l], -b->y[l], -b->z[l], o2, id2, cj + l, PST_LANES);
     }
-    if (kind[i] != PST_DIRICHLET)
-        y[i] += s;
+    *wij = a;
+    *wji = r;
+}
+
+/* One block of a half-list row: y_J -= a_JI (u_J - u_I) for its pairs (J not a Dirichlet
+ * row), and acc + a_IJ (u_J - u_I) returned. */
+PST_KHOT pst_v8 qs_half_block_step(pst_kernel K, int D, const qs_ctx *k, const qs_data *d,
+                                   const double *kap_i, const pst_lanes_block *b, pst_v8 acc,
+                                   double *y)
+{
+    pst_v8 wij, wji;
+    qs_lane_half_weights(K, D, k->supp, k->c.pair_eps, b, kap_i, d->kap, &wij, &wji);
+    pst_v8 t = wji * b->du;
+    for (int l = 0; l < b->n; ++l)
+        if (k->c.kind[b->j[l]] != PST_DIRICHLET)
+            y[b->j[l]] -= t[l];
+    return pst_lanes_add(acc, wij * b->du, b->n);
+}
+
+/* Half-list row i with one h for the cloud, 8 pairs at a time from the packed rows like
+ * qs_lane_rows: y_I += its sum after the scatter of the row's blocks. Compute-bound: per pair
+ * both quadratic forms and the transposes of kappa_J (15 doubles in 3D), against half the
+ * sqrts, divisions and kernels of the whole list. */
+PST_KHOT void qs_half_lane_row(const qs_ctx *k, const qs_data *d, int D, pst_kernel K,
+                               const int64_t *off, const uint32_t *idx, size_t i, double *y)
+{
+    const double *kap = d->kap + (size_t)QS_NK(D) * i;
+    pst_lanes L = pst_lanes_row(&k->c, i, 1.0 / pst_h(&k->c, i));
+    PST_LANES_EACH(L, D, idx, off[i], off[i + 1], b,
+                   L.acc = qs_half_block_step(K, D, k, d, kap, b, L.acc, y));
+    if (k->c.kind[i] != PST_DIRICHLET)
+        y[i] += pst_v8_sum(L.acc);
 }
 
 /* Half-list row i with per-particle h: each direction of a pair is computed as apply computes
@@ -373,30 +392,45 @@ PST_KHOT void qs_half_row_varh(const qs_ctx *k, const qs_data *d, int D, const i
                   qs_weight_to(k, d, D, j, i));
 }
 
-/* Rows [i0, i1) of a half list (operator.h, half_rows), in the widest vector ISA. Compute-bound
- * like apply: two kappa dot products per pair, 4 bytes of index, x_J, u_J and kappa_J gathered
- * and y_J written back. */
-PST_ISA_DISPATCH static void qs_half_block(const qs_ctx *k, const qs_data *d, int D,
-                                           const int64_t *off, const uint32_t *idx, size_t i0,
-                                           size_t i1, const double *u, double *y)
+/* Rows [i0, i1) of a half list with per-particle h, in the widest vector ISA. */
+PST_ISA_DISPATCH static void qs_half_varh(const qs_ctx *k, const qs_data *d, const int64_t *off,
+                                          const uint32_t *idx, size_t i0, size_t i1,
+                                          const double *u, double *y)
 {
     for (size_t i = i0; i < i1; ++i) {
-        if (k->c.h && D == 2)
+        if (k->c.dim == 2)
             qs_half_row_varh(k, d, 2, off, idx, i, u, y);
-        else if (k->c.h)
-            qs_half_row_varh(k, d, 3, off, idx, i, u, y);
-        else if (D == 2)
-            qs_half_row_uniform(k, d, 2, off, idx, i, u, y);
         else
-            qs_half_row_uniform(k, d, 3, off, idx, i, u, y);
+            qs_half_row_varh(k, d, 3, off, idx, i, u, y);
     }
 }
 
+/* Rows [i0, i1) of a half list with one h (qs_half_lane_row) per dimension and kernel, in the
+ * widest vector ISA. */
+typedef void (*qs_half_fn)(const qs_ctx *, const qs_data *, const int64_t *, const uint32_t *,
+                           size_t, size_t, double *);
+#define QS_HALF(D, K, name)                                                                    \
+    PST_ISA_DISPATCH static void qs_half_##D##_##name(const qs_ctx *k, const qs_data *d,        \
+                                                      const int64_t *off, const uint32_t *idx, \
+                                                      size_t i0, size_t i1, double *y)         \
+    {                                                                                          \
+        for (size_t i = i0; i < i1; ++i)                                                       \
+            qs_half_lane_row(k, d, D, K, off, idx, i, y);                                      \
+    }
+QS_FOR_KERNELS(QS_HALF, 2)
+QS_FOR_KERNELS(QS_HALF, 3)
+static const qs_half_fn qs_half_table[2][4] = QS_KERNEL_TABLE(qs_half);
+
+/* Rows [i0, i1) of a half list (operator.h, half_rows): in lanes from the packed rows with one
+ * h for the cloud, else pair by pair. */
 static void qs_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
                          size_t i1, const double *u, double *y)
 {
     qs_ctx k = make_ctx(op);
-    qs_half_block(&k, op->data, k.c.dim, off, idx, i0, i1, u, y);
+    if (k.c.h)
+        qs_half_varh(&k, op->data, off, idx, i0, i1, u, y);
+    else
+        qs_half_table[k.c.dim - 2][k.c.kernel](&k, op->data, off, idx, i0, i1, y);
 }
 
 static void qs_emit_row(const pst_op *op, size_t i, double *w)

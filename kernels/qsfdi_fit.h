@@ -118,23 +118,33 @@ PST_KHOT void qs_quad(int D, const double r[3], double qm[6])
  * omega2 (s4 / d^2 + s2) with the quadratic forms s4 = kappa4 . (r2s, r2c) and s2 in Horner
  * order: 20 multiplications in 3D where the monomials and two dot products take 24 (the
  * multiplications are what the matrix-free apply is bound by, qs_lane_rows), and neither
- * form waits for the division. */
+ * form waits for the division. kappa_m is kap[m * stride]: a row's (stride 1), or one lane
+ * of coefficient vectors (pst_lanes_coefs, stride 8), the same arithmetic for both. */
+PST_KHOT double qs_weight_strided(int D, double x, double y, double z, double o2, double id2,
+                                  const double *kap, int stride)
+{
+    const int nq = QS_NQ(D);
+#define K4(m) kap[(m) * stride]
+#define K2(m) kap[(nq + (m)) * stride]
+    double s4, s2;
+    if (D == 2) {
+        s4 = x * (K4(0) * x + K4(2) * y) + y * (K4(1) * y);
+        s2 = x * (K2(2) * x + K2(4) * y + K2(0)) + y * (K2(3) * y + K2(1));
+    } else {
+        s4 = x * (K4(0) * x + K4(3) * y + K4(4) * z) + y * (K4(1) * y + K4(5) * z) +
+             z * (K4(2) * z);
+        s2 = x * (K2(3) * x + K2(6) * y + K2(7) * z + K2(0)) + y * (K2(4) * y + K2(8) * z + K2(1)) +
+             z * (K2(5) * z + K2(2));
+    }
+#undef K4
+#undef K2
+    return o2 * (s4 * id2 + s2);
+}
+
 PST_KHOT double qs_weight_xyz(int D, double x, double y, double z, double o2, double id2,
                               const double *kap)
 {
-    const int nq = QS_NQ(D);
-    const double *k2 = kap + nq;
-    double s4, s2;
-    if (D == 2) {
-        s4 = x * (kap[0] * x + kap[2] * y) + y * (kap[1] * y);
-        s2 = x * (k2[2] * x + k2[4] * y + k2[0]) + y * (k2[3] * y + k2[1]);
-    } else {
-        s4 = x * (kap[0] * x + kap[3] * y + kap[4] * z) + y * (kap[1] * y + kap[5] * z) +
-             z * (kap[2] * z);
-        s2 = x * (k2[3] * x + k2[6] * y + k2[7] * z + k2[0]) + y * (k2[4] * y + k2[8] * z + k2[1]) +
-             z * (k2[5] * z + k2[2]);
-    }
-    return o2 * (s4 * id2 + s2);
+    return qs_weight_strided(D, x, y, z, o2, id2, kap, 1);
 }
 
 PST_KHOT double qs_weight(int D, const double r[3], double o2, double id2, const double *kap)

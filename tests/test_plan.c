@@ -652,8 +652,9 @@ static void test_fit_memory(void)
         CHECK_INT(pst_plan_make(&p, &s, n, NULL, err, sizeof err), PST_OK);
         /* first the half list, then the tight radius, then a shorter restart */
         CHECK_INT(p.half_list, 1);
-        /* the half-list apply packs nothing */
-        CHECK(fabs(p.bytes_operators - (double)n * (1 + pst_scheme_data_bytes("lpmps", 3))) < 1);
+        /* the half-list lane rows read the packed rows too */
+        CHECK(fabs(p.bytes_operators - (double)n * (1 + pst_scheme_data_bytes("lpmps", 3) + 32)) <
+              1);
         CHECK(p.task_amg_radius[0] == (k == 0 ? -1 : 1.3));
         CHECK(k < 2 ? p.task_restart[0] == 50 : p.task_restart[0] >= 20 && p.task_restart[0] < 50);
         CHECK(p.bytes_total <= s.memory_fraction * p.bytes_available);

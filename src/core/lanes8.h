@@ -113,4 +113,39 @@ PST_V8_INLINE void pst_v8_rows4(const double *rows, const uint32_t *j, pst_v8 *c
     *c3 = __builtin_shufflevector(h01, h23, 2, 3, 10, 11, 6, 7, 14, 15);
 }
 
+/* rows[l][0..8) for l < 8 as eight vectors, out[c][l] = rows[l][c]: eight 64-byte loads and
+ * three rounds of 8 shuffles (pairs of elements, of 128-bit and of 256-bit pieces), where
+ * element loads would take 64 loads and 56 merges. */
+PST_V8_INLINE void pst_v8_transpose8(const double *const rows[8], pst_v8 out[8])
+{
+    pst_v8 r[8];
+    for (int l = 0; l < 8; ++l)
+        memcpy(&r[l], rows[l], sizeof r[l]);
+    pst_v8 e01 = __builtin_shufflevector(r[0], r[1], 0, 8, 2, 10, 4, 12, 6, 14);
+    pst_v8 o01 = __builtin_shufflevector(r[0], r[1], 1, 9, 3, 11, 5, 13, 7, 15);
+    pst_v8 e23 = __builtin_shufflevector(r[2], r[3], 0, 8, 2, 10, 4, 12, 6, 14);
+    pst_v8 o23 = __builtin_shufflevector(r[2], r[3], 1, 9, 3, 11, 5, 13, 7, 15);
+    pst_v8 e45 = __builtin_shufflevector(r[4], r[5], 0, 8, 2, 10, 4, 12, 6, 14);
+    pst_v8 o45 = __builtin_shufflevector(r[4], r[5], 1, 9, 3, 11, 5, 13, 7, 15);
+    pst_v8 e67 = __builtin_shufflevector(r[6], r[7], 0, 8, 2, 10, 4, 12, 6, 14);
+    pst_v8 o67 = __builtin_shufflevector(r[6], r[7], 1, 9, 3, 11, 5, 13, 7, 15);
+    /* columns (0, 4), (2, 6), (1, 5), (3, 7) of rows 0-3, then of rows 4-7 */
+    pst_v8 a04 = __builtin_shufflevector(e01, e23, 0, 1, 8, 9, 4, 5, 12, 13);
+    pst_v8 a26 = __builtin_shufflevector(e01, e23, 2, 3, 10, 11, 6, 7, 14, 15);
+    pst_v8 a15 = __builtin_shufflevector(o01, o23, 0, 1, 8, 9, 4, 5, 12, 13);
+    pst_v8 a37 = __builtin_shufflevector(o01, o23, 2, 3, 10, 11, 6, 7, 14, 15);
+    pst_v8 b04 = __builtin_shufflevector(e45, e67, 0, 1, 8, 9, 4, 5, 12, 13);
+    pst_v8 b26 = __builtin_shufflevector(e45, e67, 2, 3, 10, 11, 6, 7, 14, 15);
+    pst_v8 b15 = __builtin_shufflevector(o45, o67, 0, 1, 8, 9, 4, 5, 12, 13);
+    pst_v8 b37 = __builtin_shufflevector(o45, o67, 2, 3, 10, 11, 6, 7, 14, 15);
+    out[0] = __builtin_shufflevector(a04, b04, 0, 1, 2, 3, 8, 9, 10, 11);
+    out[4] = __builtin_shufflevector(a04, b04, 4, 5, 6, 7, 12, 13, 14, 15);
+    out[2] = __builtin_shufflevector(a26, b26, 0, 1, 2, 3, 8, 9, 10, 11);
+    out[6] = __builtin_shufflevector(a26, b26, 4, 5, 6, 7, 12, 13, 14, 15);
+    out[1] = __builtin_shufflevector(a15, b15, 0, 1, 2, 3, 8, 9, 10, 11);
+    out[5] = __builtin_shufflevector(a15, b15, 4, 5, 6, 7, 12, 13, 14, 15);
+    out[3] = __builtin_shufflevector(a37, b37, 0, 1, 2, 3, 8, 9, 10, 11);
+    out[7] = __builtin_shufflevector(a37, b37, 4, 5, 6, 7, 12, 13, 14, 15);
+}
+
 #endif /* PSTENCIL_LANES8_H */

@@ -364,13 +364,12 @@ int pst_op_apply(const pst_op *op, const double *u, double *y)
     if (!op->rows)
         return PST_EINVAL;
     double t0 = omp_get_wtime();
-    if (op->half) {
+    if (op->scheme->lanes) /* the whole-list and the half-list lane rows read u there */
+        pack_values(op, u);
+    if (op->half)
         pst_op_apply_half(op, u, y);
-    } else {
-        if (op->scheme->lanes)
-            pack_values(op, u);
+    else
         op->scheme->apply(op, u, y);
-    }
     dirichlet_rows(op, u, y);
     pst_op_record_apply(op, t0);
     return PST_OK;

@@ -236,8 +236,6 @@ int pst_op_use_half_list(pst_op *op, const pst_nlist *half, char *err)
     }
     op->half = h;
     op->half_diag = diag;
-    pst_free(op->xyzu); /* the half-list rows do not read it */
-    op->xyzu = NULL;
     op->nl = half;
     op->poff = NULL; /* nothing may read the whole list any more */
     op->pidx = NULL;
