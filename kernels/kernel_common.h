@@ -73,15 +73,6 @@ PST_KHOT double pst_pair_offset(const pst_kctx *k, int D, size_t i, size_t j, do
     return d2;
 }
 
-/* -x into m (D components; negation is exact in floating point); returns m: the offset of a
- * pair seen from its other end, for the half-list rows that share one pair's geometry. */
-PST_KHOT const double *pst_negated(int D, const double x[3], double m[3])
-{
-    for (int a = 0; a < D; ++a)
-        m[a] = -x[a];
-    return m;
-}
-
 /* The min_pair_distance rule: a pair at distance d is live when d > eps h (h the pair's
  * smoothing length; 1 for distances already scaled by h). */
 PST_KHOT int pst_pair_live(const pst_kctx *k, double d, double h) { return d > k->pair_eps * h; }

@@ -139,7 +139,8 @@ PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int
 
 /* The nk coefficients of the block's 8 neighbours, rows of nk doubles in coef (row J at
  * coef + nk J), as vectors: c[m][l] = coef[nk j[l] + m] for m < nk (8 < nk <= 16: two 8 x 8
- * transposes, the second of the row's last 8 coefficients; nk = 8: one). The half-list rows
+ * transposes, the second of the row's last 8 coefficients; nk <= 8: one, of 8 doubles from
+ * each row's start, so coef must extend 8 - nk doubles past its last row). The half-list rows
  * read the other row's coefficients this way: 16 loads and 48 shuffles per block, where
  * per-element gathers took 15 x 8 loads and GCC left the loop scalar. */
 PST_KHOT void pst_lanes_coefs(const double *coef, int nk, const uint32_t *j, pst_v8 c[16])
@@ -152,6 +153,19 @@ PST_KHOT void pst_lanes_coefs(const double *coef, int nk, const uint32_t *j, pst
     pst_v8_transpose8(p, c);
     if (nk > PST_LANES)
         pst_v8_transpose8(q, c + (nk - PST_LANES));
+}
+
+/* One block of a half-list row (pairs (I, J > I)) with both of its weights: y_J -= a_JI
+ * (u_J - u_I) for the block's pairs whose J is not a Dirichlet row, one at a time (the lanes
+ * hold 8 different J), and acc + a_IJ (u_J - u_I) returned for row I's sum. */
+PST_KHOT pst_v8 pst_lanes_half_add(pst_v8 acc, pst_v8 wij, pst_v8 wji, const pst_lanes_block *b,
+                                   const uint8_t *kind, double *y)
+{
+    pst_v8 t = wji * b->du;
+    for (int l = 0; l < b->n; ++l)
+        if (kind[b->j[l]] != PST_DIRICHLET)
+            y[b->j[l]] -= t[l];
+    return pst_lanes_add(acc, wij * b->du, b->n);
 }
 
 /* The pairs idx[e0 .. e1) of row L (dimension D), 8 at a time: `step`, a statement in b (a

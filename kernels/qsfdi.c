@@ -348,19 +348,14 @@ PST_KHOT void qs_lane_half_weights(pst_kernel K, int D, double supp, double eps,
     *wji = r;
 }
 
-/* One block of a half-list row: y_J -= a_JI (u_J - u_I) for its pairs (J not a Dirichlet
- * row), and acc + a_IJ (u_J - u_I) returned. */
+/* One block of a half-list row (pst_lanes_half_add). */
 PST_KHOT pst_v8 qs_half_block_step(pst_kernel K, int D, const qs_ctx *k, const qs_data *d,
                                    const double *kap_i, const pst_lanes_block *b, pst_v8 acc,
                                    double *y)
 {
     pst_v8 wij, wji;
     qs_lane_half_weights(K, D, k->supp, k->c.pair_eps, b, kap_i, d->kap, &wij, &wji);
-    pst_v8 t = wji * b->du;
-    for (int l = 0; l < b->n; ++l)
-        if (k->c.kind[b->j[l]] != PST_DIRICHLET)
-            y[b->j[l]] -= t[l];
-    return pst_lanes_add(acc, wij * b->du, b->n);
+    return pst_lanes_half_add(acc, wij, wji, b, k->c.kind, y);
 }
 
 /* Half-list row i with one h for the cloud, 8 pairs at a time from the packed rows like

@@ -192,18 +192,26 @@ PST_KHOT void centre_of(const wls_ctx *k, int D, size_t i, double xc[3])
  * kernel weight w in the row of coefficients lam, the quadratic part in Horner order: 10
  * multiplications in 3D where the monomials and the dot product take 16 (the multiplications
  * bound the matrix-free apply, lane_rows_t). Scalars, not the basis array, so that GCC
- * vectorises the loops over a chunk that call it. */
+ * vectorises the loops over a chunk that call it. lambda_m is lam[m * stride]: a row's
+ * (stride 1), or one lane of coefficient vectors (pst_lanes_coefs, stride 8). */
+PST_KHOT double basis_weight_strided(int D, int B, double w, double x, double y, double z,
+                                     const double *lam, int stride)
+{
+#define L(m) lam[(B + (m)) * stride]
+    double s;
+    if (D == 2)
+        s = x * (L(2) * x + L(4) * y + L(0)) + y * (L(3) * y + L(1));
+    else
+        s = x * (L(3) * x + L(6) * y + L(7) * z + L(0)) + y * (L(4) * y + L(8) * z + L(1)) +
+            z * (L(5) * z + L(2));
+#undef L
+    return w * (B ? lam[0] + s : s);
+}
+
 PST_KHOT double basis_weight_xyz(int D, int B, double w, double x, double y, double z,
                                  const double *lam)
 {
-    const double *l = lam + B;
-    double s;
-    if (D == 2)
-        s = x * (l[2] * x + l[4] * y + l[0]) + y * (l[3] * y + l[1]);
-    else
-        s = x * (l[3] * x + l[6] * y + l[7] * z + l[0]) + y * (l[4] * y + l[8] * z + l[1]) +
-            z * (l[5] * z + l[2]);
-    return w * (B ? lam[0] + s : s);
+    return basis_weight_strided(D, B, w, x, y, z, lam, 1);
 }
 
 PST_KHOT double basis_weight(int D, int B, double w, const double xh[3], const double *lam)
@@ -229,26 +237,60 @@ PST_KHOT double reverse_weight(const wls_ctx *k, int D, int B, pst_kernel K, siz
     return row_weight(k, D, B, K, xc, 1.0 / pst_h(&k->c, j), k->d->lam + (size_t)nb * j, i);
 }
 
-/* Row i of a half list (operator.h, half_rows). With one h for the cloud the pair's offset and
- * kernel weight serve both directions (x^_JI = -x^_IJ exactly): one sqrt for two weights, each
- * bit for bit apply's; with per-particle h each direction is computed as apply does. */
+/* Both weights of a block of half-list pairs (i, j[l] > i) with one h for the cloud: a_IJ
+ * from row i's coefficients lam, a_JI from each J's (pst_lanes_coefs) at the negated offset
+ * (x^_JI = -x^_IJ exactly, the same kernel weight): one sqrt and one kernel for both, each
+ * weight lane_weights' bit for bit. */
+PST_KHOT void lane_half_weights(const wls_ctx *k, int D, int B, pst_kernel K,
+                                const pst_lanes_block *b, const double *lam, pst_v8 *wij,
+                                pst_v8 *wji)
+{
+    const double supp = pst_sph_support[K], eps = k->c.pair_eps;
+    pst_v8 c[16], a, r;
+    pst_lanes_coefs(k->d->lam, k->d->nb, b->j, c);
+    const double *cj = (const double *)c;
+#pragma omp simd
+    for (int l = 0; l < PST_LANES; ++l) {
+        double q = b->q[l], w = pst_sph_shape(K, D, q, 0);
+        w = ((q < supp) & (q > eps)) ? w : 0.0;
+        a[l] = basis_weight_xyz(D, B, w, b->x[l], b->y[l], b->z[l], lam);
+        r[l] = basis_weight_strided(D, B, w, -b->x[l], -b->y[l], -b->z[l], cj + l, PST_LANES);
+    }
+    *wij = a;
+    *wji = r;
+}
+
+/* One block of a half-list row (pst_lanes_half_add). */
+PST_KHOT pst_v8 half_block_step(const wls_ctx *k, int D, int B, pst_kernel K, const double *lam,
+                                const pst_lanes_block *b, pst_v8 acc, double *y)
+{
+    pst_v8 wij, wji;
+    lane_half_weights(k, D, B, K, b, lam, &wij, &wji);
+    return pst_lanes_half_add(acc, wij, wji, b, k->c.kind, y);
+}
+
+/* Row i of a half list (operator.h, half_rows). With one h for the cloud 8 pairs at a time
+ * from the packed rows (lane_half_weights); with per-particle h each direction is computed as
+ * apply does, a pair at a time. */
 PST_KHOT void half_row_t(const wls_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
                          const double *u, double *y, int D, int B, pst_kernel K)
 {
     const int nb = D + D * (D + 1) / 2 + B;
     const uint8_t *kind = k->c.kind;
-    double xc[3], ih = 1.0 / pst_h(&k->c, i);
-    const double *lam = k->d->lam + (size_t)nb * i, *lam0 = k->d->lam;
-    centre_of(k, D, i, xc);
+    double ih = 1.0 / pst_h(&k->c, i);
+    const double *lam = k->d->lam + (size_t)nb * i;
     if (k->c.h) {
+        double xc[3];
+        centre_of(k, D, i, xc);
         PST_HALF_LOOP(off, idx, kind, i, u, y, j, (void)0,
                       row_weight(k, D, B, K, xc, ih, lam, j), reverse_weight(k, D, B, K, j, i));
-    } else {
-        double xh[3] = {0, 0, 0}, m[3] = {0, 0, 0}, w;
-        PST_HALF_LOOP(off, idx, kind, i, u, y, j, w = pair_weight(k, D, K, xc, j, ih, xh),
-                      basis_weight(D, B, w, xh, lam),
-                      basis_weight(D, B, w, pst_negated(D, xh, m), lam0 + (size_t)nb * j));
+        return;
     }
+    pst_lanes L = pst_lanes_row(&k->c, i, ih);
+    PST_LANES_EACH(L, D, idx, off[i], off[i + 1], b,
+                   L.acc = half_block_step(k, D, B, K, lam, b, L.acc, y));
+    if (kind[i] != PST_DIRICHLET)
+        y[i] += pst_v8_sum(L.acc);
 }
 
 /* The weights a_Ij of row i for its neighbours idx[0..n) into t: the chunk's gather, then
@@ -541,7 +583,9 @@ int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn
     d->solve = solve;
     int nb = d->nb, nm = WLS_NMOM(D) - (typeB ? 0 : D + 1);
     size_t blk = n < WLS_BLOCK ? n : WLS_BLOCK;
-    PST_DATA_ARRAY(d->lam, n * (size_t)nb * sizeof *d->lam);
+    /* 8 doubles past the last row: the half-list rows read 2D rows 8 at a time */
+    if (!d->lam && PST_DATA_ARRAY(d->lam, (n * (size_t)nb + PST_LANES) * sizeof *d->lam))
+        memset(d->lam + n * (size_t)nb, 0, PST_LANES * sizeof *d->lam);
     PST_DATA_ARRAY(d->level, n);
     double *mom = pst_alloc(blk * (size_t)nm * sizeof *mom);
     double *Mb = pst_alloc(blk * (size_t)(nb * nb) * sizeof *Mb);
