@@ -364,7 +364,7 @@ int pst_op_apply(const pst_op *op, const double *u, double *y)
     if (!op->rows)
         return PST_EINVAL;
     double t0 = omp_get_wtime();
-    if (op->scheme->lanes) /* the whole-list and the half-list lane rows read u there */
+    if (op->xyzu) /* the lane rows, of the whole list or of a half list, read u there */
         pack_values(op, u);
     if (op->half)
         pst_op_apply_half(op, u, y);
