@@ -315,9 +315,9 @@ static int half_list_serves(const pst_plan *p, const pst_scene *s, int nops)
 
 /* 1 when the whole-list plan gives something up to fit `budget`: it does not fit, or a solve
  * had its restart shortened, its AMG radius tightened or its AMG matrix changed. Only then does
- * the half list pay: the whole-list matrix-free apply is faster (vectorised across a row's
- * neighbours; the half-list apply scatters to the other rows one pair at a time), 2.0x for
- * qsfdi in 3D (docs/operators.md, "The half-list apply"). */
+ * the half list pay: the whole-list matrix-free apply is faster (a half-list pair costs about
+ * three whole-list pairs: two weights, the other row's coefficients, the scatter), 1.5-1.8x
+ * for qsfdi, lpmps and lsmps in 3D, 4.6x for lv (docs/operators.md, "The half-list apply"). */
 static int whole_list_gives_up(const pst_plan *p, const pst_scene *s, double budget)
 {
     if (p->bytes_total > budget)
