@@ -147,7 +147,7 @@ PST_KHOT void row_mobility(const lv_ctx *k, int D, int T, size_t i, double mi[3]
 /* w_IJ of row i (Neumann or not) at pair (i, j) from the positions: the half-list rows. */
 PST_KHOT double row_weight(const lv_ctx *k, int D, int G, int T, int H, size_t i, size_t j)
 {
-    double x[3], d2, W, mi[3], mn[3], mj[3], F, w;
+    double x[3], d2, W, mi[3], mn[3], mj[3] = {0, 0, 0}, F, w;
     double a = pair_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, j, x, &d2, &W);
     row_mobility(k, D, T, i, mi, mn);
     if (k->c.kind[i] == PST_NEUMANN) {
@@ -706,13 +706,25 @@ static void lv_apply(const pst_op *op, const double *u, double *y)
     }
 }
 
+/* Rows [i0, i1) of a half list (operator.h, half_rows): in lanes where lv_half_lane_rows_for
+ * serves the operator (its Neumann rows then after the others, a pair at a time: still an
+ * order fixed by the list), else every row a pair at a time. */
 static void lv_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
                          size_t i1, const double *u, double *y)
 {
     lv_ctx k = make_ctx(op);
     row_fn row = row_for(&k);
+    lv_lane_rows_fn lanes = lv_half_lane_rows_for(&k);
+    if (lanes)
+        lanes(&k, off, idx, i0, i1, y);
     for (size_t i = i0; i < i1; ++i)
-        row(&k, off, idx, i, u, y, NULL, 1);
+        if (!lanes || k.c.kind[i] == PST_NEUMANN)
+            row(&k, off, idx, i, u, y, NULL, 1);
+}
+
+double lv_row_weight(const lv_ctx *k, size_t i, size_t j)
+{
+    return row_weight(k, k->c.dim, k->variant, k->c.ncomp > 1, k->harmonic, i, j);
 }
 
 static void lv_emit_row(const pst_op *op, size_t i, double *w)

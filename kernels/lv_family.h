@@ -59,16 +59,23 @@ PST_KHOT double pair_a(pst_kernel K, int D, double d, double ht, double eps)
 
 /* w_IJ of a scalar-mobility row, s_I V_J (pair mobility) [F - eta_I . g] (lv_family.c's file
  * comment), from Vs = s_I V_J, the pair mobility pm, F, eta_I and the components of g (gz not
- * read in 2D): scalars, not an array, so that a loop over lanes calling it vectorises. */
-PST_KHOT double scalar_weight(int D, double Vs, double pm, double F, const double *eta,
-                              double gx, double gy, double gz)
+ * read in 2D): scalars, not an array, so that a loop over lanes calling it vectorises.
+ * eta_I^a is eta[a * stride]: a row's (stride 1), or one lane of vectors (stride 8). */
+PST_KHOT double scalar_weight_strided(int D, double Vs, double pm, double F, const double *eta,
+                                      int stride, double gx, double gy, double gz)
 {
     double t = F;
     t -= eta[0] * gx;
-    t -= eta[1] * gy;
+    t -= eta[stride] * gy;
     if (D == 3)
-        t -= eta[2] * gz;
+        t -= eta[2 * stride] * gz;
     return Vs * pm * t;
+}
+
+PST_KHOT double scalar_weight(int D, double Vs, double pm, double F, const double *eta,
+                              double gx, double gy, double gz)
+{
+    return scalar_weight_strided(D, Vs, pm, F, eta, 1, gx, gy, gz);
 }
 
 /* One component b of a diagonal-tensor row's sum, (M^b_I + M^b_J) [x^b g^b / d^2 -
@@ -110,5 +117,14 @@ typedef void (*lv_lane_rows_fn)(const lv_ctx *k, const int64_t *off, const uint3
 
 /* The lane rows of k's operator, or NULL where only the chunk rows serve it (lv_lanes.c). */
 lv_lane_rows_fn lv_lane_rows_for(const lv_ctx *k);
+
+/* The half-list rows [i0, i1) in lanes, every row but the Neumann rows (half_rows' rule: a
+ * Dirichlet row I still writes its pairs' y_J), or NULL where they take a pair at a time: G1,
+ * no tensor, one h (lv_lanes.c). */
+lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k);
+
+/* w_IJ of row i at pair (i, j) for any operator, a pair at a time (lv_family.c): the lane
+ * half-list rows' weight of a Neumann row J. */
+double lv_row_weight(const lv_ctx *k, size_t i, size_t j);
 
 #endif /* PSTENCIL_LV_FAMILY_H */

@@ -2,8 +2,10 @@
  * the matrix-free apply of the operators of the default gradient G1, any mobility (none,
  * scalar, diagonal tensor), either pair mean, one h or h per particle, 8 pairs at a time from
  * the packed rows like qsfdi's, through the pair rules of lv_family.h, so with the chunk rows'
- * weights bit for bit. A file of its own so that its 64 instantiations (dimension, kernel,
- * tensor, pair mean, h layout) compile beside lv_family.c. */
+ * weights bit for bit; and the half-list rows of the G1 operators with a scalar or no
+ * mobility and one h (docs/operators.md, "The half-list apply"). A file of its own so that
+ * its 64 + 16 instantiations (dimension, kernel, tensor, pair mean, h layout) compile beside
+ * lv_family.c. */
 #include "lv_family.h"
 #include "isa.h"
 #include "lanes.h"
@@ -21,10 +23,10 @@ typedef struct {
  * particle, h~ = (h_I + h_J) / 2 as the chunk rows form it. V_J, the mobility of J (mj[0], or
  * the tensor's D components) and h_J gathered for the block (hj read only with HS). With g
  * as an array (gradient_from, weight_from) GCC 12 does not vectorise the lane loop: 3x
- * slower. */
+ * slower. The pairs' a into *av (the half-list rows' other direction reads it). */
 PST_KHOT pst_v8 g1_lane_weights(pst_kernel K, int D, int T, int H, int HS,
                                 const lv_lane_row *r, const pst_lanes_block *b, pst_v8 vj,
-                                const pst_v8 mj[3], pst_v8 hj)
+                                const pst_v8 mj[3], pst_v8 hj, pst_v8 *av)
 {
     pst_v8 w;
 #pragma omp simd
@@ -39,16 +41,13 @@ PST_KHOT pst_v8 g1_lane_weights(pst_kernel K, int D, int T, int H, int HS,
             wv = scalar_weight(D, r->s * vj[l], pair_mobility(r->m[0], mj[0][l], H), a, r->eta,
                                gx, gy, gz);
         w[l] = a == 0.0 ? 0.0 : wv;
+        (*av)[l] = a;
     }
     return w;
 }
 
-/* Row i of the matrix-free apply for such a row (not a Neumann row), 8 pairs at a time like
- * qsfdi's, each block taken one ahead (kernels/lanes.h): the weights of row_t's chunks without
- * their passes through arrays. The row's last block reads on into the list like row_t's (the
- * lanes past the row computed and kept out of the sum); the list's last row pads. */
-PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, int T, int H, int HS,
-                          const int64_t *off, const uint32_t *idx, size_t i, double *y)
+/* What row i reads besides its pairs (lv_lane_row). */
+PST_KHOT lv_lane_row lane_row_of(const lv_ctx *k, int D, int T, size_t i)
 {
     lv_lane_row r = {.hi = pst_h(&k->c, i),
                      .ht = 0.5 * (pst_h(&k->c, i) + k->c.h_uniform),
@@ -61,6 +60,17 @@ PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, int T, int H, in
         for (int e = 0; e < D; ++e)
             r.C[a * D + e] = T ? k->d->C[(size_t)D * D * i + (size_t)(a * D + e)] : 0.0;
     }
+    return r;
+}
+
+/* Row i of the matrix-free apply for such a row (not a Neumann row), 8 pairs at a time like
+ * qsfdi's, each block taken one ahead (kernels/lanes.h): the weights of row_t's chunks without
+ * their passes through arrays. The row's last block reads on into the list like row_t's (the
+ * lanes past the row computed and kept out of the sum); the list's last row pads. */
+PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, int T, int H, int HS,
+                          const int64_t *off, const uint32_t *idx, size_t i, double *y)
+{
+    lv_lane_row r = lane_row_of(k, D, T, i);
     const double *mob[3] = {NULL, NULL, NULL};
     for (int a = 0; a < (T ? D : 1); ++a)
         mob[a] = k->c.ncomp ? k->c.mob[a] : NULL;
@@ -71,10 +81,96 @@ PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, int T, int H, in
         for (int a = 0; a < (T ? D : 1); ++a)
             mj[a] = mob[a] ? pst_v8_gather(mob[a], b->j) : pst_v8_splat(1.0);
         pst_v8 hj = HS ? pst_v8_gather(k->c.h, b->j) : pst_v8_splat(0.0);
-        L.acc = pst_lanes_add(L.acc, g1_lane_weights(K, D, T, H, HS, &r, b, vj, mj, hj) * b->du,
+        pst_v8 av;
+        L.acc = pst_lanes_add(L.acc,
+                              g1_lane_weights(K, D, T, H, HS, &r, b, vj, mj, hj, &av) * b->du,
                               b->n);
     });
     y[i] = pst_v8_sum(L.acc);
+}
+
+/* The weights w_JI of a block of half-list pairs seen from their rows J (G1, a scalar or no
+ * mobility, one h): the pair's a (one h: the same h~ and distance both ways), g = a x_JI with
+ * x_JI = -x_IJ exactly, and row J's s_J, eta_J (etaj, D vectors) and mobility mj against row
+ * I's V_I and mi: scalar_weight as row J's own lane row computes it, bit for bit. */
+PST_KHOT pst_v8 g1_lane_reverse(int D, int H, double vi, double mi, const pst_lanes_block *b,
+                                pst_v8 a, pst_v8 sj, const pst_v8 etaj[3], pst_v8 mj)
+{
+    const double *e = (const double *)etaj;
+    pst_v8 w;
+#pragma omp simd
+    for (int l = 0; l < PST_LANES; ++l) {
+        double gx = a[l] * -b->x[l], gy = a[l] * -b->y[l], gz = a[l] * -b->z[l];
+        double wv = scalar_weight_strided(D, sj[l] * vi, pair_mobility(mj[l], mi, H), a[l], e + l,
+                                          PST_LANES, gx, gy, gz);
+        w[l] = a[l] == 0.0 ? 0.0 : wv;
+    }
+    return w;
+}
+
+/* One block of half-list row i (pst_lanes_half_add): both weights, a Neumann row J's w_JI a
+ * pair at a time (its own rule, lv_row_weight). */
+PST_KHOT pst_v8 g1_half_step(const lv_ctx *k, int D, pst_kernel K, int H, const lv_lane_row *r,
+                             size_t i, const pst_lanes_block *b, pst_v8 acc, double *y)
+{
+    const double *mob = k->c.ncomp ? k->c.mob[0] : NULL;
+    pst_v8 mj[3] = {mob ? pst_v8_gather(mob, b->j) : pst_v8_splat(1.0)}, av, etaj[3];
+    pst_v8 wij = g1_lane_weights(K, D, 0, H, 0, r, b, pst_v8_gather(k->c.V, b->j), mj,
+                                 pst_v8_splat(0.0), &av);
+    for (int a = 0; a < 3; ++a)
+        etaj[a] = a < D ? pst_v8_gather_stride(k->d->eta + a, (size_t)D, b->j) : pst_v8_splat(0.0);
+    pst_v8 wji = g1_lane_reverse(D, H, k->c.V[i], r->m[0], b, av,
+                                 pst_v8_gather(k->d->s, b->j), etaj, mj[0]);
+    for (int l = 0; l < b->n; ++l)
+        if (k->c.kind[b->j[l]] == PST_NEUMANN)
+            wji[l] = lv_row_weight(k, b->j[l], i);
+    return pst_lanes_half_add(acc, wij, wji, b, k->c.kind, y);
+}
+
+/* Half-list row i (not a Neumann row) in lanes, 8 pairs at a time like g1_lane_row: y_J for
+ * the pairs, then y_I += its sum unless it is a Dirichlet row. */
+PST_KHOT void g1_half_lane_row(const lv_ctx *k, int D, pst_kernel K, int H, const int64_t *off,
+                               const uint32_t *idx, size_t i, double *y)
+{
+    lv_lane_row r = lane_row_of(k, D, 0, i);
+    pst_lanes L = pst_lanes_row(&k->c, i, 1.0);
+    PST_LANES_EACH(L, D, idx, off[i], off[i + 1], b,
+                   L.acc = g1_half_step(k, D, K, H, &r, i, b, L.acc, y));
+    if (k->c.kind[i] != PST_DIRICHLET)
+        y[i] += pst_v8_sum(L.acc);
+}
+
+/* g1_half_lane_row for the rows [i0, i1) but the Neumann rows, per dimension, kernel and pair
+ * mean, in the widest vector ISA. */
+#define LV_HALF_ROWS(D, K, name, H)                                                            \
+    PST_ISA_DISPATCH static void half_rows_##D##_##name##_##H(                                 \
+        const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i0, size_t i1,       \
+        double *y)                                                                             \
+    {                                                                                          \
+        for (size_t i = i0; i < i1; ++i)                                                       \
+            if (k->c.kind[i] != PST_NEUMANN)                                                   \
+                g1_half_lane_row(k, D, K, H, off, idx, i, y);                                  \
+    }
+#define LV_HALF_ROWS_K(D, K, name) LV_HALF_ROWS(D, K, name, 0) LV_HALF_ROWS(D, K, name, 1)
+#define LV_HALF_ROWS_D(D)                                                                      \
+    LV_HALF_ROWS_K(D, PST_KERNEL_CUBIC, cubic)                                                 \
+    LV_HALF_ROWS_K(D, PST_KERNEL_QUINTIC, quintic)                                             \
+    LV_HALF_ROWS_K(D, PST_KERNEL_WENDLAND_C2, wc2)                                             \
+    LV_HALF_ROWS_K(D, PST_KERNEL_WENDLAND_C4, wc4)
+LV_HALF_ROWS_D(2)
+LV_HALF_ROWS_D(3)
+#define LV_HALF_ENTRY(D, name) {half_rows_##D##_##name##_0, half_rows_##D##_##name##_1}
+static const lv_lane_rows_fn half_rows_table[2][4][2] = {
+    {LV_HALF_ENTRY(2, cubic), LV_HALF_ENTRY(2, quintic), LV_HALF_ENTRY(2, wc2),
+     LV_HALF_ENTRY(2, wc4)},
+    {LV_HALF_ENTRY(3, cubic), LV_HALF_ENTRY(3, quintic), LV_HALF_ENTRY(3, wc2),
+     LV_HALF_ENTRY(3, wc4)}};
+
+lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k)
+{
+    if (k->variant != PST_GRAD_G1 || k->c.ncomp > 1 || k->c.h)
+        return NULL;
+    return half_rows_table[k->c.dim - 2][k->c.kernel][k->harmonic];
 }
 
 /* g1_lane_row for the rows [i0, i1) that are neither Dirichlet nor Neumann rows, per dimension,

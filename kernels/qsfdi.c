@@ -445,7 +445,6 @@ const pst_scheme pst_scheme_qsfdi = {
     .degree_lattice = 2,
     .min_neighbours = qs_min,
     .half_rows = qs_half_rows,
-    .half_lanes = 1,
     .amg_radius = 1.3, /* docs/solving.md: 1.6 h's iterations, 60 % of its entries */
     .precompute = qs_precompute,
     .apply = qs_apply,

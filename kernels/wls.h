@@ -42,7 +42,7 @@ void pst_wls_msums(int dim, int deg, int n, const double *r, int stride, const d
     .fallback = PST_WLS_FALLBACK, .default_kernel = PST_KERNEL_QUINTIC, .degree = 2,          \
     .degree_lattice = 2,                                                                       \
     .min_neighbours = pst_wls_min_neighbours, .apply = pst_wls_apply, .lanes = 1,              \
-    .half_rows = pst_wls_half_rows, .half_lanes = 1,                                           \
+    .half_rows = pst_wls_half_rows,                                                            \
     .emit_row = pst_wls_emit_row, .gradient = pst_wls_gradient, .hessian = pst_wls_hessian,    \
     .interpolate = pst_wls_interpolate, .degrade = pst_wls_degrade, .free_data = pst_wls_free, \
     .data_bytes = {49, 81} /* lam: nb doubles (6 / 10 with type B) and a level byte */

@@ -644,9 +644,6 @@ static void test_fit_memory(void)
     CHECK_INT(pst_scheme_apply_bytes("lpmps"), 32);
     CHECK_INT(pst_scheme_apply_bytes("cspm"), 0);
     CHECK_INT(pst_scheme_apply_bytes("nosuch"), 0);
-    CHECK_INT(pst_scheme_half_apply_bytes("lpmps"), 32); /* its half-list rows read them too */
-    CHECK_INT(pst_scheme_half_apply_bytes("lv"), 0);
-    CHECK_INT(pst_scheme_half_apply_bytes("cspm"), 0);
     CHECK(fabs(p.bytes_operators - (double)n * (1 + pst_scheme_data_bytes("lpmps", 3) + 32)) < 1);
     double loose = p.bytes_total, avail = p.bytes_available;
     const double cut[3] = {0.9, 0.7, 0.6};

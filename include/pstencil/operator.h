@@ -152,13 +152,9 @@ int pst_scheme_data_bytes(const char *name, int dim);
 /* Bytes per particle that an operator keeps for its lane rows, the positions and values
  * packed for the precompute, the matrix-free apply and qsfdi's derivatives (32 for qsfdi,
  * lpmps, lsmps and the LV family; docs/operators.md, "Matrix-free rows in lanes"), beside its
- * data (pst_scheme_data_bytes). 0 for the other schemes and an unknown name. */
+ * data (pst_scheme_data_bytes), on a half list too (pst_op_use_half_list: its lane rows read
+ * them). 0 for the other schemes and an unknown name. */
 int pst_scheme_apply_bytes(const char *name);
-
-/* The part of pst_scheme_apply_bytes that an operator keeps on a half list
- * (pst_op_use_half_list): 32 for qsfdi, lpmps and lsmps, whose half-list rows read the packed
- * rows too; 0 for the LV family (its half-list rows take a pair at a time) and the others. */
-int pst_scheme_half_apply_bytes(const char *name);
 
 /* 1 when a scheme's own assembled matrix serves AMG better than the Brookshaw proxy (lsmps;
  * measured in docs/solving.md, "The AMG matrix per scheme"): the matrix pst_solve_opts

@@ -316,8 +316,8 @@ static int half_list_serves(const pst_plan *p, const pst_scene *s, int nops)
 /* 1 when the whole-list plan gives something up to fit `budget`: it does not fit, or a solve
  * had its restart shortened, its AMG radius tightened or its AMG matrix changed. Only then does
  * the half list pay: the whole-list matrix-free apply is faster (a half-list pair costs about
- * three whole-list pairs: two weights, the other row's coefficients, the scatter), 1.5-1.8x
- * for qsfdi, lpmps and lsmps in 3D, 4.6x for lv (docs/operators.md, "The half-list apply"). */
+ * three whole-list pairs: two weights, the other row's coefficients, the scatter), 1.4-1.8x
+ * in 3D (docs/operators.md, "The half-list apply"). */
 static int whole_list_gives_up(const pst_plan *p, const pst_scene *s, double budget)
 {
     if (p->bytes_total > budget)
@@ -487,7 +487,7 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
     for (int k = 0; k < s->ntasks; ++k)
         nops += s->tasks[k].type == SC_TASK_SOLVE && s->tasks[k].ngroups > 0;
     /* the scheme's per-particle data, the row status and the packed rows of the lane schemes
-     * (on a half list those whose half-list rows read them) */
+     * (kept on a half list, whose lane rows read them too) */
     const double packed = n * pst_scheme_apply_bytes(s->op.scheme);
     p->bytes_operators = nops * (n * (1.0 + pst_scheme_data_bytes(s->op.scheme, dim)) + packed);
     pst_memory_avail avail;
@@ -507,13 +507,10 @@ static int plan_make(pst_plan *p, const pst_scene *s, size_t particles, double h
         /* matrix-free and short of memory: the half list is smaller; the whole list lives
          * through the precompute and the copy only */
         p->half_list = 1;
-        /* freed with the whole list (nops is 1) where the half-list rows do not read them */
-        double unpacked = packed - n * pst_scheme_half_apply_bytes(s->op.scheme);
-        p->bytes_operators -= unpacked;
         p->bytes_half_list = n * (8.0 + 2.0 * p->neighbours);
         double solves = fit_solves(p, s, p->bytes_half_list, budget, 1);
         p->bytes_total = fmax(solves, p->bytes_cloud + p->bytes_neighbours +
-                                          p->bytes_half_list + p->bytes_operators + unpacked);
+                                          p->bytes_half_list + p->bytes_operators);
     }
     if (p->bytes_total > budget)
         return refuse_memory(p, s, err, errlen);

@@ -68,15 +68,21 @@ PST_V8_INLINE pst_v8 pst_v8_add_below(pst_v8 acc, pst_v8 terms, double from, pst
     return (pst_v8)(((pst_v8i)sum & keep) | ((pst_v8i)acc & ~keep));
 }
 
-/* a[j[0]], ..., a[j[7]], as a tree of pairs (a loop of element stores also became a chain of
- * masked merges). */
-PST_V8_INLINE pst_v8 pst_v8_gather(const double *a, const uint32_t *j)
+/* a[s j[0]], ..., a[s j[7]] (s: the stride), as a tree of pairs (a loop of element stores
+ * also became a chain of masked merges). */
+PST_V8_INLINE pst_v8 pst_v8_gather_stride(const double *a, size_t s, const uint32_t *j)
 {
-    pst_v2 p0 = {a[j[0]], a[j[1]]}, p1 = {a[j[2]], a[j[3]]}, p2 = {a[j[4]], a[j[5]]},
-           p3 = {a[j[6]], a[j[7]]};
+    pst_v2 p0 = {a[s * j[0]], a[s * j[1]]}, p1 = {a[s * j[2]], a[s * j[3]]},
+           p2 = {a[s * j[4]], a[s * j[5]]}, p3 = {a[s * j[6]], a[s * j[7]]};
     return __builtin_shufflevector(__builtin_shufflevector(p0, p1, 0, 1, 2, 3),
                                    __builtin_shufflevector(p2, p3, 0, 1, 2, 3), 0, 1, 2, 3, 4, 5,
                                    6, 7);
+}
+
+/* a[j[0]], ..., a[j[7]]. */
+PST_V8_INLINE pst_v8 pst_v8_gather(const double *a, const uint32_t *j)
+{
+    return pst_v8_gather_stride(a, 1, j);
 }
 
 /* Row j of an array of rows of 4 doubles (32 bytes each). */

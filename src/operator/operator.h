@@ -60,11 +60,9 @@ typedef struct pst_scheme {
     void (*apply)(const pst_op *op, const double *u, double *y);
     /* 1 when the precompute, apply (and derivatives) read op->xyzu, the positions and u packed
      * per particle (kernels/lanes.h): pst_op_create packs the positions, pst_op_apply,
-     * pst_op_gradient and pst_op_hessian u before the call */
+     * pst_op_gradient and pst_op_hessian u before the call; kept on a half list, whose lane
+     * rows read it too */
     int lanes;
-    /* 1 when half_rows read op->xyzu too (the lane rows of a half list), which an operator then
-     * keeps when it moves to a half list */
-    int half_lanes;
     /* The apply on a half list (hoff, hidx: row I holds its neighbours J > I), rows I in
      * [i0, i1): for each pair, y_I += w_IJ (u_J - u_I) unless I is a Dirichlet row and
      * y_J += w_JI (u_I - u_J) unless J is, with the weights of apply (operator_half.c schedules

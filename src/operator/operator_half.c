@@ -236,10 +236,6 @@ int pst_op_use_half_list(pst_op *op, const pst_nlist *half, char *err)
     }
     op->half = h;
     op->half_diag = diag;
-    if (!op->scheme->half_lanes) { /* its half-list rows take a pair at a time */
-        pst_free(op->xyzu);
-        op->xyzu = NULL;
-    }
     op->nl = half;
     op->poff = NULL; /* nothing may read the whole list any more */
     op->pidx = NULL;

@@ -103,12 +103,6 @@ int pst_scheme_apply_bytes(const char *name)
     return s && s->lanes ? 4 * (int)sizeof(double) : 0;
 }
 
-int pst_scheme_half_apply_bytes(const char *name)
-{
-    const pst_scheme *s = pst_scheme_find(name);
-    return s && s->half_lanes ? pst_scheme_apply_bytes(name) : 0;
-}
-
 int pst_scheme_keep_bytes(const char *name, int dim, int keep)
 {
     const pst_scheme *s = pst_scheme_find(name);
