@@ -152,19 +152,10 @@ PST_KHOT void g1_half_lane_row(const lv_ctx *k, int D, pst_kernel K, int H, cons
                 g1_half_lane_row(k, D, K, H, off, idx, i, y);                                  \
     }
 #define LV_HALF_ROWS_K(D, K, name) LV_HALF_ROWS(D, K, name, 0) LV_HALF_ROWS(D, K, name, 1)
-#define LV_HALF_ROWS_D(D)                                                                      \
-    LV_HALF_ROWS_K(D, PST_KERNEL_CUBIC, cubic)                                                 \
-    LV_HALF_ROWS_K(D, PST_KERNEL_QUINTIC, quintic)                                             \
-    LV_HALF_ROWS_K(D, PST_KERNEL_WENDLAND_C2, wc2)                                             \
-    LV_HALF_ROWS_K(D, PST_KERNEL_WENDLAND_C4, wc4)
-LV_HALF_ROWS_D(2)
-LV_HALF_ROWS_D(3)
+PST_FOR_KERNELS(LV_HALF_ROWS_K, 2)
+PST_FOR_KERNELS(LV_HALF_ROWS_K, 3)
 #define LV_HALF_ENTRY(D, name) {half_rows_##D##_##name##_0, half_rows_##D##_##name##_1}
-static const lv_lane_rows_fn half_rows_table[2][4][2] = {
-    {LV_HALF_ENTRY(2, cubic), LV_HALF_ENTRY(2, quintic), LV_HALF_ENTRY(2, wc2),
-     LV_HALF_ENTRY(2, wc4)},
-    {LV_HALF_ENTRY(3, cubic), LV_HALF_ENTRY(3, quintic), LV_HALF_ENTRY(3, wc2),
-     LV_HALF_ENTRY(3, wc4)}};
+static const lv_lane_rows_fn half_rows_table[2][4][2] = PST_KERNEL_TABLE(LV_HALF_ENTRY);
 
 lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k)
 {
@@ -189,22 +180,13 @@ lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k)
     LV_LANE_ROWS(D, K, name, T, 0, 1)                                                          \
     LV_LANE_ROWS(D, K, name, T, 1, 0) LV_LANE_ROWS(D, K, name, T, 1, 1)
 #define LV_LANE_ROWS_K(D, K, name) LV_LANE_ROWS_T(D, K, name, 0) LV_LANE_ROWS_T(D, K, name, 1)
-#define LV_LANE_ROWS_D(D)                                                                      \
-    LV_LANE_ROWS_K(D, PST_KERNEL_CUBIC, cubic)                                                 \
-    LV_LANE_ROWS_K(D, PST_KERNEL_QUINTIC, quintic)                                             \
-    LV_LANE_ROWS_K(D, PST_KERNEL_WENDLAND_C2, wc2)                                             \
-    LV_LANE_ROWS_K(D, PST_KERNEL_WENDLAND_C4, wc4)
-LV_LANE_ROWS_D(2)
-LV_LANE_ROWS_D(3)
+PST_FOR_KERNELS(LV_LANE_ROWS_K, 2)
+PST_FOR_KERNELS(LV_LANE_ROWS_K, 3)
 #define LV_LANE_ENTRY_T(D, name, T)                                                            \
     {{lane_rows_##D##_##name##_##T##_0_0, lane_rows_##D##_##name##_##T##_0_1},                 \
      {lane_rows_##D##_##name##_##T##_1_0, lane_rows_##D##_##name##_##T##_1_1}}
 #define LV_LANE_ENTRY(D, name) {LV_LANE_ENTRY_T(D, name, 0), LV_LANE_ENTRY_T(D, name, 1)}
-static const lv_lane_rows_fn lane_rows_table[2][4][2][2][2] = {
-    {LV_LANE_ENTRY(2, cubic), LV_LANE_ENTRY(2, quintic), LV_LANE_ENTRY(2, wc2),
-     LV_LANE_ENTRY(2, wc4)},
-    {LV_LANE_ENTRY(3, cubic), LV_LANE_ENTRY(3, quintic), LV_LANE_ENTRY(3, wc2),
-     LV_LANE_ENTRY(3, wc4)}};
+static const lv_lane_rows_fn lane_rows_table[2][4][2][2][2] = PST_KERNEL_TABLE(LV_LANE_ENTRY);
 
 /* The lane rows serve the G1 operators (the default gradient), whatever their mobility, pair
  * mean and h; NULL for G2-G4 (the chunk rows serve every operator, and the Neumann rows of

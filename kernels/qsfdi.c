@@ -309,8 +309,8 @@ typedef void (*qs_rows_fn)(const qs_ctx *, const qs_data *, size_t, size_t, doub
     {                                                                                          \
         qs_lane_rows(k, d, D, K, i0, i1, y);                                                   \
     }
-QS_FOR_KERNELS(QS_ROWS, 2)
-QS_FOR_KERNELS(QS_ROWS, 3)
+PST_FOR_KERNELS(QS_ROWS, 2)
+PST_FOR_KERNELS(QS_ROWS, 3)
 static const qs_rows_fn qs_rows_table[2][4] = QS_KERNEL_TABLE(qs_rows);
 
 /* Matrix-free apply: each pair's weight recomputed from positions and kappa_I, 8 pairs at a
@@ -412,8 +412,8 @@ typedef void (*qs_half_fn)(const qs_ctx *, const qs_data *, const int64_t *, con
         for (size_t i = i0; i < i1; ++i)                                                       \
             qs_half_lane_row(k, d, D, K, off, idx, i, y);                                      \
     }
-QS_FOR_KERNELS(QS_HALF, 2)
-QS_FOR_KERNELS(QS_HALF, 3)
+PST_FOR_KERNELS(QS_HALF, 2)
+PST_FOR_KERNELS(QS_HALF, 3)
 static const qs_half_fn qs_half_table[2][4] = QS_KERNEL_TABLE(qs_half);
 
 /* Rows [i0, i1) of a half list (operator.h, half_rows): in lanes from the packed rows with one

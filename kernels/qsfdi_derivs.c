@@ -157,8 +157,8 @@ typedef void (*qs_deriv_fn)(const qs_ctx *, const double *, size_t, const int64_
         else                                                                                   \
             qs_deriv_row_t(k, NULL, D, K, i, off, idx, out, which, 0);                         \
     }
-QS_FOR_KERNELS(QS_DERIV, 2)
-QS_FOR_KERNELS(QS_DERIV, 3)
+PST_FOR_KERNELS(QS_DERIV, 2)
+PST_FOR_KERNELS(QS_DERIV, 3)
 static const qs_deriv_fn qs_deriv_table[2][4] = QS_KERNEL_TABLE(qs_deriv);
 
 /* Gradient (which = 0) or Hessian (1) of u at every particle (qs_deriv_row_t); u is read from

@@ -561,11 +561,8 @@ PST_KHOT void qs_fallback_gradient(const qs_ctx *k, int D, const double *nu, con
 
 static inline int qs_min(int dim) { return dim == 2 ? 5 : 9; } /* choice 6, docs/choices.md */
 
-/* X(D, K, name) for each kernel, and the table [D - 2][K] of the functions prefix_D_name: the
- * rows instantiated per dimension and kernel (qsfdi.c, qsfdi_derivs.c). */
-#define QS_FOR_KERNELS(X, D)                                                                   \
-    X(D, PST_KERNEL_CUBIC, cubic) X(D, PST_KERNEL_QUINTIC, quintic)                            \
-    X(D, PST_KERNEL_WENDLAND_C2, wc2) X(D, PST_KERNEL_WENDLAND_C4, wc4)
+/* The table [D - 2][K] of the functions prefix_D_name: the rows instantiated per dimension and
+ * kernel with PST_FOR_KERNELS (qsfdi.c, qsfdi_derivs.c). */
 #define QS_KERNEL_TABLE(prefix)                                                                \
     {{prefix##_2_cubic, prefix##_2_quintic, prefix##_2_wc2, prefix##_2_wc4},                   \
      {prefix##_3_cubic, prefix##_3_quintic, prefix##_3_wc2, prefix##_3_wc4}}

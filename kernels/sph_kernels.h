@@ -158,6 +158,15 @@ static inline double pst_sph_dw(pst_kernel k, int dim, double r, double h)
     return pst_sph_eval(k, dim, r, h, 1);
 }
 
+/* X(D, K, name) for each kernel K, name its short name: the rows that the kernels instantiate
+ * per dimension and kernel; PST_KERNEL_TABLE(E), the table [D - 2][K] of E(D, name). */
+#define PST_FOR_KERNELS(X, D)                                                                  \
+    X(D, PST_KERNEL_CUBIC, cubic) X(D, PST_KERNEL_QUINTIC, quintic)                            \
+    X(D, PST_KERNEL_WENDLAND_C2, wc2) X(D, PST_KERNEL_WENDLAND_C4, wc4)
+#define PST_KERNEL_TABLE(E)                                                                    \
+    {{E(2, cubic), E(2, quintic), E(2, wc2), E(2, wc4)},                                       \
+     {E(3, cubic), E(3, quintic), E(3, wc2), E(3, wc4)}}
+
 static inline double pst_sph_d2w(pst_kernel k, int dim, double r, double h)
 {
     return pst_sph_eval(k, dim, r, h, 2);
