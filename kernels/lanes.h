@@ -213,4 +213,14 @@ PST_KHOT pst_v8 pst_lanes_half_add(pst_v8 acc, pst_v8 wij, pst_v8 wji, const pst
 #define PST_LANES_ROW(L, D, idx, e0, e1, b, weights)                                           \
     PST_LANES_EACH(L, D, idx, e0, e1, b, (L).acc += (weights) * b->du)
 
+/* The pairs idx[e0 .. e1) of half-list row L (pairs (I, J > I); dimension D): for each block
+ * (b), L.acc = `step`, an expression in b and L.acc that writes the block's y_J and returns
+ * row I's sum so far (pst_lanes_half_add); then y_I += that sum unless I is a Dirichlet row. */
+#define PST_LANES_HALF_ROW(L, D, idx, e0, e1, b, kind, y, step)                                \
+    do {                                                                                       \
+        PST_LANES_EACH(L, D, idx, e0, e1, b, (L).acc = (step));                                \
+        if ((kind)[(L).i] != PST_DIRICHLET)                                                    \
+            (y)[(L).i] += pst_v8_sum((L).acc);                                                 \
+    } while (0)
+
 #endif /* PSTENCIL_LANES_H */

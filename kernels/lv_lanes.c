@@ -134,10 +134,8 @@ PST_KHOT void g1_half_lane_row(const lv_ctx *k, int D, pst_kernel K, int H, cons
 {
     lv_lane_row r = lane_row_of(k, D, 0, i);
     pst_lanes L = pst_lanes_row(&k->c, i, 1.0);
-    PST_LANES_EACH(L, D, idx, off[i], off[i + 1], b,
-                   L.acc = g1_half_step(k, D, K, H, &r, i, b, L.acc, y));
-    if (k->c.kind[i] != PST_DIRICHLET)
-        y[i] += pst_v8_sum(L.acc);
+    PST_LANES_HALF_ROW(L, D, idx, off[i], off[i + 1], b, k->c.kind, y,
+                       g1_half_step(k, D, K, H, &r, i, b, L.acc, y));
 }
 
 /* g1_half_lane_row for the rows [i0, i1) but the Neumann rows, per dimension, kernel and pair

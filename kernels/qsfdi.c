@@ -367,10 +367,8 @@ PST_KHOT void qs_half_lane_row(const qs_ctx *k, const qs_data *d, int D, pst_ker
 {
     const double *kap = d->kap + (size_t)QS_NK(D) * i;
     pst_lanes L = pst_lanes_row(&k->c, i, 1.0 / pst_h(&k->c, i));
-    PST_LANES_EACH(L, D, idx, off[i], off[i + 1], b,
-                   L.acc = qs_half_block_step(K, D, k, d, kap, b, L.acc, y));
-    if (k->c.kind[i] != PST_DIRICHLET)
-        y[i] += pst_v8_sum(L.acc);
+    PST_LANES_HALF_ROW(L, D, idx, off[i], off[i + 1], b, k->c.kind, y,
+                       qs_half_block_step(K, D, k, d, kap, b, L.acc, y));
 }
 
 /* Half-list row i with per-particle h: each direction of a pair is computed as apply computes

@@ -287,10 +287,8 @@ PST_KHOT void half_row_t(const wls_ctx *k, const int64_t *off, const uint32_t *i
         return;
     }
     pst_lanes L = pst_lanes_row(&k->c, i, ih);
-    PST_LANES_EACH(L, D, idx, off[i], off[i + 1], b,
-                   L.acc = half_block_step(k, D, B, K, lam, b, L.acc, y));
-    if (kind[i] != PST_DIRICHLET)
-        y[i] += pst_v8_sum(L.acc);
+    PST_LANES_HALF_ROW(L, D, idx, off[i], off[i + 1], b, kind, y,
+                       half_block_step(k, D, B, K, lam, b, L.acc, y));
 }
 
 /* The weights a_Ij of row i for its neighbours idx[0..n) into t: the chunk's gather, then
