@@ -120,7 +120,7 @@ lv_lane_rows_fn lv_lane_rows_for(const lv_ctx *k);
 
 /* The half-list rows [i0, i1) in lanes, every row but the Neumann rows (half_rows' rule: a
  * Dirichlet row I still writes its pairs' y_J), or NULL where they take a pair at a time: G1,
- * no tensor, one h (lv_lanes.c). */
+ * no tensor (lv_lanes.c). */
 lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k);
 
 /* w_IJ of row i at pair (i, j) for any operator, a pair at a time (lv_family.c): the lane

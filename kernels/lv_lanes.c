@@ -3,9 +3,9 @@
  * scalar, diagonal tensor), either pair mean, one h or h per particle, 8 pairs at a time from
  * the packed rows like qsfdi's, through the pair rules of lv_family.h, so with the chunk rows'
  * weights bit for bit; and the half-list rows of the G1 operators with a scalar or no
- * mobility and one h (docs/operators.md, "The half-list apply"). A file of its own so that
- * its 64 + 16 instantiations (dimension, kernel, tensor, pair mean, h layout) compile beside
- * lv_family.c. */
+ * mobility, one h or h per particle (docs/operators.md, "The half-list apply"). A file of its
+ * own so that its 64 + 16 instantiations (dimension, kernel, tensor, pair mean, h layout: the
+ * half-list rows take it at run time) compile beside lv_family.c. */
 #include "lv_family.h"
 #include "isa.h"
 #include "lanes.h"
@@ -90,7 +90,7 @@ PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, int T, int H, in
 }
 
 /* The weights w_JI of a block of half-list pairs seen from their rows J (G1, a scalar or no
- * mobility, one h): the pair's a (one h: the same h~ and distance both ways), g = a x_JI with
+ * mobility): the pair's a (h~ and the distance are the same both ways), g = a x_JI with
  * x_JI = -x_IJ exactly, and row J's s_J, eta_J (etaj, D vectors) and mobility mj against row
  * I's V_I and mi: scalar_weight as row J's own lane row computes it, bit for bit. */
 PST_KHOT pst_v8 g1_lane_reverse(int D, int H, double vi, double mi, const pst_lanes_block *b,
@@ -109,14 +109,17 @@ PST_KHOT pst_v8 g1_lane_reverse(int D, int H, double vi, double mi, const pst_la
 }
 
 /* One block of half-list row i (pst_lanes_half_add): both weights, a Neumann row J's w_JI a
- * pair at a time (its own rule, lv_row_weight). */
-PST_KHOT pst_v8 g1_half_step(const lv_ctx *k, int D, pst_kernel K, int H, const lv_lane_row *r,
-                             size_t i, const pst_lanes_block *b, pst_v8 acc, double *y)
+ * pair at a time (its own rule, lv_row_weight). HS (h per particle) is a run-time flag here:
+ * h~ = (h_I + h_J) / 2 is the same sum both ways, so a is too. */
+PST_KHOT pst_v8 g1_half_step(const lv_ctx *k, int D, pst_kernel K, int H, int HS,
+                             const lv_lane_row *r, size_t i, const pst_lanes_block *b,
+                             pst_v8 acc, double *y)
 {
     const double *mob = k->c.ncomp ? k->c.mob[0] : NULL;
     pst_v8 mj[3] = {mob ? pst_v8_gather(mob, b->j) : pst_v8_splat(1.0)}, av, etaj[3];
-    pst_v8 wij = g1_lane_weights(K, D, 0, H, 0, r, b, pst_v8_gather(k->c.V, b->j), mj,
-                                 pst_v8_splat(0.0), &av);
+    pst_v8 hj = HS ? pst_v8_gather(k->c.h, b->j) : pst_v8_splat(0.0);
+    pst_v8 wij =
+        g1_lane_weights(K, D, 0, H, HS, r, b, pst_v8_gather(k->c.V, b->j), mj, hj, &av);
     for (int a = 0; a < 3; ++a)
         etaj[a] = a < D ? pst_v8_gather_stride(k->d->eta + a, (size_t)D, b->j) : pst_v8_splat(0.0);
     pst_v8 wji = g1_lane_reverse(D, H, k->c.V[i], r->m[0], b, av,
@@ -129,25 +132,26 @@ PST_KHOT pst_v8 g1_half_step(const lv_ctx *k, int D, pst_kernel K, int H, const 
 
 /* Half-list row i (not a Neumann row) in lanes, 8 pairs at a time like g1_lane_row: y_J for
  * the pairs, then y_I += its sum unless it is a Dirichlet row. */
-PST_KHOT void g1_half_lane_row(const lv_ctx *k, int D, pst_kernel K, int H, const int64_t *off,
-                               const uint32_t *idx, size_t i, double *y)
+PST_KHOT void g1_half_lane_row(const lv_ctx *k, int D, pst_kernel K, int H, int HS,
+                               const int64_t *off, const uint32_t *idx, size_t i, double *y)
 {
     lv_lane_row r = lane_row_of(k, D, 0, i);
     pst_lanes L = pst_lanes_row(&k->c, i, 1.0);
     PST_LANES_HALF_ROW(L, D, idx, off[i], off[i + 1], b, k->c.kind, y,
-                       g1_half_step(k, D, K, H, &r, i, b, L.acc, y));
+                       g1_half_step(k, D, K, H, HS, &r, i, b, L.acc, y));
 }
 
 /* g1_half_lane_row for the rows [i0, i1) but the Neumann rows, per dimension, kernel and pair
- * mean, in the widest vector ISA. */
+ * mean, in the widest vector ISA; one h or h per particle. */
 #define LV_HALF_ROWS(D, K, name, H)                                                            \
     PST_ISA_DISPATCH static void half_rows_##D##_##name##_##H(                                 \
         const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i0, size_t i1,       \
         double *y)                                                                             \
     {                                                                                          \
+        const int hs = k->c.h != NULL;                                                         \
         for (size_t i = i0; i < i1; ++i)                                                       \
             if (k->c.kind[i] != PST_NEUMANN)                                                   \
-                g1_half_lane_row(k, D, K, H, off, idx, i, y);                                  \
+                g1_half_lane_row(k, D, K, H, hs, off, idx, i, y);                              \
     }
 #define LV_HALF_ROWS_K(D, K, name) LV_HALF_ROWS(D, K, name, 0) LV_HALF_ROWS(D, K, name, 1)
 PST_FOR_KERNELS(LV_HALF_ROWS_K, 2)
@@ -157,7 +161,7 @@ static const lv_lane_rows_fn half_rows_table[2][4][2] = PST_KERNEL_TABLE(LV_HALF
 
 lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k)
 {
-    if (k->variant != PST_GRAD_G1 || k->c.ncomp > 1 || k->c.h)
+    if (k->variant != PST_GRAD_G1 || k->c.ncomp > 1)
         return NULL;
     return half_rows_table[k->c.dim - 2][k->c.kernel][k->harmonic];
 }

@@ -20,8 +20,8 @@ typedef struct {
     int variant, mobility, mean; /* mean: pst_mobility_mean */
 } scheme_case;
 
-/* The LV family's G1 rows with one h and a scalar or no mobility go in lanes, under either
- * pair mean (kernels/lv_lanes.c). */
+/* The LV family's G1 rows with a scalar or no mobility go in lanes, under either pair mean,
+ * with one h or h per particle (kernels/lv_lanes.c). */
 static const scheme_case cases[] = {
     {"qsfdi", 0, 0, 0}, {"lpmps", 0, 0, 0},     {"lsmps", 0, 0, 0},
     {"lsmps", 1, 0, 0}, {"lv", 0, 0, 0},        {"lv", 0, 1, 0},
