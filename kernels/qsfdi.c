@@ -217,24 +217,6 @@ static int qs_precompute(pst_op *op, char *err)
 
 /* ---- apply and emission ------------------------------------------------------------------ */
 
-/* The weight a_IJ of row i (centre xi, 1/h_I ih, coefficients kap) for neighbour j. */
-PST_KHOT double qs_row_weight(const qs_ctx *k, int D, const double xi[3], double ih,
-                              const double *kap, size_t j)
-{
-    double r[3] = {0, 0, 0}, o2, id2;
-    qs_pair(k, D, xi, ih, j, r, &o2, &id2);
-    return qs_weight(D, r, o2, id2, kap);
-}
-
-/* The weight of row j for its neighbour i (the reverse of a pair, from row j's own data). */
-PST_KHOT double qs_weight_to(const qs_ctx *k, const qs_data *d, int D, size_t j, size_t i)
-{
-    double xj[3] = {0, 0, 0};
-    for (int a = 0; a < D; ++a)
-        xj[a] = k->c.x[a][j];
-    return qs_row_weight(k, D, xj, 1.0 / pst_h(&k->c, j), d->kap + (size_t)QS_NK(D) * j, i);
-}
-
 /* The weights a_IJ of row i's neighbours idx[0..n) (one chunk) into a: the gather of
  * qs_gather, then qs_weight per pair in one loop the compiler vectorises across neighbours. */
 PST_KHOT void qs_chunk_weights(const qs_ctx *k, int D, const double xi[3], double ih,
@@ -348,82 +330,93 @@ PST_KHOT void qs_lane_half_weights(pst_kernel K, int D, double supp, double eps,
     *wji = r;
 }
 
-/* One block of a half-list row (pst_lanes_half_add). */
+/* Both weights of a block of half-list pairs with h per particle: the block taken with 1/h = 1
+ * (b->x = x_J - x_I), each direction scaled by its own row's 1/h (ihi; ihj per lane) and given
+ * its own sqrt, division and kernel, as each row's whole-list apply forms them (the reverse
+ * offset (x_I - x_J) / h_J is -((x_J - x_I) / h_J) exactly): each weight bit for bit. */
+PST_KHOT void qs_lane_half_weights_hs(pst_kernel K, int D, double supp, double eps,
+                                      const pst_lanes_block *b, double ihi, pst_v8 ihj,
+                                      const double *kap_i, const double *kap, pst_v8 *wij,
+                                      pst_v8 *wji)
+{
+    pst_v8 c[16], a, r;
+    pst_lanes_coefs(kap, QS_NK(D), b->j, c);
+    const double *cj = (const double *)c;
+#pragma omp simd
+    for (int l = 0; l < PST_LANES; ++l) {
+        double o2, id2, x = b->x[l] * ihi, y = b->y[l] * ihi, z = b->z[l] * ihi;
+        double d2 = x * x + y * y + (D == 3 ? z * z : 0.0);
+        qs_omega_q(K, D, supp, eps, d2, sqrt(d2), &o2, &id2);
+        a[l] = qs_weight_xyz(D, x, y, z, o2, id2, kap_i);
+        x = -(b->x[l] * ihj[l]);
+        y = -(b->y[l] * ihj[l]);
+        z = -(b->z[l] * ihj[l]);
+        d2 = x * x + y * y + (D == 3 ? z * z : 0.0);
+        qs_omega_q(K, D, supp, eps, d2, sqrt(d2), &o2, &id2);
+        r[l] = qs_weight_strided(D, x, y, z, o2, id2, cj + l, PST_LANES);
+    }
+    *wij = a;
+    *wji = r;
+}
+
+/* One block of a half-list row (pst_lanes_half_add); hs: h per particle, the block's offsets
+ * unscaled, ihi = 1 / h_I. */
 PST_KHOT pst_v8 qs_half_block_step(pst_kernel K, int D, const qs_ctx *k, const qs_data *d,
-                                   const double *kap_i, const pst_lanes_block *b, pst_v8 acc,
-                                   double *y)
+                                   const double *kap_i, int hs, double ihi,
+                                   const pst_lanes_block *b, pst_v8 acc, double *y)
 {
     pst_v8 wij, wji;
-    qs_lane_half_weights(K, D, k->supp, k->c.pair_eps, b, kap_i, d->kap, &wij, &wji);
+    if (hs)
+        qs_lane_half_weights_hs(K, D, k->supp, k->c.pair_eps, b, ihi,
+                                pst_v8_splat(1.0) / pst_v8_gather(k->c.h, b->j), kap_i, d->kap,
+                                &wij, &wji);
+    else
+        qs_lane_half_weights(K, D, k->supp, k->c.pair_eps, b, kap_i, d->kap, &wij, &wji);
     return pst_lanes_half_add(acc, wij, wji, b, k->c.kind, y);
 }
 
-/* Half-list row i with one h for the cloud, 8 pairs at a time from the packed rows like
- * qs_lane_rows: y_I += its sum after the scatter of the row's blocks. Compute-bound: per pair
- * both quadratic forms and the transposes of kappa_J (15 doubles in 3D), against half the
- * sqrts, divisions and kernels of the whole list. */
-PST_KHOT void qs_half_lane_row(const qs_ctx *k, const qs_data *d, int D, pst_kernel K,
+/* Half-list row i, 8 pairs at a time from the packed rows like qs_lane_rows: y_I += its sum
+ * after the scatter of the row's blocks. Compute-bound: per pair both quadratic forms and the
+ * transposes of kappa_J (15 doubles in 3D); with one h for the cloud half the sqrts, divisions
+ * and kernels of the whole list, with h per particle (hs, a constant: as a run-time flag it
+ * made the one-h rows 15-25 % slower) as many, plus a division for 1 / h_J and the sqrt of the
+ * unscaled block. */
+PST_KHOT void qs_half_lane_row(const qs_ctx *k, const qs_data *d, int D, pst_kernel K, int hs,
                                const int64_t *off, const uint32_t *idx, size_t i, double *y)
 {
     const double *kap = d->kap + (size_t)QS_NK(D) * i;
-    pst_lanes L = pst_lanes_row(&k->c, i, 1.0 / pst_h(&k->c, i));
+    const double ihi = 1.0 / pst_h(&k->c, i);
+    pst_lanes L = pst_lanes_row(&k->c, i, hs ? 1.0 : ihi);
     PST_LANES_HALF_ROW(L, D, idx, off[i], off[i + 1], b, k->c.kind, y,
-                       qs_half_block_step(K, D, k, d, kap, b, L.acc, y));
+                       qs_half_block_step(K, D, k, d, kap, hs, ihi, b, L.acc, y));
 }
 
-/* Half-list row i with per-particle h: each direction of a pair is computed as apply computes
- * it. */
-PST_KHOT void qs_half_row_varh(const qs_ctx *k, const qs_data *d, int D, const int64_t *off,
-                               const uint32_t *idx, size_t i, const double *u, double *y)
-{
-    const uint8_t *kind = k->c.kind;
-    const double *kap = d->kap + (size_t)QS_NK(D) * i;
-    double xi[3] = {0, 0, 0}, ih = 1.0 / pst_h(&k->c, i);
-    for (int a = 0; a < D; ++a)
-        xi[a] = k->c.x[a][i];
-    PST_HALF_LOOP(off, idx, kind, i, u, y, j, (void)0, qs_row_weight(k, D, xi, ih, kap, j),
-                  qs_weight_to(k, d, D, j, i));
-}
-
-/* Rows [i0, i1) of a half list with per-particle h, in the widest vector ISA. */
-PST_ISA_DISPATCH static void qs_half_varh(const qs_ctx *k, const qs_data *d, const int64_t *off,
-                                          const uint32_t *idx, size_t i0, size_t i1,
-                                          const double *u, double *y)
-{
-    for (size_t i = i0; i < i1; ++i) {
-        if (k->c.dim == 2)
-            qs_half_row_varh(k, d, 2, off, idx, i, u, y);
-        else
-            qs_half_row_varh(k, d, 3, off, idx, i, u, y);
-    }
-}
-
-/* Rows [i0, i1) of a half list with one h (qs_half_lane_row) per dimension and kernel, in the
- * widest vector ISA. */
+/* Rows [i0, i1) of a half list (qs_half_lane_row) per dimension, kernel and h layout (HS: h
+ * per particle), in the widest vector ISA. */
 typedef void (*qs_half_fn)(const qs_ctx *, const qs_data *, const int64_t *, const uint32_t *,
                            size_t, size_t, double *);
-#define QS_HALF(D, K, name)                                                                    \
-    PST_ISA_DISPATCH static void qs_half_##D##_##name(const qs_ctx *k, const qs_data *d,        \
-                                                      const int64_t *off, const uint32_t *idx, \
-                                                      size_t i0, size_t i1, double *y)         \
+#define QS_HALF_HS(D, K, name, HS)                                                             \
+    PST_ISA_DISPATCH static void qs_half_##HS##_##D##_##name(                                  \
+        const qs_ctx *k, const qs_data *d, const int64_t *off, const uint32_t *idx,           \
+        size_t i0, size_t i1, double *y)                                                       \
     {                                                                                          \
         for (size_t i = i0; i < i1; ++i)                                                       \
-            qs_half_lane_row(k, d, D, K, off, idx, i, y);                                      \
+            qs_half_lane_row(k, d, D, K, HS, off, idx, i, y);                                  \
     }
+#define QS_HALF(D, K, name) QS_HALF_HS(D, K, name, 0) QS_HALF_HS(D, K, name, 1)
 PST_FOR_KERNELS(QS_HALF, 2)
 PST_FOR_KERNELS(QS_HALF, 3)
-static const qs_half_fn qs_half_table[2][4] = QS_KERNEL_TABLE(qs_half);
+static const qs_half_fn qs_half_table[2][4] = QS_KERNEL_TABLE(qs_half_0);
+static const qs_half_fn qs_half_hs_table[2][4] = QS_KERNEL_TABLE(qs_half_1);
 
-/* Rows [i0, i1) of a half list (operator.h, half_rows): in lanes from the packed rows with one
- * h for the cloud, else pair by pair. */
+/* Rows [i0, i1) of a half list (operator.h, half_rows): in lanes from the packed rows. */
 static void qs_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
                          size_t i1, const double *u, double *y)
 {
+    (void)u; /* read from op->xyzu */
     qs_ctx k = make_ctx(op);
-    if (k.c.h)
-        qs_half_varh(&k, op->data, off, idx, i0, i1, u, y);
-    else
-        qs_half_table[k.c.dim - 2][k.c.kernel](&k, op->data, off, idx, i0, i1, y);
+    (k.c.h ? qs_half_hs_table : qs_half_table)[k.c.dim - 2][k.c.kernel](&k, op->data, off, idx,
+                                                                       i0, i1, y);
 }
 
 static void qs_emit_row(const pst_op *op, size_t i, double *w)
