@@ -406,8 +406,8 @@ typedef void (*qs_half_fn)(const qs_ctx *, const qs_data *, const int64_t *, con
 #define QS_HALF(D, K, name) QS_HALF_HS(D, K, name, 0) QS_HALF_HS(D, K, name, 1)
 PST_FOR_KERNELS(QS_HALF, 2)
 PST_FOR_KERNELS(QS_HALF, 3)
-static const qs_half_fn qs_half_table[2][4] = QS_KERNEL_TABLE(qs_half_0);
-static const qs_half_fn qs_half_hs_table[2][4] = QS_KERNEL_TABLE(qs_half_1);
+static const qs_half_fn qs_half_table[2][2][4] = {QS_KERNEL_TABLE(qs_half_0),
+                                                  QS_KERNEL_TABLE(qs_half_1)};
 
 /* Rows [i0, i1) of a half list (operator.h, half_rows): in lanes from the packed rows. */
 static void qs_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
@@ -415,8 +415,7 @@ static void qs_half_rows(const pst_op *op, const int64_t *off, const uint32_t *i
 {
     (void)u; /* read from op->xyzu */
     qs_ctx k = make_ctx(op);
-    (k.c.h ? qs_half_hs_table : qs_half_table)[k.c.dim - 2][k.c.kernel](&k, op->data, off, idx,
-                                                                       i0, i1, y);
+    qs_half_table[k.c.h != NULL][k.c.dim - 2][k.c.kernel](&k, op->data, off, idx, i0, i1, y);
 }
 
 static void qs_emit_row(const pst_op *op, size_t i, double *w)
