@@ -214,29 +214,6 @@ PST_KHOT double basis_weight_xyz(int D, int B, double w, double x, double y, dou
     return basis_weight_strided(D, B, w, x, y, z, lam, 1);
 }
 
-PST_KHOT double basis_weight(int D, int B, double w, const double xh[3], const double *lam)
-{
-    return basis_weight_xyz(D, B, w, xh[0], xh[1], D == 3 ? xh[2] : 0.0, lam);
-}
-
-/* a_Ij of row i for neighbour j: shared by apply and emit_row (bit-identical weights). */
-PST_KHOT double row_weight(const wls_ctx *k, int D, int B, pst_kernel K, const double *xc,
-                          double ih, const double *lam, size_t j)
-{
-    double xh[3];
-    double w = pair_weight(k, D, K, xc, j, ih, xh);
-    return basis_weight(D, B, w, xh, lam);
-}
-
-/* a_Ji: row j's weight for its neighbour i, from row j's own centre, h and coefficients. */
-PST_KHOT double reverse_weight(const wls_ctx *k, int D, int B, pst_kernel K, size_t j, size_t i)
-{
-    const int nb = D + D * (D + 1) / 2 + B;
-    double xc[3];
-    centre_of(k, D, j, xc);
-    return row_weight(k, D, B, K, xc, 1.0 / pst_h(&k->c, j), k->d->lam + (size_t)nb * j, i);
-}
-
 /* Both weights of a block of half-list pairs (i, j[l] > i) with one h for the cloud: a_IJ
  * from row i's coefficients lam, a_JI from each J's (pst_lanes_coefs) at the negated offset
  * (x^_JI = -x^_IJ exactly, the same kernel weight): one sqrt and one kernel for both, each
@@ -260,40 +237,74 @@ PST_KHOT void lane_half_weights(const wls_ctx *k, int D, int B, pst_kernel K,
     *wji = r;
 }
 
-/* One block of a half-list row (pst_lanes_half_add). */
-PST_KHOT pst_v8 half_block_step(const wls_ctx *k, int D, int B, pst_kernel K, const double *lam,
-                                const pst_lanes_block *b, pst_v8 acc, double *y)
+/* The same with h per particle: the block taken with 1/h = 1 (b->x = x_J - x_I), each
+ * direction scaled by its own row's 1/h (ihi; 1/h_J per lane from the gathered h_J) and given
+ * its own sqrt and kernel weight, as each row's lane_weights forms them (the reverse offset
+ * (x_I - x_J) / h_J is -((x_J - x_I) / h_J) exactly): each weight bit for bit. */
+PST_KHOT void lane_half_weights_hs(const wls_ctx *k, int D, int B, pst_kernel K,
+                                   const pst_lanes_block *b, double ihi, const double *lam,
+                                   pst_v8 *wij, pst_v8 *wji)
+{
+    const double supp = pst_sph_support[K], eps = k->c.pair_eps;
+    const pst_v8 ihj = pst_v8_splat(1.0) / pst_v8_gather(k->c.h, b->j);
+    pst_v8 c[16], a, r;
+    pst_lanes_coefs(k->d->lam, k->d->nb, b->j, c);
+    const double *cj = (const double *)c;
+#pragma omp simd
+    for (int l = 0; l < PST_LANES; ++l) {
+        double x = b->x[l] * ihi, y = b->y[l] * ihi, z = b->z[l] * ihi;
+        double q = sqrt(x * x + y * y + (D == 3 ? z * z : 0.0)), w = pst_sph_shape(K, D, q, 0);
+        w = ((q < supp) & (q > eps)) ? w : 0.0;
+        a[l] = basis_weight_xyz(D, B, w, x, y, z, lam);
+        x = -(b->x[l] * ihj[l]);
+        y = -(b->y[l] * ihj[l]);
+        z = -(b->z[l] * ihj[l]);
+        q = sqrt(x * x + y * y + (D == 3 ? z * z : 0.0));
+        w = pst_sph_shape(K, D, q, 0);
+        w = ((q < supp) & (q > eps)) ? w : 0.0;
+        r[l] = basis_weight_strided(D, B, w, x, y, z, cj + l, PST_LANES);
+    }
+    *wij = a;
+    *wji = r;
+}
+
+/* One block of a half-list row (pst_lanes_half_add); HS: h per particle (ihi = 1 / h_I). */
+PST_KHOT pst_v8 half_block_step(const wls_ctx *k, int D, int B, pst_kernel K, int HS,
+                                const double *lam, double ihi, const pst_lanes_block *b,
+                                pst_v8 acc, double *y)
 {
     pst_v8 wij, wji;
-    lane_half_weights(k, D, B, K, b, lam, &wij, &wji);
+    if (HS)
+        lane_half_weights_hs(k, D, B, K, b, ihi, lam, &wij, &wji);
+    else
+        lane_half_weights(k, D, B, K, b, lam, &wij, &wji);
     return pst_lanes_half_add(acc, wij, wji, b, k->c.kind, y);
 }
 
-/* Row i of a half list (operator.h, half_rows). With one h for the cloud 8 pairs at a time
- * from the packed rows (lane_half_weights); with per-particle h each direction is computed as
- * apply does, a pair at a time. */
+/* Row i of a half list (operator.h, half_rows), 8 pairs at a time from the packed rows; with
+ * h per particle (a separate loop: a flag inside one loop made qsfdi's one-h rows 15-25 %
+ * slower) the blocks are taken unscaled and each direction has its own sqrt and kernel. */
 PST_KHOT void half_row_t(const wls_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
-                         const double *u, double *y, int D, int B, pst_kernel K)
+                         double *y, int D, int B, pst_kernel K)
 {
     const int nb = D + D * (D + 1) / 2 + B;
     const uint8_t *kind = k->c.kind;
     double ih = 1.0 / pst_h(&k->c, i);
     const double *lam = k->d->lam + (size_t)nb * i;
     if (k->c.h) {
-        double xc[3];
-        centre_of(k, D, i, xc);
-        PST_HALF_LOOP(off, idx, kind, i, u, y, j, (void)0,
-                      row_weight(k, D, B, K, xc, ih, lam, j), reverse_weight(k, D, B, K, j, i));
+        pst_lanes L = pst_lanes_row(&k->c, i, 1.0);
+        PST_LANES_HALF_ROW(L, D, idx, off[i], off[i + 1], b, kind, y,
+                           half_block_step(k, D, B, K, 1, lam, ih, b, L.acc, y));
         return;
     }
     pst_lanes L = pst_lanes_row(&k->c, i, ih);
     PST_LANES_HALF_ROW(L, D, idx, off[i], off[i + 1], b, kind, y,
-                       half_block_step(k, D, B, K, lam, b, L.acc, y));
+                       half_block_step(k, D, B, K, 0, lam, ih, b, L.acc, y));
 }
 
 /* The weights a_Ij of row i for its neighbours idx[0..n) into t: the chunk's gather, then
- * w_c lam . p(r_c) in one loop over the chunk that the compiler vectorises (basis_weight's
- * arithmetic, so the half-list rows, which take a pair at a time, agree bit for bit). */
+ * w_c lam . p(r_c) in one loop over the chunk that the compiler vectorises (basis_weight_xyz,
+ * as the lane rows: the emitted weights are the applies' bit for bit). */
 PST_KHOT void chunk_weights(const wls_ctx *k, int D, int B, pst_kernel K, const double *xc,
                             double ih, const double *lam, const uint32_t *idx, int n, double *t)
 {
@@ -670,16 +681,16 @@ void pst_wls_degrade(pst_op *op, size_t i)
 
 /* Row i: its weights into w (emission), or with off != NULL the half-list row of (off, idx);
  * and rows [i0, i1) of the matrix-free apply (lane_rows_t). */
-typedef void (*row_fn)(const wls_ctx *, size_t, const double *, double *, double *,
-                       const int64_t *off, const uint32_t *idx);
+typedef void (*row_fn)(const wls_ctx *, size_t, double *, double *, const int64_t *off,
+                       const uint32_t *idx);
 typedef void (*rows_fn)(const wls_ctx *, size_t, size_t, double *);
 #define WLS_ROW(D, B, K)                                                                       \
-    PST_ISA_DISPATCH static void row_##D##_##B##_##K(const wls_ctx *k, size_t i, const double *u, \
-                                                     double *y, double *w, const int64_t *off,  \
+    PST_ISA_DISPATCH static void row_##D##_##B##_##K(const wls_ctx *k, size_t i, double *y,    \
+                                                     double *w, const int64_t *off,            \
                                                      const uint32_t *idx)                       \
     {                                                                                          \
         if (off)                                                                               \
-            half_row_t(k, off, idx, i, u, y, D, B, (pst_kernel)K);                             \
+            half_row_t(k, off, idx, i, y, D, B, (pst_kernel)K);                                \
         else                                                                                   \
             emit_t(k, i, w, D, B, (pst_kernel)K);                                              \
     }                                                                                          \
@@ -723,16 +734,17 @@ void pst_wls_apply(const pst_op *op, const double *u, double *y)
 void pst_wls_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
                        size_t i1, const double *u, double *y)
 {
+    (void)u; /* read from op->xyzu */
     wls_ctx k = make_ctx(op);
     row_fn row = row_for(&k);
     for (size_t i = i0; i < i1; ++i)
-        row(&k, i, u, y, NULL, off, idx);
+        row(&k, i, y, NULL, off, idx);
 }
 
 void pst_wls_emit_row(const pst_op *op, size_t i, double *w)
 {
     wls_ctx k = make_ctx(op);
-    row_for(&k)(&k, i, NULL, NULL, w, NULL, NULL);
+    row_for(&k)(&k, i, NULL, w, NULL, NULL);
 }
 
 /* ---- the fit at the particles: gradient and Hessian --------------------------------------- */
