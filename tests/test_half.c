@@ -1,9 +1,9 @@
 /* The half-list apply (pst_op_use_half_list, docs/operators.md): for every scheme that has one,
  * in 2D and 3D, with Dirichlet and Neumann rows, uniform and per-particle h and (LV family) a
- * rough mobility, it agrees with the whole-list apply to rounding, gives the same bits for 1
- * and 2 threads, keeps the whole-list diagonal, refuses what needs whole rows, and an AMG solve
- * on it takes the whole list's iterations to the same answer (AUTO on the Brookshaw proxy
- * where the scheme's own matrix would need whole rows). */
+ * rough scalar or tensor mobility and the gradients G1-G4, it agrees with the whole-list apply
+ * to rounding, gives the same bits for 1 and 2 threads, keeps the whole-list diagonal, refuses
+ * what needs whole rows, and an AMG solve on it takes the whole list's iterations to the same
+ * answer (AUTO on the Brookshaw proxy where the scheme's own matrix would need whole rows). */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"
@@ -15,18 +15,33 @@
 
 static double wave(const double *x) { return sin(3 * x[0] + 2 * x[1] - x[2]) + x[0] * x[1]; }
 
+/* mobility: its components (0: none), TENSOR: a diagonal tensor, one per dimension. */
+enum { TENSOR = -1 };
+
 typedef struct {
     const char *scheme;
-    int variant, mobility, mean; /* mean: pst_mobility_mean */
+    int variant, mobility, mean, gradient; /* mean: pst_mobility_mean; gradient 0: G1 */
 } scheme_case;
 
 /* The LV family's G1 rows with a scalar or no mobility go in lanes, under either pair mean,
- * with one h or h per particle (kernels/lv_lanes.c). */
+ * with one h or h per particle (kernels/lv_lanes.c); its tensor rows and the gradients G2-G4
+ * a pair at a time (kernels/lv_family.c). */
 static const scheme_case cases[] = {
-    {"qsfdi", 0, 0, 0}, {"lpmps", 0, 0, 0},     {"lsmps", 0, 0, 0},
-    {"lsmps", 1, 0, 0}, {"lv", 0, 0, 0},        {"lv", 0, 1, 0},
-    {"lv", 0, 1, PST_MEAN_HARMONIC},            {"cb", 0, 0, 0},
-    {"brookshaw", 0, 1, 0}, {"schwaiger", 0, 0, 0}};
+    {"qsfdi", 0, 0, 0, 0},
+    {"lpmps", 0, 0, 0, 0},
+    {"lsmps", 0, 0, 0, 0},
+    {"lsmps", 1, 0, 0, 0},
+    {"lv", 0, 0, 0, 0},
+    {"lv", 0, 1, 0, 0},
+    {"lv", 0, 1, PST_MEAN_HARMONIC, 0},
+    {"lv", 0, TENSOR, 0, 0},
+    {"lv", 0, TENSOR, PST_MEAN_HARMONIC, 0},
+    {"lv", 0, 1, 0, PST_GRAD_G2},
+    {"lv", 0, 1, PST_MEAN_HARMONIC, PST_GRAD_G3},
+    {"lv", 0, TENSOR, 0, PST_GRAD_G4},
+    {"cb", 0, 0, 0, 0},
+    {"brookshaw", 0, 1, 0, 0},
+    {"schwaiger", 0, 0, 0, 0}};
 
 /* A jittered lattice with a Dirichlet layer, every 7th boundary particle Neumann, with per-
  * particle h (+-10 %) when vary_h; more than one block of rows (2048) in both dimensions. */
@@ -59,14 +74,14 @@ static void check_case(const scheme_case *sc, int dim, int vary_h)
 {
     pst_cloud *c = cloud_of(dim, vary_h);
     if (sc->mobility)
-        test_rough_mobility(c, sc->mobility);
+        test_rough_mobility(c, sc->mobility == TENSOR ? dim : sc->mobility);
     size_t n = pst_cloud_size(c);
     double support = pst_kernel_support(pst_scheme_default_kernel(sc->scheme));
     pst_nlist *nl = test_nlist(c, support), *half = NULL;
     pst_op_opts o;
     pst_op_defaults(&o);
     o.scheme = sc->scheme;
-    o.gradient = PST_GRAD_G1;
+    o.gradient = sc->gradient ? sc->gradient : PST_GRAD_G1;
     o.variant = sc->variant;
     o.mobility_mean = sc->mean;
     pst_op *op = test_op_of(c, nl, &o);
@@ -93,8 +108,10 @@ static void check_case(const scheme_case *sc, int dim, int vary_h)
     double scale, d = max_abs_diff(y1, yw, n, &scale);
     CHECK(d <= 1e-12 * scale);
     if (!(d <= 1e-12 * scale))
-        fprintf(stderr, "  %s (variant %d, mobility %d) %dD vary_h %d: half vs whole %.3g of %.3g\n",
-                sc->scheme, sc->variant, sc->mobility, dim, vary_h, d, scale);
+        fprintf(stderr,
+                "  %s (variant %d, mobility %d, gradient %d) %dD vary_h %d: half vs whole "
+                "%.3g of %.3g\n",
+                sc->scheme, sc->variant, sc->mobility, sc->gradient, dim, vary_h, d, scale);
     CHECK_INT(pst_op_diagonal(op, dh), PST_OK);
     CHECK(memcmp(dh, dw, n * sizeof *dh) == 0);
     pst_op_destroy(op);
