@@ -137,6 +137,29 @@ PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int
         b->q[l] = sqrt(b->d2[l]);
 }
 
+/* The half-list rows on a cloud with h per particle take their blocks unscaled (pst_lanes_row
+ * with 1/h = 1: b->x = x_J - x_I) and scale each direction by its own row's 1/h, so that each
+ * weight is bit for bit what its row's whole-list apply computes for the pair. These two give
+ * the scale factors and one lane's scaled offset. */
+
+/* -1/h_J for the block's neighbours, J's factor: (x_I - x_J) / h_J is (x_J - x_I) (-1/h_J)
+ * exactly, and 1/h_J the same IEEE quotient as row J's scalar 1.0 / h_J. */
+PST_KHOT pst_v8 pst_lanes_back_scale(const double *h, const pst_lanes_block *b)
+{
+    return -(pst_v8_splat(1.0) / pst_v8_gather(h, b->j));
+}
+
+/* Lane l of the unscaled block b seen from a row of factor f (1/h_I, or J's -1/h_J): the
+ * scaled offset into x, y, z and its d2, returned, in pst_lanes_take's order. */
+PST_KHOT double pst_lanes_lane_scaled(const pst_lanes_block *b, int D, int l, double f,
+                                      double *x, double *y, double *z)
+{
+    *x = b->x[l] * f;
+    *y = b->y[l] * f;
+    *z = b->z[l] * f;
+    return *x * *x + *y * *y + (D == 3 ? *z * *z : 0.0);
+}
+
 /* The nk coefficients of the block's 8 neighbours, rows of nk doubles in coef (row J at
  * coef + nk J), as vectors: c[m][l] = coef[nk j[l] + m] for m < nk (8 < nk <= 16: two 8 x 8
  * transposes, the second of the row's last 8 coefficients; nk <= 8: one, of 8 doubles from

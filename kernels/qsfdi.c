@@ -330,28 +330,23 @@ PST_KHOT void qs_lane_half_weights(pst_kernel K, int D, double supp, double eps,
     *wji = r;
 }
 
-/* Both weights of a block of half-list pairs with h per particle: the block taken with 1/h = 1
- * (b->x = x_J - x_I), each direction scaled by its own row's 1/h (ihi; ihj per lane) and given
- * its own sqrt, division and kernel, as each row's whole-list apply forms them (the reverse
- * offset (x_I - x_J) / h_J is -((x_J - x_I) / h_J) exactly): each weight bit for bit. */
+/* Both weights of a block of half-list pairs with h per particle: each direction at its own
+ * row's scaled offset (pst_lanes_lane_scaled), with its own sqrt, division and kernel, as each
+ * row's whole-list apply forms them: each weight bit for bit. */
 PST_KHOT void qs_lane_half_weights_hs(pst_kernel K, int D, double supp, double eps,
-                                      const pst_lanes_block *b, double ihi, pst_v8 ihj,
+                                      const pst_lanes_block *b, double ihi, const double *h,
                                       const double *kap_i, const double *kap, pst_v8 *wij,
                                       pst_v8 *wji)
 {
-    pst_v8 c[16], a, r;
+    pst_v8 c[16], a, r, fj = pst_lanes_back_scale(h, b);
     pst_lanes_coefs(kap, QS_NK(D), b->j, c);
     const double *cj = (const double *)c;
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
-        double o2, id2, x = b->x[l] * ihi, y = b->y[l] * ihi, z = b->z[l] * ihi;
-        double d2 = x * x + y * y + (D == 3 ? z * z : 0.0);
+        double o2, id2, x, y, z, d2 = pst_lanes_lane_scaled(b, D, l, ihi, &x, &y, &z);
         qs_omega_q(K, D, supp, eps, d2, sqrt(d2), &o2, &id2);
         a[l] = qs_weight_xyz(D, x, y, z, o2, id2, kap_i);
-        x = -(b->x[l] * ihj[l]);
-        y = -(b->y[l] * ihj[l]);
-        z = -(b->z[l] * ihj[l]);
-        d2 = x * x + y * y + (D == 3 ? z * z : 0.0);
+        d2 = pst_lanes_lane_scaled(b, D, l, fj[l], &x, &y, &z);
         qs_omega_q(K, D, supp, eps, d2, sqrt(d2), &o2, &id2);
         r[l] = qs_weight_strided(D, x, y, z, o2, id2, cj + l, PST_LANES);
     }
@@ -367,8 +362,7 @@ PST_KHOT pst_v8 qs_half_block_step(pst_kernel K, int D, const qs_ctx *k, const q
 {
     pst_v8 wij, wji;
     if (hs)
-        qs_lane_half_weights_hs(K, D, k->supp, k->c.pair_eps, b, ihi,
-                                pst_v8_splat(1.0) / pst_v8_gather(k->c.h, b->j), kap_i, d->kap,
+        qs_lane_half_weights_hs(K, D, k->supp, k->c.pair_eps, b, ihi, k->c.h, kap_i, d->kap,
                                 &wij, &wji);
     else
         qs_lane_half_weights(K, D, k->supp, k->c.pair_eps, b, kap_i, d->kap, &wij, &wji);
@@ -379,8 +373,7 @@ PST_KHOT pst_v8 qs_half_block_step(pst_kernel K, int D, const qs_ctx *k, const q
  * after the scatter of the row's blocks. Compute-bound: per pair both quadratic forms and the
  * transposes of kappa_J (15 doubles in 3D); with one h for the cloud half the sqrts, divisions
  * and kernels of the whole list, with h per particle (hs, a constant: as a run-time flag it
- * made the one-h rows 15-25 % slower) as many, plus a division for 1 / h_J and the sqrt of the
- * unscaled block. */
+ * made the one-h rows 15-25 % slower) as many, plus a division for 1 / h_J. */
 PST_KHOT void qs_half_lane_row(const qs_ctx *k, const qs_data *d, int D, pst_kernel K, int hs,
                                const int64_t *off, const uint32_t *idx, size_t i, double *y)
 {

@@ -237,29 +237,24 @@ PST_KHOT void lane_half_weights(const wls_ctx *k, int D, int B, pst_kernel K,
     *wji = r;
 }
 
-/* The same with h per particle: the block taken with 1/h = 1 (b->x = x_J - x_I), each
- * direction scaled by its own row's 1/h (ihi; 1/h_J per lane from the gathered h_J) and given
- * its own sqrt and kernel weight, as each row's lane_weights forms them (the reverse offset
- * (x_I - x_J) / h_J is -((x_J - x_I) / h_J) exactly): each weight bit for bit. */
+/* The same with h per particle: each direction at its own row's scaled offset
+ * (pst_lanes_lane_scaled), with its own sqrt and kernel weight, as each row's lane_weights
+ * forms them: each weight bit for bit. */
 PST_KHOT void lane_half_weights_hs(const wls_ctx *k, int D, int B, pst_kernel K,
                                    const pst_lanes_block *b, double ihi, const double *lam,
                                    pst_v8 *wij, pst_v8 *wji)
 {
     const double supp = pst_sph_support[K], eps = k->c.pair_eps;
-    const pst_v8 ihj = pst_v8_splat(1.0) / pst_v8_gather(k->c.h, b->j);
-    pst_v8 c[16], a, r;
+    pst_v8 c[16], a, r, fj = pst_lanes_back_scale(k->c.h, b);
     pst_lanes_coefs(k->d->lam, k->d->nb, b->j, c);
     const double *cj = (const double *)c;
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
-        double x = b->x[l] * ihi, y = b->y[l] * ihi, z = b->z[l] * ihi;
-        double q = sqrt(x * x + y * y + (D == 3 ? z * z : 0.0)), w = pst_sph_shape(K, D, q, 0);
+        double x, y, z, q = sqrt(pst_lanes_lane_scaled(b, D, l, ihi, &x, &y, &z));
+        double w = pst_sph_shape(K, D, q, 0);
         w = ((q < supp) & (q > eps)) ? w : 0.0;
         a[l] = basis_weight_xyz(D, B, w, x, y, z, lam);
-        x = -(b->x[l] * ihj[l]);
-        y = -(b->y[l] * ihj[l]);
-        z = -(b->z[l] * ihj[l]);
-        q = sqrt(x * x + y * y + (D == 3 ? z * z : 0.0));
+        q = sqrt(pst_lanes_lane_scaled(b, D, l, fj[l], &x, &y, &z));
         w = pst_sph_shape(K, D, q, 0);
         w = ((q < supp) & (q > eps)) ? w : 0.0;
         r[l] = basis_weight_strided(D, B, w, x, y, z, cj + l, PST_LANES);
