@@ -643,7 +643,9 @@ static int precompute(pst_op *op, int which, char *err)
     if (!d)
         return PST_ENOMEM;
     d->which = which;
-    PST_DATA_ARRAY(d->C, n * (size_t)(dim * dim) * sizeof *d->C);
+    /* 8 doubles past the last row: the half-list tensor rows read 2D rows 8 at a time */
+    if (!d->C && PST_DATA_ARRAY(d->C, (n * (size_t)(dim * dim) + PST_LANES) * sizeof *d->C))
+        memset(d->C + n * (size_t)(dim * dim), 0, PST_LANES * sizeof *d->C);
     PST_DATA_ARRAY(d->zeta, n * (size_t)dim * sizeof *d->zeta);
     PST_DATA_ARRAY(d->eta, n * (size_t)dim * sizeof *d->eta);
     PST_DATA_ARRAY(d->s, n * sizeof *d->s);

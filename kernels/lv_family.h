@@ -80,34 +80,47 @@ PST_KHOT double scalar_weight(int D, double Vs, double pm, double F, const doubl
 
 /* One component b of a diagonal-tensor row's sum, (M^b_I + M^b_J) [x^b g^b / d^2 -
  * zeta^b (C_I g)^b] (lv_family.c's file comment), from its pair mobility pm, x^b, g^b, 1 / d^2
- * (id2), zeta^b, row b of C_I (Cb) and the components of g (gz not read in 2D). */
+ * (id2), zeta^b, row b of C_I (Cb, its entries stride apart) and the components of g (gz not
+ * read in 2D). */
 PST_KHOT double tensor_term(int D, double pm, double xb, double gb, double id2, double zb,
-                            const double *Cb, double gx, double gy, double gz)
+                            const double *Cb, int stride, double gx, double gy, double gz)
 {
     double Cg = 0;
     Cg += Cb[0] * gx;
-    Cg += Cb[1] * gy;
+    Cg += Cb[stride] * gy;
     if (D == 3)
-        Cg += Cb[2] * gz;
+        Cg += Cb[2 * stride] * gz;
     return pm * (xb * gb * id2 - zb * Cg);
 }
 
 /* w_IJ of a diagonal-tensor row, s_I V_J sum_b tensor_term, from Vs = s_I V_J, the mobilities
  * of I (mi, D values) and of J (mjx, mjy, mjz), the pair mean H, d^2, C_I, zeta_I, the offset
- * and g (z components not read in 2D): scalars, like scalar_weight. One division by d^2 per
- * pair rather than one per component: divisions are the costliest operations of these rows
- * (3D 10^6, 1 thread: 4-21 % off the tensor apply, bench/README.md). */
+ * and g (z components not read in 2D): scalars, like scalar_weight. mi, C and zeta are a
+ * row's (stride 1) or one lane of vectors (stride 8), as in scalar_weight_strided. One division
+ * by d^2 per pair rather than one per component: divisions are the costliest operations of
+ * these rows (3D 10^6, 1 thread: 4-21 % off the tensor apply, bench/README.md). */
+PST_KHOT double tensor_weight_strided(int D, int H, double Vs, const double *mi, double mjx,
+                                      double mjy, double mjz, double d2, const double *C,
+                                      const double *zeta, int stride, double x, double y,
+                                      double z, double gx, double gy, double gz)
+{
+    const int r = stride;
+    double s = 0, id2 = 1.0 / d2;
+    s += tensor_term(D, pair_mobility(mi[0], mjx, H), x, gx, id2, zeta[0], C, r, gx, gy, gz);
+    s += tensor_term(D, pair_mobility(mi[r], mjy, H), y, gy, id2, zeta[r], C + D * r, r, gx, gy,
+                     gz);
+    if (D == 3)
+        s += tensor_term(D, pair_mobility(mi[2 * r], mjz, H), z, gz, id2, zeta[2 * r],
+                         C + 2 * D * r, r, gx, gy, gz);
+    return Vs * s;
+}
+
 PST_KHOT double tensor_weight(int D, int H, double Vs, const double *mi, double mjx, double mjy,
                               double mjz, double d2, const double *C, const double *zeta,
                               double x, double y, double z, double gx, double gy, double gz)
 {
-    double s = 0, id2 = 1.0 / d2;
-    s += tensor_term(D, pair_mobility(mi[0], mjx, H), x, gx, id2, zeta[0], C, gx, gy, gz);
-    s += tensor_term(D, pair_mobility(mi[1], mjy, H), y, gy, id2, zeta[1], C + D, gx, gy, gz);
-    if (D == 3)
-        s += tensor_term(D, pair_mobility(mi[2], mjz, H), z, gz, id2, zeta[2], C + 2 * D, gx, gy,
-                         gz);
-    return Vs * s;
+    return tensor_weight_strided(D, H, Vs, mi, mjx, mjy, mjz, d2, C, zeta, 1, x, y, z, gx, gy,
+                                 gz);
 }
 
 /* The matrix-free apply's rows [i0, i1) that are neither Dirichlet nor Neumann rows into y,
@@ -119,8 +132,8 @@ typedef void (*lv_lane_rows_fn)(const lv_ctx *k, const int64_t *off, const uint3
 lv_lane_rows_fn lv_lane_rows_for(const lv_ctx *k);
 
 /* The half-list rows [i0, i1) in lanes, every row but the Neumann rows (half_rows' rule: a
- * Dirichlet row I still writes its pairs' y_J), or NULL where they take a pair at a time: G1,
- * no tensor (lv_lanes.c). */
+ * Dirichlet row I still writes its pairs' y_J), or NULL where they take a pair at a time: the
+ * G1 operators (lv_half_lanes.c). */
 lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k);
 
 /* w_IJ of row i at pair (i, j) for any operator, a pair at a time (lv_family.c): the lane
