@@ -9,12 +9,20 @@
 
 /* What a block of half-list row I reads of its rows J besides their positions: s_J, and
  * eta_J (scalar rows) or C_J and zeta_J (tensor rows, T) as vectors, lane l of entry m at
- * [m * 8 + l]: C_J from 8 x 8 transposes (pst_lanes_coefs; C keeps 8 doubles past its last
- * row for the 2D rows of 4), the D entries of eta_J or zeta_J by strided gathers. */
+ * [m * 8 + l]. */
 typedef struct {
-    pst_v8 s, eta[3], C[16], zeta[3];
+    pst_v8 s;
+    union {
+        pst_v8 eta[3];
+        struct {
+            pst_v8 C[16], zeta[3];
+        };
+    };
 } lv_lane_back;
 
+/* Row J's data of a block into j: C_J from 8 x 8 transposes (pst_lanes_coefs; C keeps 8
+ * doubles past its last row for the 2D rows of 4), the D entries of eta_J or zeta_J by strided
+ * gathers (0 beyond D). */
 PST_KHOT void lane_back_of(const lv_ctx *k, int D, int T, const pst_lanes_block *b,
                            lv_lane_back *j)
 {

@@ -96,6 +96,14 @@ static wls_ctx make_ctx(const pst_op *op) { return (wls_ctx){.c = pst_kctx_of(op
 /* The hot functions (PST_KHOT) take the dimension D, the type flag B and the kernel K as
  * arguments; the instantiations below call them with constants, so the pair loops carry no
  * branches on them. */
+/* The kernel weight f(q) of a scaled distance q, 0 outside the support and for degenerate
+ * pairs (q <= eps): a select, so that the lane loops stay branch-free. */
+PST_KHOT double cut_weight(int D, pst_kernel K, double q, double supp, double eps)
+{
+    double w = pst_sph_shape(K, D, q, 0);
+    return ((q < supp) & (q > eps)) ? w : 0.0;
+}
+
 /* Scaled offset x^ = (x_j - x_c) * ih of a pair and its weight f(|x^|) (0 outside the support
  * and for degenerate pairs). */
 PST_KHOT double pair_weight(const wls_ctx *k, int D, pst_kernel K, const double *xc, size_t j,
@@ -106,9 +114,7 @@ PST_KHOT double pair_weight(const wls_ctx *k, int D, pst_kernel K, const double 
         xh[a] = pst_offset(&k->c, a, k->c.x[a][j], xc[a]) * ih;
         q2 += xh[a] * xh[a];
     }
-    double q = sqrt(q2);
-    double f = pst_sph_shape(K, D, q, 0);
-    return q < pst_sph_support[K] && q > k->c.pair_eps ? f : 0.0;
+    return cut_weight(D, K, sqrt(q2), pst_sph_support[K], k->c.pair_eps);
 }
 
 /* The moment passes gather a row's neighbours, a chunk at a time, into stack arrays (structure
@@ -228,8 +234,7 @@ PST_KHOT void lane_half_weights(const wls_ctx *k, int D, int B, pst_kernel K,
     const double *cj = (const double *)c;
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
-        double q = b->q[l], w = pst_sph_shape(K, D, q, 0);
-        w = ((q < supp) & (q > eps)) ? w : 0.0;
+        double q = b->q[l], w = cut_weight(D, K, q, supp, eps);
         a[l] = basis_weight_xyz(D, B, w, b->x[l], b->y[l], b->z[l], lam);
         r[l] = basis_weight_strided(D, B, w, -b->x[l], -b->y[l], -b->z[l], cj + l, PST_LANES);
     }
@@ -251,12 +256,10 @@ PST_KHOT void lane_half_weights_hs(const wls_ctx *k, int D, int B, pst_kernel K,
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
         double x, y, z, q = sqrt(pst_lanes_lane_scaled(b, D, l, ihi, &x, &y, &z));
-        double w = pst_sph_shape(K, D, q, 0);
-        w = ((q < supp) & (q > eps)) ? w : 0.0;
+        double w = cut_weight(D, K, q, supp, eps);
         a[l] = basis_weight_xyz(D, B, w, x, y, z, lam);
         q = sqrt(pst_lanes_lane_scaled(b, D, l, fj[l], &x, &y, &z));
-        w = pst_sph_shape(K, D, q, 0);
-        w = ((q < supp) & (q > eps)) ? w : 0.0;
+        w = cut_weight(D, K, q, supp, eps);
         r[l] = basis_weight_strided(D, B, w, x, y, z, cj + l, PST_LANES);
     }
     *wij = a;
@@ -333,8 +336,7 @@ PST_KHOT pst_v8 lane_weights(const wls_ctx *k, int D, int B, pst_kernel K,
     pst_v8 a;
 #pragma omp simd
     for (int l = 0; l < PST_LANES; ++l) {
-        double q = b->q[l], w = pst_sph_shape(K, D, q, 0);
-        w = ((q < supp) & (q > eps)) ? w : 0.0;
+        double q = b->q[l], w = cut_weight(D, K, q, supp, eps);
         a[l] = basis_weight_xyz(D, B, w, b->x[l], b->y[l], b->z[l], lam);
     }
     return a;
