@@ -96,25 +96,4 @@ PST_KHOT int pst_pair_live(const pst_kctx *k, double d, double h) { return d > k
             (y)[i] = pst_s_;                                                                   \
     } while (0)
 
-/* Row i of a half list (off, idx: its neighbours j > i) in the half-list apply (operator.h,
- * half_rows): y_i += sum_j w_ij (u_j - u_i) unless row i is a Dirichlet row, and
- * y_j -= w_ji (u_j - u_i) for every non-Dirichlet j. `pair` is a statement run first for each
- * pair (geometry both weights share, or nothing); `wij` and `wji` are expressions in `j`, the
- * weights of apply, so the half-list and whole-list applies agree to rounding. */
-#define PST_HALF_LOOP(off, idx, kind, i, u, y, j, pair, wij, wji)                             \
-    do {                                                                                       \
-        double pst_ui_ = (u)[i], pst_s_ = 0;                                                   \
-        int pst_live_ = (kind)[i] != PST_DIRICHLET;                                            \
-        for (int64_t pst_e_ = (off)[i]; pst_e_ < (off)[(i) + 1]; ++pst_e_) {                   \
-            size_t j = (idx)[pst_e_];                                                          \
-            double pst_du_ = (u)[j] - pst_ui_;                                                 \
-            pair;                                                                              \
-            if (pst_live_)                                                                     \
-                pst_s_ += (wij) * pst_du_;                                                     \
-            if ((kind)[j] != PST_DIRICHLET)                                                    \
-                (y)[j] -= (wji) * pst_du_;                                                     \
-        }                                                                                      \
-        (y)[i] += pst_s_;                                                                      \
-    } while (0)
-
 #endif

@@ -257,27 +257,66 @@ PST_KHOT void chunk_row_weights(const lv_ctx *k, int D, int G, int T, int H, siz
                            ch->a[c], ch->W[c], mi, &mj[0][c], &F[c]);
 }
 
+/* The weights of row i for the chunk of neighbours idx[0..n) whose geometry is ch, into t:
+ * a Neumann row's (neumann_from) or a scheme row's (chunk_row_weights), 0 for degenerate
+ * pairs (F = 0). */
+PST_KHOT void chunk_weights_of(const lv_ctx *k, int D, int G, int T, int H, size_t i,
+                               const uint32_t *idx, int n, const lv_chunk *ch, double *t)
+{
+    double mi[3], mn[3], F[LV_CHUNK];
+    row_mobility(k, D, T, i, mi, mn);
+    if (k->c.kind[i] == PST_NEUMANN) {
+#pragma omp simd
+        for (int c = 0; c < n; ++c)
+            t[c] = neumann_from(k, D, G, i, idx[c], &ch->x[0][c], LV_CHUNK, ch->d2[c], ch->a[c],
+                                ch->W[c], mn, &F[c]);
+    } else {
+        chunk_row_weights(k, D, G, T, H, i, idx, n, ch, mi, F, t);
+    }
+    /* the cut of degenerate pairs as a loop of its own: inside the weight loop GCC would sink
+     * the weight into a branch of it, and that loop would not vectorise below AVX-512 */
+    for (int c = 0; c < n; ++c)
+        t[c] = F[c] == 0.0 ? 0.0 : t[c];
+}
+
 /* The weights of row i for its neighbours idx[0..n) into t (with L: chunk_geometry's). */
 PST_KHOT void chunk_weights(const lv_ctx *k, int D, int G, int T, int H, size_t i,
                             const uint32_t *idx, int n, double *t, const pst_lanes *L,
                             double *du)
 {
     lv_chunk ch;
-    double mi[3], mn[3], F[LV_CHUNK];
     chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, idx, n, &ch, L, du);
-    row_mobility(k, D, T, i, mi, mn);
-    if (k->c.kind[i] == PST_NEUMANN) {
-#pragma omp simd
+    chunk_weights_of(k, D, G, T, H, i, idx, n, &ch, t);
+}
+
+/* The weights w_JI of the pairs (J = idx[c], i) of a half-list chunk into t, each as row J's
+ * own rows form it: weight_from with row J's data gathered and the pair's geometry ch seen
+ * from J (x_JI = -x_IJ exactly; d^2, h~, a and W are the same both ways). A Neumann row J's
+ * weight a pair at a time (row_weight); degenerate pairs 0, as in chunk_weights_of. */
+PST_KHOT void chunk_reverse_weights(const lv_ctx *k, int D, int G, int T, int H, size_t i,
+                                    const uint32_t *idx, int n, const lv_chunk *ch, double *t)
+{
+    /* mrow: row J's own mobility (row_mobility's); mcol: I's, as J's pair reads its column */
+    double x[3][LV_CHUNK], mrow[LV_CHUNK][3], mcol[3][LV_CHUNK], F[LV_CHUNK];
+    for (int b = 0; b < D; ++b)
         for (int c = 0; c < n; ++c)
-            t[c] = neumann_from(k, D, G, i, idx[c], &ch.x[0][c], LV_CHUNK, ch.d2[c], ch.a[c],
-                                ch.W[c], mn, &F[c]);
-    } else {
-        chunk_row_weights(k, D, G, T, H, i, idx, n, &ch, mi, F, t);
+            x[b][c] = -ch->x[b][c];
+    for (int b = 0; b < (T ? D : 1); ++b) {
+        double m = pst_mob(&k->c, b, i);
+        for (int c = 0; c < n; ++c) {
+            mrow[c][b] = T ? k->c.mob[b][idx[c]] : pst_mob(&k->c, 0, idx[c]);
+            mcol[b][c] = m;
+        }
     }
-    /* the cut of degenerate pairs as a loop of its own: inside the weight loop GCC would sink
-     * the weight into a branch of it, and that loop would not vectorise below AVX-512 */
+#pragma omp simd
+    for (int c = 0; c < n; ++c)
+        t[c] = weight_from(k, D, G, T, H, idx[c], i, &x[0][c], LV_CHUNK, ch->d2[c], ch->a[c],
+                           ch->W[c], mrow[c], &mcol[0][c], &F[c]);
     for (int c = 0; c < n; ++c)
         t[c] = F[c] == 0.0 ? 0.0 : t[c];
+    for (int c = 0; c < n; ++c)
+        if (k->c.kind[idx[c]] == PST_NEUMANN)
+            t[c] = row_weight(k, D, G, T, H, idx[c], i);
 }
 
 /* Row i into y (apply, from the packed rows: pst_lanes_gather) or its weights into w
@@ -309,15 +348,35 @@ PST_KHOT void row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, si
         y[i] = pst_v8_sum(acc);
 }
 
-/* Row i of a half list (operator.h, half_rows), for constant D, G, T, H: both weights of each
- * pair as apply computes them (each from its own row's data: the pair gradient uses the row's
- * own C, so the geometry is not shared). */
+/* Row i of a half list (operator.h, half_rows), for constant D, G, T, H, a chunk of its pairs
+ * (i, j > i) at a time: the geometry once for both directions (chunk_geometry from the
+ * positions, as the emission), w_IJ as the whole-list rows form it (chunk_weights_of) and w_JI
+ * as row J's (chunk_reverse_weights); then, in list order, y_I += sum_J w_IJ (u_J - u_I)
+ * unless I is a Dirichlet row and y_J -= w_JI (u_J - u_I) for each non-Dirichlet J.
+ * The G1 rows but Neumann ones take lv_half_lanes.c's rows instead. */
 PST_KHOT void half_row_t(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
                          const double *u, double *y, int D, int G, int T, int H)
 {
     const uint8_t *kind = k->c.kind;
-    PST_HALF_LOOP(off, idx, kind, i, u, y, j, (void)0, row_weight(k, D, G, T, H, i, j),
-                  row_weight(k, D, G, T, H, j, i));
+    const double ui = u[i];
+    double s = 0;
+    for (int64_t c0 = off[i]; c0 < off[i + 1]; c0 += LV_CHUNK) {
+        int n = (int)(off[i + 1] - c0 < LV_CHUNK ? off[i + 1] - c0 : LV_CHUNK);
+        const uint32_t *ic = idx + c0;
+        lv_chunk ch;
+        double wij[LV_CHUNK], wji[LV_CHUNK];
+        chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, ic, n, &ch, NULL, NULL);
+        chunk_weights_of(k, D, G, T, H, i, ic, n, &ch, wij);
+        chunk_reverse_weights(k, D, G, T, H, i, ic, n, &ch, wji);
+        for (int c = 0; c < n; ++c) {
+            double du = u[ic[c]] - ui;
+            s += wij[c] * du;
+            if (kind[ic[c]] != PST_DIRICHLET)
+                y[ic[c]] -= wji[c] * du;
+        }
+    }
+    if (kind[i] != PST_DIRICHLET)
+        y[i] += s;
 }
 
 /* Row i: of the whole list (apply, emission) or, with half = 1, of a half list. */
@@ -709,8 +768,8 @@ static void lv_apply(const pst_op *op, const double *u, double *y)
 }
 
 /* Rows [i0, i1) of a half list (operator.h, half_rows): in lanes where lv_half_lane_rows_for
- * serves the operator (its Neumann rows then after the others, a pair at a time: still an
- * order fixed by the list), else every row a pair at a time. */
+ * serves the operator (its Neumann rows then after the others, in chunks: still an order fixed
+ * by the list), else every row in chunks (half_row_t). */
 static void lv_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
                          size_t i1, const double *u, double *y)
 {

@@ -132,8 +132,8 @@ typedef void (*lv_lane_rows_fn)(const lv_ctx *k, const int64_t *off, const uint3
 lv_lane_rows_fn lv_lane_rows_for(const lv_ctx *k);
 
 /* The half-list rows [i0, i1) in lanes, every row but the Neumann rows (half_rows' rule: a
- * Dirichlet row I still writes its pairs' y_J), or NULL where they take a pair at a time: the
- * G1 operators (lv_half_lanes.c). */
+ * Dirichlet row I still writes its pairs' y_J), or NULL where they go in chunks (lv_family.c):
+ * the G1 operators (lv_half_lanes.c). */
 lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k);
 
 /* w_IJ of row i at pair (i, j) for any operator, a pair at a time (lv_family.c): the lane

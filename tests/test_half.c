@@ -23,9 +23,9 @@ typedef struct {
     int variant, mobility, mean, gradient; /* mean: pst_mobility_mean; gradient 0: G1 */
 } scheme_case;
 
-/* The LV family's G1 rows with a scalar or no mobility go in lanes, under either pair mean,
- * with one h or h per particle (kernels/lv_lanes.c); its tensor rows and the gradients G2-G4
- * a pair at a time (kernels/lv_family.c). */
+/* The LV family's G1 rows go in lanes with any mobility, under either pair mean, with one h
+ * or h per particle (kernels/lv_half_lanes.c); the gradients G2-G4 in chunks, and the Neumann
+ * rows of every gradient (kernels/lv_family.c, half_row_t). */
 static const scheme_case cases[] = {
     {"qsfdi", 0, 0, 0, 0},
     {"lpmps", 0, 0, 0, 0},
