@@ -77,23 +77,4 @@ PST_KHOT double pst_pair_offset(const pst_kctx *k, int D, size_t i, size_t j, do
  * smoothing length; 1 for distances already scaled by h). */
 PST_KHOT int pst_pair_live(const pst_kctx *k, double d, double h) { return d > k->pair_eps * h; }
 
-/* Row i of the pattern (off, idx) in the two-point form, for apply and emission alike: with
- * w != NULL the weights w_ij go to w in pattern order, else y[i] = sum_j w_ij (u_j - u_i),
- * summed in pattern order. `wij` is an expression in the neighbour index `j`; one expression for
- * both paths keeps their weights bit-identical (operator.h). */
-#define PST_ROW_LOOP(off, idx, i, u, y, w, j, wij)                                            \
-    do {                                                                                       \
-        double pst_ui_ = (u) ? (u)[i] : 0, pst_s_ = 0;                                         \
-        for (int64_t pst_e_ = (off)[i]; pst_e_ < (off)[(i) + 1]; ++pst_e_) {                   \
-            size_t j = (idx)[pst_e_];                                                          \
-            double pst_w_ = (wij);                                                             \
-            if (w)                                                                             \
-                (w)[pst_e_ - (off)[i]] = pst_w_;                                               \
-            else                                                                               \
-                pst_s_ += pst_w_ * ((u)[j] - pst_ui_);                                         \
-        }                                                                                      \
-        if (!(w))                                                                              \
-            (y)[i] = pst_s_;                                                                   \
-    } while (0)
-
 #endif
