@@ -293,7 +293,7 @@ PST_KHOT void chunk_weights(const lv_ctx *k, int D, int G, int T, int H, size_t 
  * own rows form it: weight_from reading row J's data by its index, with the pair's geometry ch
  * seen from J (x_JI = -x_IJ exactly; d^2, h~, a and W are the same both ways). GCC 12 leaves
  * the weight loop scalar ("no vectype for stmt"); the shared geometry is the gain (row J's
- * data copied per lane first vectorised it, at no gain: docs/operators.md). A Neumann row
+ * data copied per lane first vectorised it, at no clear gain: docs/operators.md). A Neumann row
  * J's weight a pair at a time (row_weight); degenerate pairs 0, as in chunk_weights_of. */
 PST_KHOT void chunk_reverse_weights(const lv_ctx *k, int D, int G, int T, int H, size_t i,
                                     const uint32_t *idx, int n, const lv_chunk *ch, double *t)
