@@ -36,6 +36,9 @@ static lv_ctx make_ctx(const pst_op *op)
                     .harmonic = op->opts.mobility_mean == PST_MEAN_HARMONIC, .d = op->data};
 }
 
+/* Whether the gradient variant G reads the kernel value W (G2 and G4), else only W'. */
+static inline int needs_w(int G) { return G == PST_GRAD_G2 || G == PST_GRAD_G4; }
+
 /* The pair geometry of (i, j): x = r_j - r_i, d^2, h~ = (h_i + h_j)/2 (26), the kernel value W
  * (only when needW) and a = -dW/dr / d >= 0, so that the G1 gradient (15) is a x. Degenerate
  * pairs get a = W = 0. */
@@ -87,7 +90,7 @@ PST_KHOT double gradient_from(const lv_ctx *k, int D, int G, size_t i, size_t j,
 PST_KHOT double pair_gradient(const lv_ctx *k, int D, int G, size_t i, size_t j, double x[3],
                             double g[3], double *d2)
 {
-    double W, a = pair_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, j, x, d2, &W);
+    double W, a = pair_geometry(k, D, needs_w(G), i, j, x, d2, &W);
     return gradient_from(k, D, G, i, j, x, 1, *d2, a, W, g);
 }
 
@@ -148,7 +151,7 @@ PST_KHOT void row_mobility(const lv_ctx *k, int D, int T, size_t i, double mi[3]
 PST_KHOT double row_weight(const lv_ctx *k, int D, int G, int T, int H, size_t i, size_t j)
 {
     double x[3], d2, W, mi[3], mn[3], mj[3] = {0, 0, 0}, F, w;
-    double a = pair_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, j, x, &d2, &W);
+    double a = pair_geometry(k, D, needs_w(G), i, j, x, &d2, &W);
     row_mobility(k, D, T, i, mi, mn);
     if (k->c.kind[i] == PST_NEUMANN) {
         w = neumann_from(k, D, G, i, j, x, 1, d2, a, W, mn, &F);
@@ -257,6 +260,15 @@ PST_KHOT void chunk_row_weights(const lv_ctx *k, int D, int G, int T, int H, siz
                            ch->a[c], ch->W[c], mi, &mj[0][c], &F[c]);
 }
 
+/* The cut of degenerate pairs (F = 0) from a chunk's weights t, as a loop of its own: inside
+ * the weight loop GCC would sink the weight into a branch of it, and that loop would not
+ * vectorise below AVX-512. */
+PST_KHOT void chunk_cut(int n, const double *F, double *t)
+{
+    for (int c = 0; c < n; ++c)
+        t[c] = F[c] == 0.0 ? 0.0 : t[c];
+}
+
 /* The weights of row i for the chunk of neighbours idx[0..n) whose geometry is ch, into t:
  * a Neumann row's (neumann_from) or a scheme row's (chunk_row_weights), 0 for degenerate
  * pairs (F = 0). */
@@ -273,10 +285,7 @@ PST_KHOT void chunk_weights_of(const lv_ctx *k, int D, int G, int T, int H, size
     } else {
         chunk_row_weights(k, D, G, T, H, i, idx, n, ch, mi, F, t);
     }
-    /* the cut of degenerate pairs as a loop of its own: inside the weight loop GCC would sink
-     * the weight into a branch of it, and that loop would not vectorise below AVX-512 */
-    for (int c = 0; c < n; ++c)
-        t[c] = F[c] == 0.0 ? 0.0 : t[c];
+    chunk_cut(n, F, t);
 }
 
 /* The weights of row i for its neighbours idx[0..n) into t (with L: chunk_geometry's). */
@@ -285,7 +294,7 @@ PST_KHOT void chunk_weights(const lv_ctx *k, int D, int G, int T, int H, size_t 
                             double *du)
 {
     lv_chunk ch;
-    chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, idx, n, &ch, L, du);
+    chunk_geometry(k, D, needs_w(G), i, idx, n, &ch, L, du);
     chunk_weights_of(k, D, G, T, H, i, idx, n, &ch, t);
 }
 
@@ -314,8 +323,7 @@ PST_KHOT void chunk_reverse_weights(const lv_ctx *k, int D, int G, int T, int H,
     for (int c = 0; c < n; ++c)
         t[c] = weight_from(k, D, G, T, H, idx[c], i, &x[0][c], LV_CHUNK, ch->d2[c], ch->a[c],
                            ch->W[c], mrow[c], &mcol[0][c], &F[c]);
-    for (int c = 0; c < n; ++c)
-        t[c] = F[c] == 0.0 ? 0.0 : t[c];
+    chunk_cut(n, F, t);
     for (int c = 0; c < n; ++c)
         if (k->c.kind[idx[c]] == PST_NEUMANN)
             t[c] = row_weight(k, D, G, T, H, idx[c], i);
@@ -367,7 +375,7 @@ PST_KHOT void half_row_t(const lv_ctx *k, const int64_t *off, const uint32_t *id
         const uint32_t *ic = idx + c0;
         lv_chunk ch;
         double wij[LV_CHUNK], wji[LV_CHUNK];
-        chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, ic, n, &ch, NULL, NULL);
+        chunk_geometry(k, D, needs_w(G), i, ic, n, &ch, NULL, NULL);
         chunk_weights_of(k, D, G, T, H, i, ic, n, &ch, wij);
         chunk_reverse_weights(k, D, G, T, H, i, ic, n, &ch, wji);
         for (int c = 0; c < n; ++c) {
@@ -485,7 +493,7 @@ PST_KHOT void chunk_pairs(const lv_ctx *k, int D, int G, size_t i, const uint32_
 {
     double du[LV_CHUNK];
     pst_lanes L = pst_lanes_row(&k->c, i, 1.0); /* its u (0 or an apply's) is not read */
-    chunk_geometry(k, D, G == PST_GRAD_G2 || G == PST_GRAD_G4, i, ic, n, &p->ch, &L, du);
+    chunk_geometry(k, D, needs_w(G), i, ic, n, &p->ch, &L, du);
 #pragma omp simd
     for (int c = 0; c < n; ++c) {
         double gc[3];
