@@ -1,6 +1,7 @@
 /* The Lukyanov-Vuik family's shared parts (kernels/lv_family.c has the scheme): its data, the
- * context the pair functions read, and the pair rules that both the chunk rows (lv_family.c)
- * and the lane rows (lv_lanes.c) call, so that their weights agree bit for bit. Internal. */
+ * context the pair functions read, the pair rules that both the chunk rows (lv_rows.c,
+ * lv_half_rows.c, through lv_chunks.h) and the lane rows (lv_lanes.c, lv_half_lanes.c) call,
+ * so that their weights agree bit for bit, and the rows each file exports. Internal. */
 #ifndef PSTENCIL_LV_FAMILY_H
 #define PSTENCIL_LV_FAMILY_H
 
@@ -132,11 +133,26 @@ typedef void (*lv_lane_rows_fn)(const lv_ctx *k, const int64_t *off, const uint3
 lv_lane_rows_fn lv_lane_rows_for(const lv_ctx *k);
 
 /* The half-list rows [i0, i1) in lanes, every row but the Neumann rows (half_rows' rule: a
- * Dirichlet row I still writes its pairs' y_J), or NULL where they go in chunks (lv_family.c):
+ * Dirichlet row I still writes its pairs' y_J), or NULL where they go in chunks (lv_half_rows.c):
  * the G1 operators (lv_half_lanes.c). */
 lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k);
 
-/* w_IJ of row i at pair (i, j) for any operator, a pair at a time (lv_family.c): the lane
+/* Row i of the whole list in chunks (kernels/lv_rows.c): the matrix-free apply's row into y[i]
+ * (w NULL; u_J - u_I from the packed rows), or the row's weights into w (emission). */
+typedef void (*lv_row_fn)(const lv_ctx *k, const int64_t *off, const uint32_t *idx, size_t i,
+                          double *y, double *w);
+
+/* The chunk row of k's operator: every operator (lv_rows.c). */
+lv_row_fn lv_row_for(const lv_ctx *k);
+
+/* Row i of a half list in chunks (kernels/lv_half_rows.c): y_I and the y_J of its pairs. */
+typedef void (*lv_half_row_fn)(const lv_ctx *k, const int64_t *off, const uint32_t *idx,
+                               size_t i, const double *u, double *y);
+
+/* The half-list chunk row of k's operator: every operator (lv_half_rows.c). */
+lv_half_row_fn lv_half_row_for(const lv_ctx *k);
+
+/* w_IJ of row i at pair (i, j) for any operator, a pair at a time (lv_half_rows.c): the lane
  * half-list rows' weight of a Neumann row J. */
 double lv_row_weight(const lv_ctx *k, size_t i, size_t j);
 

@@ -3,14 +3,15 @@
  * scalar, diagonal tensor), either pair mean, one h or h per particle, 8 pairs at a time from
  * the packed rows like qsfdi's, through the pair rules of lv_family.h, so with the chunk rows'
  * weights bit for bit. A file of its own so that its 64 instantiations (dimension, kernel,
- * tensor, pair mean, h layout) compile beside lv_family.c and lv_half_lanes.c. */
+ * tensor, pair mean, h layout) compile beside lv_rows.c and lv_half_lanes.c. */
 #include "lv_lanes.h"
 #include "isa.h"
 
 /* Row i of the matrix-free apply for such a row (not a Neumann row), 8 pairs at a time like
- * qsfdi's, each block taken one ahead (kernels/lanes.h): the weights of row_t's chunks without
- * their passes through arrays. The row's last block reads on into the list like row_t's (the
- * lanes past the row computed and kept out of the sum); the list's last row pads. */
+ * qsfdi's, each block taken one ahead (kernels/lanes.h): the weights of row_t's chunks
+ * (lv_rows.c) without their passes through arrays. The row's last block reads on into the list
+ * like row_t's (the lanes past the row computed and kept out of the sum); the list's last row
+ * pads. */
 PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, int T, int H, int HS,
                           const int64_t *off, const uint32_t *idx, size_t i, double *y)
 {

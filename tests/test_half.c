@@ -25,7 +25,7 @@ typedef struct {
 
 /* The LV family's G1 rows go in lanes with any mobility, under either pair mean, with one h
  * or h per particle (kernels/lv_half_lanes.c); the gradients G2-G4 in chunks, and the Neumann
- * rows of every gradient (kernels/lv_family.c, half_row_t). */
+ * rows of every gradient (kernels/lv_half_rows.c, half_row_t). */
 static const scheme_case cases[] = {
     {"qsfdi", 0, 0, 0, 0},
     {"lpmps", 0, 0, 0, 0},
