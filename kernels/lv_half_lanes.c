@@ -70,12 +70,9 @@ PST_KHOT pst_v8 g1_half_step(const lv_ctx *k, int D, pst_kernel K, int T, int H,
                              const lv_lane_row *r, size_t i, const pst_lanes_block *b,
                              pst_v8 acc, double *y)
 {
-    pst_v8 mj[3], av;
-    for (int a = 0; a < (T ? D : 1); ++a)
-        mj[a] = k->c.ncomp ? pst_v8_gather(k->c.mob[a], b->j) : pst_v8_splat(1.0);
-    pst_v8 hj = HS ? pst_v8_gather(k->c.h, b->j) : pst_v8_splat(0.0);
-    pst_v8 wij =
-        g1_lane_weights(K, D, T, H, HS, r, b, pst_v8_gather(k->c.V, b->j), mj, hj, &av);
+    pst_v8 mj[3], hj, av;
+    pst_v8 vj = g1_lane_gathers(k, D, T, HS, r, b, mj, &hj);
+    pst_v8 wij = g1_lane_weights(K, D, T, H, HS, r, b, vj, mj, hj, &av);
     lv_lane_back jb;
     lane_back_of(k, D, T, b, &jb);
     pst_v8 wji = g1_lane_reverse(D, T, H, k->c.V[i], r, b, av, &jb, mj);

@@ -16,17 +16,12 @@ PST_KHOT void g1_lane_row(const lv_ctx *k, int D, pst_kernel K, int T, int H, in
                           const int64_t *off, const uint32_t *idx, size_t i, double *y)
 {
     lv_lane_row r = lane_row_of(k, D, T, i);
-    const double *mob[3] = {NULL, NULL, NULL};
-    for (int a = 0; a < (T ? D : 1); ++a)
-        mob[a] = k->c.ncomp ? k->c.mob[a] : NULL;
     pst_lanes L = pst_lanes_row(&k->c, i, 1.0);
     PST_LANES_EACH_TO(L, D, idx, off[i], off[i + 1], k->list_end, b, {
-        pst_v8 vj = pst_v8_gather(k->c.V, b->j);
-        pst_v8 mj[3];
-        for (int a = 0; a < (T ? D : 1); ++a)
-            mj[a] = mob[a] ? pst_v8_gather(mob[a], b->j) : pst_v8_splat(1.0);
-        pst_v8 hj = HS ? pst_v8_gather(k->c.h, b->j) : pst_v8_splat(0.0);
+        pst_v8 mj[3]; /* one declarator per line: the block is a macro argument */
+        pst_v8 hj;
         pst_v8 av;
+        pst_v8 vj = g1_lane_gathers(k, D, T, HS, &r, b, mj, &hj);
         L.acc = pst_lanes_add(L.acc,
                               g1_lane_weights(K, D, T, H, HS, &r, b, vj, mj, hj, &av) * b->du,
                               b->n);

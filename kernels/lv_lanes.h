@@ -11,9 +11,11 @@
 
 /* What a G1 row reads besides its pairs: h_I and, on a cloud of one h, h~ = (h_I + h) / 2; the
  * row's s_I, its mobility (m[0], or the tensor's D components), and eta_I (scalar rows) or
- * zeta_I and C_I (tensor rows). */
+ * zeta_I and C_I (tensor rows); and the arrays its blocks gather the mobility of J from (mob[0],
+ * or the tensor's D components; NULL without a mobility, m = 1). */
 typedef struct {
     double hi, ht, eps, s, m[3], eta[3], zeta[3], C[9];
+    const double *mob[3];
 } lv_lane_row;
 
 /* The weights of a block of 8 pairs of such a row, lane by lane through the chunk rows' own
@@ -45,6 +47,17 @@ PST_KHOT pst_v8 g1_lane_weights(pst_kernel K, int D, int T, int H, int HS,
     return w;
 }
 
+/* What a block of such a row gathers of its neighbours J: V_J (returned), the mobility of J
+ * (mj[0], or the tensor's D components) and, with HS, h_J. */
+PST_KHOT pst_v8 g1_lane_gathers(const lv_ctx *k, int D, int T, int HS, const lv_lane_row *r,
+                                const pst_lanes_block *b, pst_v8 mj[3], pst_v8 *hj)
+{
+    for (int a = 0; a < (T ? D : 1); ++a)
+        mj[a] = r->mob[a] ? pst_v8_gather(r->mob[a], b->j) : pst_v8_splat(1.0);
+    *hj = HS ? pst_v8_gather(k->c.h, b->j) : pst_v8_splat(0.0);
+    return pst_v8_gather(k->c.V, b->j);
+}
+
 /* What row i reads besides its pairs (lv_lane_row). */
 PST_KHOT lv_lane_row lane_row_of(const lv_ctx *k, int D, int T, size_t i)
 {
@@ -52,6 +65,8 @@ PST_KHOT lv_lane_row lane_row_of(const lv_ctx *k, int D, int T, size_t i)
                      .ht = 0.5 * (pst_h(&k->c, i) + k->c.h_uniform),
                      .eps = k->c.pair_eps,
                      .s = k->d->s[i]};
+    for (int a = 0; a < (T ? D : 1); ++a)
+        r.mob[a] = k->c.ncomp ? k->c.mob[a] : NULL;
     for (int a = 0; a < D; ++a) {
         r.m[a] = T ? k->c.mob[a][i] : pst_mob(&k->c, 0, i); /* row_mobility's mi */
         r.eta[a] = k->d->eta[(size_t)D * i + a];
