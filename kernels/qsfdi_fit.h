@@ -27,7 +27,7 @@
 #define QS_ND2(D) ((D) == 2 ? 3 : 6)
 #define QS_N4(D) (QS_N2(D) - QS_ND2(D))
 #define QS_NK(D) (QS_NQ(D) + QS_NM(D))
-#define QS_NMOM 56 /* n2 + n4 in 3D: the largest */
+#define QS_NMOM (QS_N2(3) + QS_N4(3)) /* 56, the largest */
 
 /* The monomials of degree 2-4 in graded lexicographic order: by degree, then the x exponent,
  * then y, descending (2D: xx xy yy | xxx xxy xyy yyy | ...). prod[a][b] is the index of
