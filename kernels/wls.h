@@ -1,6 +1,6 @@
-/* The weighted-least-squares engine (kernels/wls.c), shared by lsmps (types A and B, LDL^T),
- * lpmps (which supplies only its block factorisation) and qsfdi (which uses the vectorised
- * moment sums). Internal. */
+/* The weighted-least-squares engine (kernels/wls.c, wls_rows.c, wls_points.c), shared by
+ * lsmps (types A and B, LDL^T), lpmps (which supplies only its block factorisation) and qsfdi
+ * (which uses the vectorised moment sums). Internal. */
 #ifndef PSTENCIL_WLS_H
 #define PSTENCIL_WLS_H
 
