@@ -18,7 +18,10 @@
  * PST_MEAN_HARMONIC (an extension, not in the paper) it is 4 m_I m_J / (m_I + m_J) instead, per
  * component for tensors (pair_mobility in lv_family.h; 0 when m_I + m_J <= 0).
  * Fallback chain (docs/schemes/): too few neighbours or a singular C / Gamma -> the Brookshaw
- * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN. */
+ * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN.
+ * This file: the precompute, the applies' dispatch and the scheme table. The rows are in
+ * lv_lanes.c and lv_half_lanes.c (G1, 8 pairs at a time) and lv_rows.c and lv_half_rows.c (the
+ * rest, a chunk at a time), the pair arithmetic they share in lv_family.h and lv_chunks.h. */
 #include "isa.h"
 #include "lv_chunks.h"
 #include "small_matrix.h"
