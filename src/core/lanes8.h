@@ -25,6 +25,7 @@ typedef double pst_v8 __attribute__((vector_size(64)));
 typedef double pst_v4 __attribute__((vector_size(32)));
 typedef double pst_v2 __attribute__((vector_size(16)));
 typedef int64_t pst_v8i __attribute__((vector_size(64))); /* a comparison's lanes: 0 or -1 */
+typedef float pst_v8f __attribute__((vector_size(32)));
 
 /* Vectors of run-time values are built as shuffles of short initialisers, never as an
  * initialiser of 8 elements: in the AVX-512 clones of a target_clones function
@@ -66,6 +67,16 @@ PST_V8_INLINE pst_v8 pst_v8_add_below(pst_v8 acc, pst_v8 terms, double from, pst
     pst_v8 sum = acc + terms;
     pst_v8i keep = lane_no + pst_v8_splat(from) < len;
     return (pst_v8)(((pst_v8i)sum & keep) | ((pst_v8i)acc & ~keep));
+}
+
+/* f[0..8) widened to double (exactly): one load and one conversion. A loop of element
+ * conversions became 8 element loads and 7 inserts in the AVX-512 clone of the stored apply's
+ * loop over full blocks. */
+PST_V8_INLINE pst_v8 pst_v8_widen(const float *f)
+{
+    pst_v8f v;
+    memcpy(&v, f, sizeof v);
+    return __builtin_convertvector(v, pst_v8);
 }
 
 /* a[s j[0]], ..., a[s j[7]] (s: the stride), as a tree of pairs (a loop of element stores

@@ -228,8 +228,7 @@ block_terms(int single, const double *wd, const float *wf, const uint32_t *idx, 
 {
     pst_v8 wv;
     if (single)
-        for (int l = 0; l < PST_LANES; ++l)
-            wv[l] = (double)wf[k + l];
+        wv = pst_v8_widen(wf + k);
     else
         memcpy(&wv, wd + k, sizeof wv);
     return wv * (pst_v8_gather(u, idx + k) - uiv);
