@@ -175,6 +175,50 @@ static void test_solve_plan(void)
     CHECK_INT(k.solves, 1);
     CHECK_INT(k.stored_weights, 1);
     CHECK_INT(k.applies, 0);
+    double *u_double = field(c, "solve");
+    size_t n = pst_cloud_size(c);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+
+    /* Asked for in float: stored so, counted, reported; the answer moves by the weights'
+     * rounding (2^-24 relative: about 1e-8 of u here), not by nothing and not by the
+     * scheme's error (about 1e-3 at this spacing). */
+    const char *flt[] = {solve[0], "tasks.0.operator=stored_float"};
+    s = scene(flt, 2);
+    cJSON *rep = NULL;
+    pst_run_opts ro = {.quiet = 1, .report = &rep};
+    char err[1024];
+    CHECK_INT(pst_run_scene(&s, &ro, &p, &k, &c, err, sizeof err), PST_OK);
+    CHECK_INT(p.task_stored[0], SC_OPERATOR_STORED_FLOAT);
+    CHECK_INT(k.stored_weights, 1);
+    const cJSON *sv = cJSON_GetObjectItem(
+        cJSON_GetArrayItem(cJSON_GetObjectItem(rep, "tasks"), 0), "solver");
+    const char *use = cJSON_GetStringValue(cJSON_GetObjectItem(sv, "operator"));
+    CHECK(use && strcmp(use, "stored_float") == 0);
+    double *u_float = field(c, "solve"), moved = max_diff(u_double, u_float, n);
+    printf("solve on the float weights: max |u_float - u_double| = %.2e\n", moved);
+    CHECK(moved > 0 && moved < 1e-6);
+    cJSON_Delete(rep);
+    pst_cloud_destroy(c);
+    pst_scene_free(&s);
+
+    /* Two solves on the one base operator, double then float: the second stores again in
+     * float, and each gets its own store's answer (to the solver's rounding). */
+    const char *two[] = {
+        "tasks=[{\"type\":\"solve\",\"name\":\"d\",\"rhs\":\"-100*sin(6*x+8*y)\","
+        "\"exact\":\"sin(6*x+8*y)\",\"rtol\":1e-10,\"operator\":\"stored\"},"
+        "{\"type\":\"solve\",\"name\":\"f\",\"rhs\":\"-100*sin(6*x+8*y)\","
+        "\"exact\":\"sin(6*x+8*y)\",\"rtol\":1e-10,\"operator\":\"stored_float\"}]"};
+    s = scene(two, 1);
+    c = run(&s, &k, &p, PST_OK);
+    CHECK_INT(k.stored_weights, 2);
+    double *ud = field(c, "d"), *uf = field(c, "f");
+    CHECK(max_diff(ud, u_double, n) < 1e-12 && max_diff(uf, u_float, n) < 1e-12);
+    CHECK(max_diff(ud, uf, n) > 1e-10); /* the weights' rounding moves u by ~1e-8 */
+    free(ud);
+    free(uf);
+    free(u_double);
+    free(u_float);
     pst_cloud_destroy(c);
     pst_scene_free(&s);
 
@@ -205,7 +249,7 @@ static void test_solve_plan(void)
     c = run(&s, &k, &p, PST_OK);
     CHECK_INT(p.task_solver[0], PST_SOLVER_GMRES);
     double *u = field(c, "solve");
-    size_t n = pst_cloud_size(c);
+    n = pst_cloud_size(c);
     double *xi = malloc(n * sizeof *xi), worst = 0;
     pst_cloud_to_input_order(c, pst_cloud_coord_const(c, 0), xi);
     for (size_t i = 0; i < n; ++i)

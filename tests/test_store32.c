@@ -180,6 +180,22 @@ static void check_refusals(void)
     CHECK_INT(pst_op_store(op), PST_OK);
     CHECK_INT(pst_op_store_with(op, &f, err), PST_EINVAL);
     CHECK(strstr(err, "already stored in double") != NULL);
+    double *yd = malloc(n * sizeof *yd);
+    CHECK_INT(pst_op_apply_stored(op, u, yd), PST_OK);
+    pst_op_drop_store(op); /* then float: matrix-free in between */
+    CHECK_INT(pst_op_store_precision(op), PST_STORE_NONE);
+    CHECK_INT(pst_op_apply_stored(op, u, y), PST_EINVAL);
+    pst_op_drop_store(op);
+    pst_op_drop_store(NULL);
+    CHECK_INT(pst_op_store_with(op, &f, err), PST_OK);
+    CHECK_INT(pst_op_apply_stored(op, u, y), PST_OK);
+    double moved = 0, size = 0;
+    for (size_t i = 0; i < n; ++i) {
+        moved = fmax(moved, fabs(y[i] - yd[i]));
+        size = fmax(size, fabs(yd[i]));
+    }
+    CHECK(moved > 0 && moved <= 1e-6 * size); /* the float weights, not the double ones */
+    free(yd);
     pst_op_destroy(op);
 
     op = test_op(c, nl, "lv", PST_GRAD_G1, 0); /* on a half list */

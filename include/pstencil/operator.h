@@ -284,9 +284,10 @@ void pst_op_store_defaults(pst_op_store_opts *o);
 /* pst_op_store with options (o NULL: the defaults); one store per operator. Storing again in
  * the precision already stored is PST_OK and does nothing. Refused: PST_EINVAL for a NULL
  * operator, an unknown precision, an operator without rows (opts.laplacian = 0), one on a half
- * list, or weights already stored in the other precision; PST_ENUMERIC for a float store with
- * a row whose largest |w_IJ| lies outside [2^-102, FLT_MAX], where float would not keep it to
- * 2^-24 (a cloud of extreme coordinates: the message names the first such row); PST_ENOMEM.
+ * list, or weights already stored in the other precision (pst_op_drop_store them first);
+ * PST_ENUMERIC for a float store with a row whose largest |w_IJ| lies outside [2^-102,
+ * FLT_MAX], where float would not keep it to 2^-24 (a cloud of extreme coordinates: the
+ * message names the first such row); PST_ENOMEM.
  * Nothing is kept on failure.
  * Whatever the store, pst_op_diagonal, pst_op_assemble and the audits use the double weights
  * (emitted per row when only floats are stored), so a float-stored operator's Jacobi and AMG
@@ -295,6 +296,11 @@ int pst_op_store_with(pst_op *op, const pst_op_store_opts *o, char *err);
 
 /* The precision of op's stored weights, or PST_STORE_NONE when none are stored. */
 pst_store_precision pst_op_store_precision(const pst_op *op);
+
+/* Free op's stored weights (either precision) and the pattern built for them: the operator
+ * goes on matrix-free (pst_op_apply_stored refuses it until the next store), and may be
+ * stored again in either precision. Nothing stored, or op NULL: nothing happens. */
+void pst_op_drop_store(pst_op *op);
 
 /* Apply from the stored weights of either precision (same rows as pst_op_apply, to rounding
  * of the stored weights), deterministic for every thread count. PST_EINVAL when nothing is

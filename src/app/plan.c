@@ -358,10 +358,12 @@ static double fit_solves(pst_plan *p, const pst_scene *s, double list, double bu
         const sc_task *t = &s->tasks[k];
         if (t->type != SC_TASK_SOLVE && t->type != SC_TASK_DIFFUSE)
             continue;
-        double w = 8.0 * n * p->neighbours;
-        p->task_stored[k] = half || p->task_petsc[k] ? 0 /* PETSc's MatShell: matrix-free */
-                            : t->stored >= 0         ? t->stored
-                                                     : without + p->bytes_weights + w <= budget;
+        double w = (t->stored == SC_OPERATOR_STORED_FLOAT ? 4.0 : 8.0) * n * p->neighbours;
+        p->task_stored[k] = half || p->task_petsc[k] ? SC_OPERATOR_MATRIX_FREE /* MatShell */
+                            : t->stored != SC_OPERATOR_AUTO ? (int)t->stored
+                            : without + p->bytes_weights + w <= budget
+                                ? SC_OPERATOR_STORED
+                                : SC_OPERATOR_MATRIX_FREE;
         if (p->task_stored[k])
             p->bytes_weights += w;
     }
@@ -554,6 +556,13 @@ static const char *precond_name(int p)
     return names[p];
 }
 
+/* How a task's plan applies L (pst_plan.task_stored). */
+static const char *operator_use_name(int stored)
+{
+    static const char *const names[] = {"matrix-free", "stored", "stored (float)"};
+    return names[stored];
+}
+
 static void print_solve(FILE *f, const pst_plan *p, int k, const sc_task *t)
 {
     fprintf(f, ": %s", solver_name(p->task_solver[k]));
@@ -566,7 +575,7 @@ static void print_solve(FILE *f, const pst_plan *p, int k, const sc_task *t)
     if (p->task_precond[k] == PST_PREC_AMG && p->task_amg_radius[k] != t->amg_radius)
         fprintf(f, " on pairs within %g h (to fit)", p->task_amg_radius[k]);
     fprintf(f, ", rtol %g, %s operator%s", t->rtol,
-            p->task_stored[k] ? "stored" : "matrix-free", t->ngroups ? ", own boundary groups" : "");
+            operator_use_name(p->task_stored[k]), t->ngroups ? ", own boundary groups" : "");
     if (p->task_petsc[k] && p->ranks > 1)
         fprintf(f, ", in PETSc over %d ranks", p->ranks);
     else if (p->task_petsc[k])
@@ -584,7 +593,7 @@ static void print_steps(FILE *f, const pst_plan *p, int k, const sc_task *t)
     if (t->method != SC_METHOD_EXPLICIT)
         fprintf(f, ", %s + %s, rtol %g", solver_name(p->task_solver[k]),
                 precond_name(p->task_precond[k]), t->rtol);
-    fprintf(f, ", %s operator%s", p->task_stored[k] ? "stored" : "matrix-free",
+    fprintf(f, ", %s operator%s", operator_use_name(p->task_stored[k]),
             t->nvelocity ? ", moving particles" : "");
 }
 

@@ -53,7 +53,8 @@ typedef struct {
      * (pst_nlist_build_skin) for its updates */
     int moving;
     double skin;
-    int task_stored[SC_MAX_TASKS];  /* 1: stored weights, 0: matrix-free                      */
+    int task_stored[SC_MAX_TASKS];  /* an sc_operator_use but auto: 0 matrix-free, 1 stored,  */
+                                    /* 2 stored in float                                    */
     int task_petsc[SC_MAX_TASKS];   /* 1: a solve that runs in PETSc (matrix-free, whole list) */
     int task_solver[SC_MAX_TASKS];  /* pst_solver a solve task will use                        */
     int task_precond[SC_MAX_TASKS]; /* pst_precond a solve task will use                       */

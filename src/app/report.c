@@ -87,11 +87,18 @@ void report_task_header(cJSON *task, const sc_task *t)
         cJSON_AddStringToObject(task, "field", t->field);
 }
 
-void report_solve(cJSON *task, const pst_solve_result *res, int fix_mean)
+const char *report_operator_use(int stored)
+{
+    static const char *const names[] = {"matrix_free", "stored", "stored_float"};
+    return names[stored];
+}
+
+void report_solve(cJSON *task, const pst_solve_result *res, int stored, int fix_mean)
 {
     static const char *const solvers[] = {"auto", "cg", "gmres", "bicgstab"};
     cJSON *s = cJSON_AddObjectToObject(task, "solver");
     cJSON_AddStringToObject(s, "method", solvers[res->solver]);
+    cJSON_AddStringToObject(s, "operator", report_operator_use(stored));
     cJSON_AddBoolToObject(s, "converged", res->converged);
     cJSON_AddNumberToObject(s, "iterations", res->iterations);
     cJSON_AddNumberToObject(s, "relative_residual", res->rel_residual);

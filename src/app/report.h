@@ -25,9 +25,13 @@ void report_operator(cJSON *report, const pst_op *op);
 cJSON *report_parameters(const pst_op_opts *oo);
 /* A task's name and type. */
 void report_task_header(cJSON *task, const sc_task *t);
-/* A solve's outcome: solver, converged, iterations, residual, message, residual history;
- * fix_mean (the solve fixed the mean of u) and, when it did, mean_shift (lambda). */
-void report_solve(cJSON *task, const pst_solve_result *res, int fix_mean);
+/* A solve's outcome: solver, how it applied L (`stored`: pst_plan.task_stored), converged,
+ * iterations, residual, message, residual history; fix_mean (the solve fixed the mean of u)
+ * and, when it did, mean_shift (lambda). */
+void report_solve(cJSON *task, const pst_solve_result *res, int stored, int fix_mean);
+/* How a task applied L, by its plan's task_stored, in the scene's words (tasks[].operator):
+ * "matrix_free", "stored" or "stored_float". */
+const char *report_operator_use(int stored);
 /* The plan's decisions and estimates, the counters and the cloud's size, at the end. */
 void report_finish(cJSON *report, const pst_plan *p, const pst_run_counters *cnt,
                    const pst_cloud *c);

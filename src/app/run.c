@@ -86,6 +86,24 @@ int run_make_operator(run_state *r, int laplacian, const run_boundary *bnd, pst_
     return r->plan.half_list ? use_half_list(r, *op) : PST_OK;
 }
 
+int run_store_weights(run_state *r, int k, pst_op *op)
+{
+    pst_op_store_opts so;
+    pst_op_store_defaults(&so);
+    if (r->plan.task_stored[k] == SC_OPERATOR_STORED_FLOAT)
+        so.precision = PST_STORE_FLOAT;
+    if (pst_op_store_precision(op) != PST_STORE_NONE && pst_op_store_precision(op) != so.precision)
+        pst_op_drop_store(op); /* an earlier task on this operator stored the other precision */
+    char msg[PST_ERRLEN] = "";
+    int st = pst_op_store_with(op, &so, msg);
+    r->cnt.stored_weights++;
+    if (st != PST_OK)
+        return run_fail(r, st, "%s: task '%s': cannot store the operator's weights%s: %s",
+                        r->s->path, r->s->tasks[k].name,
+                        so.precision == PST_STORE_FLOAT ? " in float" : "", msg);
+    return PST_OK;
+}
+
 /* User + system CPU time of the process: with the wall-clock total it shows the parallel
  * efficiency of a run. */
 static double cpu_seconds(void)

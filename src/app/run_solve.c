@@ -117,11 +117,9 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
                         "bicgstab (tasks[%d].solver)",
                         r->s->path, t->name, k);
     if (r->plan.task_stored[k]) {
-        int st = pst_op_store(op);
-        r->cnt.stored_weights++;
+        int st = run_store_weights(r, k, op);
         if (st != PST_OK)
-            return run_fail(r, st, "%s: task '%s': cannot store the operator's weights", r->s->path,
-                            t->name);
+            return st;
     }
     pst_solve_opts so;
     pst_solve_defaults(&so);
@@ -140,7 +138,7 @@ static int solve_with(run_state *r, int k, cJSON *tj, pst_op *op, const double *
     so.restart = r->plan.task_restart[k];
     so.max_iter = t->max_iter;
     so.rtol = t->rtol;
-    so.stored = r->plan.task_stored[k];
+    so.stored = r->plan.task_stored[k] != SC_OPERATOR_MATRIX_FREE;
     so.history = 1;
     cli_progress pg;
     run_monitor_ctx mc = {&pg, t->rtol};
@@ -164,7 +162,7 @@ int run_solve_finish(run_state *r, int k, cJSON *tj, pst_solve_result *res, int 
 {
     const sc_task *t = &r->s->tasks[k];
     r->cnt.solves++;
-    report_solve(tj, res, fix_mean);
+    report_solve(tj, res, r->plan.task_stored[k], fix_mean);
     cJSON_AddNumberToObject(tj, "seconds", res->seconds);
     pst_solve_result_free(res);
     if (st == PST_ENUMERIC) {

@@ -58,6 +58,10 @@ int run_make_fields(run_state *r);
  * (NULL: the cloud's own); counted and reported. */
 int run_make_operator(run_state *r, int laplacian, const run_boundary *bnd, pst_op **op);
 
+/* Task k's stored weights on op, in the precision its plan chose (pst_plan.task_stored),
+ * in place of weights an earlier task stored in the other precision; counted. */
+int run_store_weights(run_state *r, int k, pst_op *op);
+
 /* Task k's norms of approx (ncomp components) against its exact expressions, into tj's
  * "norms"; pts non-NULL: at m points instead of the particles. */
 int run_task_norms(run_state *r, int k, cJSON *tj, int ncomp, double *const *approx,

@@ -9,6 +9,7 @@
 #include "run_steps.h"
 
 #include "progress.h"
+#include "report.h"
 
 #include <math.h>
 #include <omp.h>
@@ -132,13 +133,8 @@ static int set_up(stepper *st, cJSON *sj)
 {
     run_state *r = st->r;
     int s = check_boundary(st);
-    if (s == PST_OK && r->plan.task_stored[st->k]) {
-        s = pst_op_store(st->op);
-        r->cnt.stored_weights++;
-        if (s != PST_OK)
-            s = run_fail(r, s, "%s: task '%s': cannot store the operator's weights", r->s->path,
-                         st->t->name);
-    }
+    if (s == PST_OK && r->plan.task_stored[st->k])
+        s = run_store_weights(r, st->k, st->op);
     if (s == PST_OK)
         s = steps_rho(r, st->op, st->m, &st->rho);
     if (s == PST_OK)
@@ -317,6 +313,7 @@ static void report_steps(const stepper *st, cJSON *sj, int done, double seconds)
 {
     static const char *const methods[] = {"explicit", "implicit", "crank_nicolson"};
     cJSON_AddStringToObject(sj, "method", methods[st->t->method]);
+    cJSON_AddStringToObject(sj, "operator", report_operator_use(st->r->plan.task_stored[st->k]));
     cJSON_AddNumberToObject(sj, "theta", st->theta);
     cJSON_AddNumberToObject(sj, "t_end", st->t->t_end);
     cJSON_AddNumberToObject(sj, "steps_done", done);
@@ -335,7 +332,8 @@ int run_steps(run_state *r, int k, cJSON *tj)
     const sc_task *t = &r->s->tasks[k];
     stepper st = {.r = r, .k = k, .t = t, .op = r->base, .n = pst_cloud_size(r->c),
                   .kind = pst_cloud_kinds_const(r->c), .theta = thetas[t->method],
-                  .m = r->plan.mobility_factor, .stored = r->plan.task_stored[k],
+                  .m = r->plan.mobility_factor,
+                  .stored = r->plan.task_stored[k] != SC_OPERATOR_MATRIX_FREE,
                   .every = t->output_every};
     double t0 = omp_get_wtime();
     cJSON *sj = cJSON_AddObjectToObject(tj, "steps");

@@ -66,6 +66,15 @@ typedef enum {
     SC_TASK_DIFFUSE          /* du/dt = L u + source, stepped in time (docs/time-stepping.md)   */
 } sc_task_type;
 
+/* tasks[].operator of a solve or diffuse task: how it applies L. The plan's choice
+ * (pst_plan.task_stored) is one of the last three. */
+typedef enum {
+    SC_OPERATOR_AUTO = -1,      /* the planner decides: stored in double where it fits      */
+    SC_OPERATOR_MATRIX_FREE = 0,
+    SC_OPERATOR_STORED = 1,      /* the weights stored in double (pst_op_store)             */
+    SC_OPERATOR_STORED_FLOAT = 2 /* ... in float (pst_op_store_with, PST_STORE_FLOAT)      */
+} sc_operator_use;
+
 /* tasks[].method of a diffuse task: the theta of the theta-method is 0, 1 and 1/2. */
 typedef enum { SC_METHOD_EXPLICIT, SC_METHOD_IMPLICIT, SC_METHOD_CRANK_NICOLSON } sc_method;
 
@@ -124,7 +133,7 @@ typedef struct {
     int amg_aggressive, amg_coarsen, amg_interp, amg_pmax; /* pst_solve_opts' fields       */
     double rtol;
     char *petsc;             /* PETSc options: the solve runs in PETSc's KSP; NULL: not given   */
-    int stored;              /* -1 auto (the planner decides), 0 matrix-free, 1 stored          */
+    int stored;              /* tasks[].operator: an sc_operator_use                            */
     /* diffuse: expressions of x, y, z and t (the boundary value NULL: the exact solution's) */
     char *initial, *source, *boundary_value;
     char *velocity[3];       /* dim expressions; nvelocity 0: the particles stay             */

@@ -282,7 +282,8 @@ static int read_task(ctx *c, const cJSON *o, pst_scene *s, sc_task *t)
                                        "a gradient task", "a hessian task",
                                        "an interpolate task", "a solve task",
                                        "a diffuse task"};
-    static const int stored[] = {-1, 1, 0};
+    static const sc_operator_use stored[] = {SC_OPERATOR_AUTO, SC_OPERATOR_STORED,
+                                             SC_OPERATOR_MATRIX_FREE, SC_OPERATOR_STORED_FLOAT};
     t->type = (sc_task_type)scene_get_enum(o, "tasks[].type");
     int rc = scene_set_str(c, &t->name, scene_get_string(o, "tasks[].name"));
     const char *field = scene_get_string(o, "tasks[].field");

@@ -151,8 +151,6 @@ struct pst_op {
 /* Set the apply timer (PST_PHASE_APPLY) to the time since t0 (omp_get_wtime). */
 void pst_op_record_apply(const pst_op *op, double t0);
 
-/* Free op's stored weights and the wide pattern built for them (operator_store.c). */
-void pst_op_drop_store(pst_op *op);
 /* A refresh's release of the store: the weight array parked for the store that follows
  * (op->spare_w), the wide pattern freed. */
 void pst_op_park_store(pst_op *op);

@@ -47,6 +47,8 @@ static void drop_own_pattern(pst_op *op)
 
 void pst_op_drop_store(pst_op *op)
 {
+    if (!op)
+        return;
     pst_free(op->w);
     pst_free(op->w32);
     pst_free(op->spare_w);
