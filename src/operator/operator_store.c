@@ -222,18 +222,46 @@ int pst_op_store_with(pst_op *op, const pst_op_store_opts *o, char *err)
 
 int pst_op_store(pst_op *op) { return pst_op_store_with(op, NULL, NULL); }
 
-/* w_IJ (u_J - u_I) of the 8 pattern entries from k (double weights wd, or float wf widened
- * exactly), with uiv = u_I in every lane. */
-static inline __attribute__((always_inline)) pst_v8
-block_terms(int single, const double *wd, const float *wf, const uint32_t *idx, const double *u,
-            int64_t k, pst_v8 uiv)
+/* w_IJ (u_J - u_I) of the 4 pattern entries from k (double weights wd, or float wf widened
+ * exactly), with uiv = u_I in every lane: half a block of 8. */
+static inline __attribute__((always_inline)) pst_v4
+half_terms(int single, const double *wd, const float *wf, const uint32_t *idx, const double *u,
+           int64_t k, pst_v4 uiv)
 {
-    pst_v8 wv;
+    pst_v4 wv;
     if (single)
-        wv = pst_v8_widen(wf + k);
+        wv = pst_v4_widen(wf + k);
     else
         memcpy(&wv, wd + k, sizeof wv);
-    return wv * (pst_v8_gather(u, idx + k) - uiv);
+    return wv * (pst_v4_gather(u, idx + k) - uiv);
+}
+
+/* The row's partial sums, lanes 0-3 and 4-7 of a block of 8 (src/core/lanes8.h, "Half
+ * vectors": as one pst_v8 they lived on the stack in the AVX2 clone). */
+typedef struct {
+    pst_v4 lo, hi;
+} row_sums;
+
+/* sums + the block of 8 entries from k. */
+static inline __attribute__((always_inline)) row_sums
+add_block(row_sums a, int single, const double *wd, const float *wf, const uint32_t *idx,
+          const double *u, int64_t k, pst_v4 uiv)
+{
+    a.lo += half_terms(single, wd, wf, idx, u, k, uiv);
+    a.hi += half_terms(single, wd, wf, idx, u, k + 4, uiv);
+    return a;
+}
+
+/* sums + the block of 8 entries from k in its lanes l with from + l < len (len in every
+ * lane): the lanes past the row's end add nothing. */
+static inline __attribute__((always_inline)) row_sums
+add_block_below(row_sums a, int single, const double *wd, const float *wf,
+                const uint32_t *idx, const double *u, int64_t k, pst_v4 uiv, double from,
+                pst_v4 len)
+{
+    a.lo = pst_v4_add_below(a.lo, half_terms(single, wd, wf, idx, u, k, uiv), from, len);
+    a.hi = pst_v4_add_below(a.hi, half_terms(single, wd, wf, idx, u, k + 4, uiv), from + 4, len);
+    return a;
 }
 
 /* Rows of at most this many pairs (three blocks) are always taken as three blocks of 8. */
@@ -242,22 +270,23 @@ block_terms(int single, const double *wd, const float *wf, const uint32_t *idx, 
 /* Rows [i0, i1) of the stored apply from the double weights wd or, with single, the float
  * weights wf (a float weight is widened exactly, so the float store differs only by its
  * weights' rounding, 2^-24 relative); end = off[n], the pattern's length. 8 pairs at a time
- * (src/core/lanes8.h): the weights as one vector load, u_J as element loads, times u_J - u_I
- * into 8 partial sums, neighbour c in lane c mod 8, the lanes combined in pst_v8_sum's order,
- * so the sum is the same for every ISA and thread count. The row's last pairs (fewer than 8)
- * are one more block of 8 whose lanes past the row's end (the next row's entries) are kept
- * out of the sums by a select: the same bits as adding the last pairs one by one, which only
- * the pattern's last row still does (no 8 entries after it). A short row (<= SHORT_ROW pairs:
- * the ~17-pair 2D rows of the LV family) is always three such blocks, so that its loop has
- * one trip count: with rows of 13 to 22 pairs the exit of the loop over full blocks was
- * unpredictable, which cost more than the loads of the lanes past the row (2D lv: 6-17 % off
- * the apply; bench/README.md, "short rows as three blocks").
- * Bound: per-core loads (8 index loads, 8 element loads merged into one vector, one weight
- * load per 8 pairs), near the memory's bandwidth: beside a triad of the same bytes
- * (bench_stored, 2026-12-05, 1 / 2 threads) 0.75-1.0 for the 3D rows of qsfdi and lv and the
- * 2D rows of qsfdi, 0.59-0.70 / 0.67-0.85 for 2D lv, whose row is mostly its own
- * instructions. Dirichlet rows (their stored weights are zeros) are the identity and skip the
- * stream: a boundary layer is 6 % of the rows of a 100^3 cloud and 17 % of a 33^3 one. */
+ * in two halves of 4 (src/core/lanes8.h): the weights as vector loads, u_J as element loads,
+ * times u_J - u_I into 8 partial sums, neighbour c in lane c mod 8, the lanes combined in
+ * pst_v8_sum's order, so the sum is the same for every ISA and thread count. The row's last
+ * pairs (fewer than 8) are one more block of 8 whose lanes past the row's end (the next row's
+ * entries) are kept out of the sums by a select: the same bits as adding the last pairs one by
+ * one, which only the pattern's last row still does (no 8 entries after it). A short row
+ * (<= SHORT_ROW pairs: the ~17-pair 2D rows of the LV family) is always three such blocks, so
+ * that its loop has one trip count: with rows of 13 to 22 pairs the exit of the loop over full
+ * blocks was unpredictable, which cost more than the loads of the lanes past the row (2D lv:
+ * 6-17 % off the apply; bench/README.md, "short rows as three blocks").
+ * Bound: per-core loads (8 index loads, 8 element loads merged into vectors, the weights'
+ * loads per 8 pairs), near the memory's bandwidth: beside a triad of the same bytes
+ * (bench_stored, 2026-12-07, 2 threads) 0.93-1.04 for the 3D rows of qsfdi, lpmps and lsmps,
+ * 0.85-0.95 for lv's, 0.83-1.05 for most 2D runs; at 1 thread 0.85-0.92 for the 3D quintic
+ * rows, 0.5-0.84 for the shorter ones, whose row is mostly its own instructions. Dirichlet
+ * rows (their stored weights are zeros) are the identity and skip the stream: a boundary
+ * layer is 6 % of the rows of a 100^3 cloud and 17 % of a 33^3 one. */
 static inline __attribute__((always_inline)) void
 stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *wd,
             const float *wf, const uint8_t *kind, const double *u, double *y, size_t i0,
@@ -269,26 +298,31 @@ stored_rows(const int64_t *off, const uint32_t *idx, int single, const double *w
             continue;
         }
         const double ui = u[i];
-        const pst_v8 uiv = pst_v8_splat(ui);
-        pst_v8 acc = pst_v8_splat(0.0);
+        const pst_v4 uiv = pst_v4_splat(ui);
+        row_sums acc = {pst_v4_splat(0.0), pst_v4_splat(0.0)};
         int64_t k = off[i], len = off[i + 1] - k;
         if (len <= SHORT_ROW && k + SHORT_ROW <= end) {
-            const pst_v8 lenv = pst_v8_splat((double)len);
+            const pst_v4 lenv = pst_v4_splat((double)len);
             for (int b = 0; b < SHORT_ROW; b += PST_LANES)
-                acc = pst_v8_add_below(acc, block_terms(single, wd, wf, idx, u, k + b, uiv), b,
-                                       lenv);
+                acc = add_block_below(acc, single, wd, wf, idx, u, k + b, uiv, b, lenv);
         } else {
             for (; k + PST_LANES <= off[i + 1]; k += PST_LANES)
-                acc += block_terms(single, wd, wf, idx, u, k, uiv);
+                acc = add_block(acc, single, wd, wf, idx, u, k, uiv);
             int64_t rest = off[i + 1] - k;
-            if (rest > 0 && k + PST_LANES <= end)
-                acc = pst_v8_add_below(acc, block_terms(single, wd, wf, idx, u, k, uiv), 0,
-                                       pst_v8_splat((double)rest));
-            else
-                for (int l = 0; k < off[i + 1]; ++k, ++l)
-                    acc[l] += (single ? (double)wf[k] : wd[k]) * (u[idx[k]] - ui);
+            if (rest > 0 && k + PST_LANES <= end) {
+                acc = add_block_below(acc, single, wd, wf, idx, u, k, uiv, 0,
+                                      pst_v4_splat((double)rest));
+            } else {
+                for (int l = 0; k < off[i + 1]; ++k, ++l) {
+                    double t = (single ? (double)wf[k] : wd[k]) * (u[idx[k]] - ui);
+                    if (l < 4)
+                        acc.lo[l] += t;
+                    else
+                        acc.hi[l - 4] += t;
+                }
+            }
         }
-        y[i] = pst_v8_sum(acc);
+        y[i] = pst_v4_sum_halves(acc.lo, acc.hi);
     }
 }
 
