@@ -90,8 +90,8 @@ PST_V8_INLINE pst_v8 pst_v8_gather(const double *a, const uint32_t *j)
 /* Half vectors (pst_v4: lanes 0-3 or 4-7 of an 8-lane block), for values that a loop carries
  * from one block to the next, such as a row's partial sums: without AVX-512 (the x86-64-v3 and
  * generic clones) GCC 12 keeps a pst_v8 variable in memory and loads and stores it around every
- * operation, where two pst_v4 stay in registers; with AVX-512 the two halves cost what one
- * pst_v8 does. The stored apply ran 3.1x (3D) to 6x (2D lv) faster in an AVX2 build with its
+ * operation, where two pst_v4 stay in registers (with AVX2; the generic SSE2 clone keeps them in
+ * memory too); with AVX-512 the two halves cost what one pst_v8 does. The stored apply ran 3.1x (3D) to 6x (2D lv) faster in an AVX2 build with its
  * partial sums as halves (src/operator/operator_store.c). */
 
 /* a in every lane of a half. */
