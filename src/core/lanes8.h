@@ -1,9 +1,10 @@
 /* Eight doubles as one value (pst_v8): GCC / Clang vector extensions, not intrinsics, so
  * each ISA clone of a PST_ISA_DISPATCH function (isa.h) compiles them to its own registers
- * (one AVX-512 register, two AVX2 or four SSE2 registers per vector) with the same IEEE
+ * (one AVX-512 register, two AVX2 or four SSE2 registers per vector; without AVX-512 not for
+ * a variable a loop carries, which stays in memory: "Half vectors" below) with the same IEEE
  * operations in every clone: the results do not depend on the ISA. The hot loops that keep
- * 8 partial sums use them (kernels/lanes.h, the stored apply). Internal; the functions are
- * inlined. */
+ * 8 partial sums use them (kernels/lanes.h; the stored apply in halves, below). Internal; the
+ * functions are inlined. */
 #ifndef PSTENCIL_LANES8_H
 #define PSTENCIL_LANES8_H
 
@@ -91,8 +92,9 @@ PST_V8_INLINE pst_v8 pst_v8_gather(const double *a, const uint32_t *j)
  * from one block to the next, such as a row's partial sums: without AVX-512 (the x86-64-v3 and
  * generic clones) GCC 12 keeps a pst_v8 variable in memory and loads and stores it around every
  * operation, where two pst_v4 stay in registers (with AVX2; the generic SSE2 clone keeps them in
- * memory too); with AVX-512 the two halves cost what one pst_v8 does. The stored apply ran 3.1x (3D) to 6x (2D lv) faster in an AVX2 build with its
- * partial sums as halves (src/operator/operator_store.c). */
+ * memory too); with AVX-512 the two halves cost what one pst_v8 does. The stored apply
+ * (src/operator/operator_store.c) ran 3-7x faster in an x86-64-v3 build with its partial sums
+ * as halves (docs/building.md, "Vector instructions"). */
 
 /* a in every lane of a half. */
 PST_V8_INLINE pst_v4 pst_v4_splat(double a)
