@@ -203,7 +203,8 @@ static void test_solve_plan(void)
     pst_scene_free(&s);
 
     /* Two solves on the one base operator, double then float: the second stores again in
-     * float, and each gets its own store's answer (to the solver's rounding). */
+     * float, and each gets its own store's answer (to well below the ~2e-8 between the two
+     * stores' answers, whatever the preconditioner's rounding). */
     const char *two[] = {
         "tasks=[{\"type\":\"solve\",\"name\":\"d\",\"rhs\":\"-100*sin(6*x+8*y)\","
         "\"exact\":\"sin(6*x+8*y)\",\"rtol\":1e-10,\"operator\":\"stored\"},"
@@ -213,8 +214,8 @@ static void test_solve_plan(void)
     c = run(&s, &k, &p, PST_OK);
     CHECK_INT(k.stored_weights, 2);
     double *ud = field(c, "d"), *uf = field(c, "f");
-    CHECK(max_diff(ud, u_double, n) < 1e-12 && max_diff(uf, u_float, n) < 1e-12);
-    CHECK(max_diff(ud, uf, n) > 1e-10); /* the weights' rounding moves u by ~1e-8 */
+    CHECK(max_diff(ud, u_double, n) < 2e-9 && max_diff(uf, u_float, n) < 2e-9);
+    CHECK(max_diff(ud, uf, n) > 5e-9);
     free(ud);
     free(uf);
     free(u_double);
