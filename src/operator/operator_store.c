@@ -222,18 +222,24 @@ int pst_op_store_with(pst_op *op, const pst_op_store_opts *o, char *err)
 
 int pst_op_store(pst_op *op) { return pst_op_store_with(op, NULL, NULL); }
 
-/* w_IJ (u_J - u_I) of the 4 pattern entries from k (double weights wd, or float wf widened
- * exactly), with uiv = u_I in every lane: half a block of 8. */
-static inline __attribute__((always_inline)) pst_v4
-half_terms(int single, const double *wd, const float *wf, const uint32_t *idx, const double *u,
-           int64_t k, pst_v4 uiv)
+/* The weights of the 8 pattern entries from k as two halves (double weights wd, or float wf
+ * widened exactly). */
+static inline __attribute__((always_inline)) void
+block_weights(int single, const double *wd, const float *wf, int64_t k, pst_v4 *lo, pst_v4 *hi)
 {
-    pst_v4 wv;
-    if (single)
-        wv = pst_v4_widen(wf + k);
-    else
-        memcpy(&wv, wd + k, sizeof wv);
-    return wv * (pst_v4_gather(u, idx + k) - uiv);
+    if (single) {
+        pst_v4_widen_halves(wf + k, lo, hi);
+    } else {
+        memcpy(lo, wd + k, sizeof *lo);
+        memcpy(hi, wd + k + 4, sizeof *hi);
+    }
+}
+
+/* w_IJ (u_J - u_I) of the 4 pattern entries from k with weights w, uiv = u_I in every lane. */
+static inline __attribute__((always_inline)) pst_v4
+half_terms(pst_v4 w, const uint32_t *idx, const double *u, int64_t k, pst_v4 uiv)
+{
+    return w * (pst_v4_gather(u, idx + k) - uiv);
 }
 
 /* The row's partial sums, lanes 0-3 and 4-7 of a block of 8 (src/core/lanes8.h, "Half
@@ -247,8 +253,10 @@ static inline __attribute__((always_inline)) row_sums
 add_block(row_sums a, int single, const double *wd, const float *wf, const uint32_t *idx,
           const double *u, int64_t k, pst_v4 uiv)
 {
-    a.lo += half_terms(single, wd, wf, idx, u, k, uiv);
-    a.hi += half_terms(single, wd, wf, idx, u, k + 4, uiv);
+    pst_v4 wlo, whi;
+    block_weights(single, wd, wf, k, &wlo, &whi);
+    a.lo += half_terms(wlo, idx, u, k, uiv);
+    a.hi += half_terms(whi, idx, u, k + 4, uiv);
     return a;
 }
 
@@ -259,8 +267,10 @@ add_block_below(row_sums a, int single, const double *wd, const float *wf,
                 const uint32_t *idx, const double *u, int64_t k, pst_v4 uiv, double from,
                 pst_v4 len)
 {
-    a.lo = pst_v4_add_below(a.lo, half_terms(single, wd, wf, idx, u, k, uiv), from, len);
-    a.hi = pst_v4_add_below(a.hi, half_terms(single, wd, wf, idx, u, k + 4, uiv), from + 4, len);
+    pst_v4 wlo, whi;
+    block_weights(single, wd, wf, k, &wlo, &whi);
+    a.lo = pst_v4_add_below(a.lo, half_terms(wlo, idx, u, k, uiv), from, len);
+    a.hi = pst_v4_add_below(a.hi, half_terms(whi, idx, u, k + 4, uiv), from + 4, len);
     return a;
 }
 
