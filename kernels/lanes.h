@@ -98,17 +98,29 @@ PST_KHOT pst_v8 pst_lanes_add(pst_v8 acc, pst_v8 terms, int64_t n)
  * consecutive calls of one row (every call but the last takes a multiple of 8), then
  * pst_v8_sum: the lanes of the rows that work a chunk at a time. t and du are read in whole
  * blocks of 8 (up to n rounded up; the lanes past n may hold any value, finite or not): the
- * last block adds through pst_v8_add_below, so its lanes past n add nothing and no loop runs
- * a scalar tail. */
+ * last block adds through a select, so its lanes past n add nothing and no loop runs a scalar
+ * tail. The loop carries the sums as two halves (src/core/lanes8.h, "Half vectors": as one
+ * pst_v8 they stayed in memory in the AVX2 clones), the same bits. */
 PST_KHOT pst_v8 pst_lanes_dot_blocks(int n, const double *t, const double *du, pst_v8 acc)
 {
+    pst_v4 lo = __builtin_shufflevector(acc, acc, 0, 1, 2, 3);
+    pst_v4 hi = __builtin_shufflevector(acc, acc, 4, 5, 6, 7);
     for (int c = 0; c < n; c += PST_LANES) {
-        pst_v8 tv, dv;
-        memcpy(&tv, t + c, sizeof tv);
-        memcpy(&dv, du + c, sizeof dv);
-        acc = pst_lanes_add(acc, tv * dv, n - c);
+        pst_v4 t0, t1, d0, d1;
+        memcpy(&t0, t + c, sizeof t0);
+        memcpy(&t1, t + c + 4, sizeof t1);
+        memcpy(&d0, du + c, sizeof d0);
+        memcpy(&d1, du + c + 4, sizeof d1);
+        if (n - c >= PST_LANES) {
+            lo += t0 * d0;
+            hi += t1 * d1;
+        } else {
+            const pst_v4 len = pst_v4_splat((double)(n - c));
+            lo = pst_v4_add_below(lo, t0 * d0, 0, len);
+            hi = pst_v4_add_below(hi, t1 * d1, 4, len);
+        }
     }
-    return acc;
+    return __builtin_shufflevector(lo, hi, 0, 1, 2, 3, 4, 5, 6, 7);
 }
 
 /* A block of 8 pairs as the matrix-free rows (and qsfdi's data moments) take it: the scaled
