@@ -92,7 +92,8 @@ int run_store_weights(run_state *r, int k, pst_op *op)
     pst_op_store_defaults(&so);
     if (r->plan.task_stored[k] == SC_OPERATOR_STORED_FLOAT)
         so.precision = PST_STORE_FLOAT;
-    if (pst_op_store_precision(op) != PST_STORE_NONE && pst_op_store_precision(op) != so.precision)
+    pst_store_precision have = pst_op_store_precision(op);
+    if (have != PST_STORE_NONE && have != so.precision)
         pst_op_drop_store(op); /* an earlier task on this operator stored the other precision */
     char msg[PST_ERRLEN] = "";
     int st = pst_op_store_with(op, &so, msg);
