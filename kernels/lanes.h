@@ -1,32 +1,149 @@
-/* Eight pairs at a time: the matrix-free rows (docs/operators.md, "Matrix-free rows in lanes").
+/* Pairs a block at a time: the matrix-free rows (docs/operators.md, "Matrix-free rows in
+ * lanes").
  *
- * A row's neighbours are taken 8 at a time. Their positions and values come from the packed
- * array op->xyzu, (x, y, z, u) per particle (pst_op_apply fills u): four 32-byte loads and a
- * 4 x 8 transpose in vector shuffles give one vector per component, where per-element
- * gathers of four separate arrays cost about four times the instructions. The scheme's pair
- * arithmetic then runs once per lane over these vectors (its own scalar inline functions in a
- * loop over the 8 lanes, which the compiler turns into vector instructions), so a weight is
- * bit for bit the one its emission computes pair by pair; and the products w (u_J - u_I) go
- * into 8 partial sums, neighbour c into lane c mod 8, combined in pst_v8_sum's order: the
- * apply's row sum is the same for every vector width and thread count.
+ * A row's neighbours are taken PST_LW at a time, as many as the vectors of the level the file
+ * is compiled for hold (below). Their positions and values come from the packed array
+ * op->xyzu, (x, y, z, u) per particle (pst_op_apply fills u): one 32-byte load per neighbour
+ * and a transpose in vector shuffles give one vector per component, where per-element gathers
+ * of four separate arrays cost about four times the instructions. The scheme's pair arithmetic
+ * then runs once per lane over these vectors (its own scalar inline functions in a loop over
+ * the lanes, which the compiler turns into vector instructions), so a weight is bit for bit
+ * the one its emission computes pair by pair; and the products w (u_J - u_I) go into 8 partial
+ * sums, neighbour c into sum c mod 8 (8 / PST_LW vectors, pst_lanes_sum), combined in
+ * pst_v8_sum's order: the apply's row sum is the same for every level, block width and thread
+ * count.
  *
  * The vectors are those of src/core/lanes8.h. Internal; every function is inlined into the
  * row that calls it. */
 #ifndef PSTENCIL_LANES_H
 #define PSTENCIL_LANES_H
 
+#include "isa.h"
 #include "kernel_common.h"
 #include "lanes8.h"
 
 #include <math.h>
 #include <string.h>
 
+/* The block width. A file whose functions are compiled for one target (a per-level copy, or a
+ * build without dispatch) takes the width of that target's vectors: 8 with AVX-512, 4 with AVX,
+ * 2 without. Without AVX-512 GCC 12 has no register for an 8-lane vector and keeps every one
+ * that lives across statements in memory (the blocks taken ahead, the row's centre and sums),
+ * copying it between stack slots 16 bytes at a time: the x86-64-v3 copies of the lane rows,
+ * in 8-lane blocks, took 2.5-4.5x the time of the AVX-512 ones, in 4-lane blocks about twice
+ * (docs/building.md, "Vector instructions"). A file with target_clones functions compiles one
+ * source for the three levels and keeps 8. */
+#if defined(PST_ISA_CLONES) || defined(__AVX512F__)
+#define PST_LW 8
+typedef pst_v8 pst_vl;
+#elif defined(__AVX__)
+#define PST_LW 4
+typedef pst_v4 pst_vl;
+#else
+#define PST_LW 2
+typedef pst_v2 pst_vl;
+#endif
+#define PST_LSUMS (PST_LANES / PST_LW) /* the vectors of a row's 8 partial sums */
+
+/* a in every lane. */
+PST_V8_INLINE pst_vl pst_vl_splat(double a)
+{
+#if PST_LW == 8
+    return pst_v8_splat(a);
+#elif PST_LW == 4
+    return pst_v4_splat(a);
+#else
+    return (pst_vl){a, a};
+#endif
+}
+
+/* a[s j[0]], ..., a[s j[PST_LW - 1]] (s: the stride). */
+PST_V8_INLINE pst_vl pst_vl_gather_stride(const double *a, size_t s, const uint32_t *j)
+{
+#if PST_LW == 8
+    return pst_v8_gather_stride(a, s, j);
+#elif PST_LW == 4
+    pst_v2 p0 = {a[s * j[0]], a[s * j[1]]}, p1 = {a[s * j[2]], a[s * j[3]]};
+    return __builtin_shufflevector(p0, p1, 0, 1, 2, 3);
+#else
+    return (pst_vl){a[s * j[0]], a[s * j[1]]};
+#endif
+}
+
+/* a[j[0]], ..., a[j[PST_LW - 1]]. */
+PST_V8_INLINE pst_vl pst_vl_gather(const double *a, const uint32_t *j)
+{
+    return pst_vl_gather_stride(a, 1, j);
+}
+
+/* pst_v8_add_below for a block of PST_LW lanes: acc + terms in the lanes l < len, acc in the
+ * others. */
+PST_V8_INLINE pst_vl pst_vl_add_below(pst_vl acc, pst_vl terms, double len)
+{
+#if PST_LW == 8
+    return pst_v8_add_below(acc, terms, 0, pst_v8_splat(len));
+#elif PST_LW == 4
+    return pst_v4_add_below(acc, terms, 0, pst_v4_splat(len));
+#else
+    const pst_v2 lane_no = {0, 1};
+    pst_v2 sum = acc + terms;
+    pst_v2i keep = lane_no < (pst_v2){len, len};
+    return (pst_v2)(((pst_v2i)sum & keep) | ((pst_v2i)acc & ~keep));
+#endif
+}
+
+/* Rows j[0 .. PST_LW) of the packed rows (x, y, z, u) as four vectors, one per column (with 8
+ * lanes pst_v8_rows4; with 4, one 4 x 4 transpose; with 2, of two pairs of halves). */
+PST_V8_INLINE void pst_vl_rows4(const double *rows, const uint32_t *j, pst_vl *x, pst_vl *y,
+                                pst_vl *z, pst_vl *u)
+{
+#if PST_LW == 8
+    pst_v8_rows4(rows, j, x, y, z, u);
+#elif PST_LW == 4
+    pst_v4 r0 = pst_v8_row4(rows, j[0]), r1 = pst_v8_row4(rows, j[1]),
+           r2 = pst_v8_row4(rows, j[2]), r3 = pst_v8_row4(rows, j[3]);
+    pst_v4 xz01 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6);
+    pst_v4 yu01 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+    pst_v4 xz23 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6);
+    pst_v4 yu23 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
+    *x = __builtin_shufflevector(xz01, xz23, 0, 1, 4, 5);
+    *z = __builtin_shufflevector(xz01, xz23, 2, 3, 6, 7);
+    *y = __builtin_shufflevector(yu01, yu23, 0, 1, 4, 5);
+    *u = __builtin_shufflevector(yu01, yu23, 2, 3, 6, 7);
+#else
+    pst_v2 a0, b0, a1, b1;
+    memcpy(&a0, rows + 4 * (size_t)j[0], sizeof a0);
+    memcpy(&b0, rows + 4 * (size_t)j[0] + 2, sizeof b0);
+    memcpy(&a1, rows + 4 * (size_t)j[1], sizeof a1);
+    memcpy(&b1, rows + 4 * (size_t)j[1] + 2, sizeof b1);
+    *x = __builtin_shufflevector(a0, a1, 0, 2);
+    *y = __builtin_shufflevector(a0, a1, 1, 3);
+    *z = __builtin_shufflevector(b0, b1, 0, 2);
+    *u = __builtin_shufflevector(b0, b1, 1, 3);
+#endif
+}
+
+/* The sum of a row's 8 partial sums (sum c mod 8 in lane c mod PST_LW of acc[(c mod 8) /
+ * PST_LW]) in pst_v8_sum's order, ((s0 + s4) + (s2 + s6)) + ((s1 + s5) + (s3 + s7)): the same
+ * bits for every width. */
+PST_V8_INLINE double pst_lanes_sum(const pst_vl acc[PST_LSUMS])
+{
+#if PST_LW == 8
+    return pst_v8_sum(acc[0]);
+#elif PST_LW == 4
+    return pst_v4_sum_halves(acc[0], acc[1]);
+#else
+    pst_v2 t = (acc[0] + acc[2]) + (acc[1] + acc[3]);
+    return t[0] + t[1];
+#endif
+}
+
 /* One row in lanes: its centre and value, 1/h, the partial sums, and the periodic box
  * (im.any = 0: none). */
 typedef struct {
     const double *xyzu;
     size_t i;
-    pst_v8 xi, yi, zi, ui, ih, acc;
+    pst_vl xi, yi, zi, ui, ih, acc[PST_LSUMS];
     pst_image im;
 } pst_lanes;
 
@@ -34,34 +151,38 @@ typedef struct {
 PST_KHOT pst_lanes pst_lanes_row(const pst_kctx *k, size_t i, double ih)
 {
     const double *p = k->xyzu + 4 * i;
-    return (pst_lanes){.xyzu = k->xyzu, .i = i, .xi = pst_v8_splat(p[0]),
-                       .yi = pst_v8_splat(p[1]), .zi = pst_v8_splat(p[2]),
-                       .ui = pst_v8_splat(p[3]), .ih = pst_v8_splat(ih),
-                       .acc = pst_v8_splat(0.0), .im = k->im};
+    pst_lanes L = {.xyzu = k->xyzu, .i = i, .xi = pst_vl_splat(p[0]), .yi = pst_vl_splat(p[1]),
+                   .zi = pst_vl_splat(p[2]), .ui = pst_vl_splat(p[3]), .ih = pst_vl_splat(ih),
+                   .im = k->im};
+    for (int s = 0; s < PST_LSUMS; ++s)
+        L.acc[s] = pst_vl_splat(0.0);
+    return L;
 }
 
-/* The pairs idx[e .. e + 8) of the row (fewer before e1: the missing lanes are the row's own
- * particle, a pair at distance 0, which every scheme's rule counts as degenerate with weight
- * 0 and whose u_J - u_I is 0): the scaled offsets (x_J - x_I) / h_I as the rows' gathers form
- * them (minimum images in a periodic box, as pst_offset), and u_J - u_I. Returns the 8
- * neighbours (idx + e, or pad filled). */
+/* The pairs idx[e .. e + PST_LW) of the row (fewer before e1, none at or past it: the missing
+ * lanes are the row's own particle, a pair at distance 0, which every scheme's rule counts as
+ * degenerate with weight 0 and whose u_J - u_I is 0): the scaled offsets (x_J - x_I) / h_I as
+ * the rows' gathers form them (minimum images in a periodic box, as pst_offset), and
+ * u_J - u_I. Returns the neighbours (idx + e, or pad filled). */
 PST_KHOT const uint32_t *pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx, int64_t e,
-                                         int64_t e1, uint32_t pad[PST_LANES], pst_v8 *x,
-                                         pst_v8 *y, pst_v8 *z, pst_v8 *du)
+                                         int64_t e1, uint32_t pad[PST_LW], pst_vl *x,
+                                         pst_vl *y, pst_vl *z, pst_vl *du)
 {
     const uint32_t *j = idx + e;
-    if (e1 - e < PST_LANES) {
-        for (int l = 0; l < PST_LANES; ++l)
+    if (e1 - e < PST_LW) {
+        for (int l = 0; l < PST_LW; ++l)
             pad[l] = l < e1 - e ? j[l] : (uint32_t)L->i;
         j = pad;
     }
-    pst_v8 X, Y, Z, U;
-    pst_v8_rows4(L->xyzu, j, &X, &Y, &Z, &U);
-    pst_v8 dx = X - L->xi, dy = Y - L->yi, dz = Z - L->zi;
+    pst_vl X, Y, Z, U;
+    pst_vl_rows4(L->xyzu, j, &X, &Y, &Z, &U);
+    pst_vl dx = X - L->xi, dy = Y - L->yi, dz = Z - L->zi;
     if (L->im.any) { /* pst_offset's minimum images; a cloud without a box skips them */
-        dx = pst_v8_min_image(dx, L->im.P[0], L->im.hP[0]);
-        dy = pst_v8_min_image(dy, L->im.P[1], L->im.hP[1]);
-        dz = pst_v8_min_image(dz, L->im.P[2], L->im.hP[2]);
+        for (int l = 0; l < PST_LW; ++l) {
+            dx[l] = pst_min_image(dx[l], L->im.P[0], L->im.hP[0]);
+            dy[l] = pst_min_image(dy[l], L->im.P[1], L->im.hP[1]);
+            dz[l] = pst_min_image(dz[l], L->im.P[2], L->im.hP[2]);
+        }
     }
     *x = dx * L->ih;
     *y = dy * L->ih;
@@ -72,13 +193,13 @@ PST_KHOT const uint32_t *pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx
 
 /* The neighbours idx[0..n) of row L into arrays, for the rows that work a chunk at a time:
  * the scaled offsets at x[a * stride + c] (a < 3) and u_J - u_I at du[c]. Writes up to n
- * rounded up to a multiple of 8 (the padded lanes). */
+ * rounded up to a multiple of 8 (the padded lanes), whatever the block width. */
 PST_KHOT void pst_lanes_gather(const pst_lanes *L, const uint32_t *idx, int n, double *x,
                                int stride, double *du)
 {
-    for (int c = 0; c < n; c += PST_LANES) {
-        uint32_t pad[PST_LANES];
-        pst_v8 X, Y, Z, U;
+    for (int c = 0; c < (n + PST_LANES - 1) / PST_LANES * PST_LANES; c += PST_LW) {
+        uint32_t pad[PST_LW];
+        pst_vl X, Y, Z, U;
         pst_lanes_pairs(L, idx, c, n, pad, &X, &Y, &Z, &U);
         memcpy(x + c, &X, sizeof X);
         memcpy(x + stride + c, &Y, sizeof Y);
@@ -87,11 +208,11 @@ PST_KHOT void pst_lanes_gather(const pst_lanes *L, const uint32_t *idx, int n, d
     }
 }
 
-/* acc + terms in the block's first n lanes (all 8 for n >= 8): the lanes past a row's end are
- * kept out by a select (pst_v8_add_below). */
-PST_KHOT pst_v8 pst_lanes_add(pst_v8 acc, pst_v8 terms, int64_t n)
+/* acc + terms in the block's first n lanes (all for n >= PST_LW, none for n <= 0): the lanes
+ * past a row's end are kept out by a select (pst_vl_add_below). */
+PST_KHOT pst_vl pst_lanes_add(pst_vl acc, pst_vl terms, int64_t n)
 {
-    return n >= PST_LANES ? acc + terms : pst_v8_add_below(acc, terms, 0, pst_v8_splat((double)n));
+    return n >= PST_LW ? acc + terms : pst_vl_add_below(acc, terms, (double)n);
 }
 
 /* acc[c mod 8] += t[c] du[c] for c < n (du: u_J - u_I), neighbour c in lane c mod 8 across
@@ -123,29 +244,32 @@ PST_KHOT pst_v8 pst_lanes_dot_blocks(int n, const double *t, const double *du, p
     return __builtin_shufflevector(lo, hi, 0, 1, 2, 3, 4, 5, 6, 7);
 }
 
-/* A block of 8 pairs as the matrix-free rows (and qsfdi's data moments) take it: the scaled
- * offsets x, y, z, u_J - u_I, the squared scaled distance d2 (x x + y y [+ z z], the schemes'
- * own order) and its square root q; j, its 8 neighbours (for gathers of per-particle values),
- * and n, how many of them are the row's (8 but in a row's last block). */
+/* A block of PST_LW pairs as the matrix-free rows (and qsfdi's data moments) take it: the
+ * scaled offsets x, y, z, u_J - u_I, the squared scaled distance d2 (x x + y y [+ z z], the
+ * schemes' own order) and its square root q; j, its neighbours (for gathers of per-particle
+ * values); n, how many of them are the row's (PST_LW but in a row's last blocks; 0 or less
+ * past its end); and s, which of the row's partial sums its lanes go to (acc[s]). */
 typedef struct {
-    pst_v8 x, y, z, du, d2, q;
+    pst_vl x, y, z, du, d2, q;
     const uint32_t *j;
-    int n;
+    int n, s;
 } pst_lanes_block;
 
-/* The block of row L's pairs from idx[e] (dimension D; the row ends at e1): idx[e .. e + 8)
- * where the list has them (e + 8 <= lim), the lanes past e1 then the next row's neighbours;
- * else padded as pst_lanes_pairs pads (pad is its scratch). Then d2 and q. */
+/* The block of row L's pairs from idx[e] (dimension D; the row ends at e1; s its partial
+ * sums): idx[e .. e + PST_LW) where the list has them (e + PST_LW <= lim), the lanes past e1
+ * then the next row's neighbours; else padded as pst_lanes_pairs pads (pad is its scratch).
+ * Then d2 and q. */
 PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int64_t e,
-                             int64_t e1, int64_t lim, uint32_t pad[PST_LANES],
+                             int64_t e1, int64_t lim, int s, uint32_t pad[PST_LW],
                              pst_lanes_block *b)
 {
-    b->n = e1 - e < PST_LANES ? (int)(e1 - e) : PST_LANES;
-    b->j = pst_lanes_pairs(L, idx, e, e + PST_LANES <= lim ? e + PST_LANES : e1, pad, &b->x,
-                           &b->y, &b->z, &b->du);
-    b->d2 = b->x * b->x + b->y * b->y + (D == 3 ? b->z * b->z : pst_v8_splat(0.0));
+    b->n = e1 - e < PST_LW ? (int)(e1 - e) : PST_LW;
+    b->s = s;
+    b->j = pst_lanes_pairs(L, idx, e, e + PST_LW <= lim ? e + PST_LW : e1, pad, &b->x, &b->y,
+                           &b->z, &b->du);
+    b->d2 = b->x * b->x + b->y * b->y + (D == 3 ? b->z * b->z : pst_vl_splat(0.0));
 #pragma omp simd
-    for (int l = 0; l < PST_LANES; ++l)
+    for (int l = 0; l < PST_LW; ++l)
         b->q[l] = sqrt(b->d2[l]);
 }
 
@@ -156,9 +280,9 @@ PST_KHOT void pst_lanes_take(const pst_lanes *L, int D, const uint32_t *idx, int
 
 /* -1/h_J for the block's neighbours, J's factor: (x_I - x_J) / h_J is (x_J - x_I) (-1/h_J)
  * exactly, and 1/h_J the same IEEE quotient as row J's scalar 1.0 / h_J. */
-PST_KHOT pst_v8 pst_lanes_back_scale(const double *h, const pst_lanes_block *b)
+PST_KHOT pst_vl pst_lanes_back_scale(const double *h, const pst_lanes_block *b)
 {
-    return -(pst_v8_splat(1.0) / pst_v8_gather(h, b->j));
+    return -(pst_vl_splat(1.0) / pst_vl_gather(h, b->j));
 }
 
 /* Lane l of the unscaled block b seen from a row of factor f (1/h_I, or J's -1/h_J): the
@@ -172,67 +296,98 @@ PST_KHOT double pst_lanes_lane_scaled(const pst_lanes_block *b, int D, int l, do
     return *x * *x + *y * *y + (D == 3 ? *z * *z : 0.0);
 }
 
-/* The nk coefficients of the block's 8 neighbours, rows of nk doubles in coef (row J at
- * coef + nk J), as vectors: c[m][l] = coef[nk j[l] + m] for m < nk (8 < nk <= 16: two 8 x 8
- * transposes, the second of the row's last 8 coefficients; nk <= 8: one, of 8 doubles from
- * each row's start, so coef must extend 8 - nk doubles past its last row). The half-list rows
- * read the other row's coefficients this way: 16 loads and 48 shuffles per block, where
- * per-element gathers took 15 x 8 loads and GCC left the loop scalar. */
-PST_KHOT void pst_lanes_coefs(const double *coef, int nk, const uint32_t *j, pst_v8 c[16])
+/* The nk coefficients of the block's neighbours, rows of nk doubles in coef (row J at
+ * coef + nk J), as vectors: c[m][l] = coef[nk j[l] + m] for m < nk <= 16. With 8 lanes by 8 x 8
+ * transposes (8 < nk: two, the second of the row's last 8 coefficients; nk <= 8: one, of 8
+ * doubles from each row's start, so coef must extend 8 - nk doubles past its last row); with
+ * 4 or 2 lanes by transposes of PST_LW x PST_LW pieces, the last one ending at the row's end
+ * (nk >= PST_LW). The half-list rows read the other row's coefficients this way: with 8 lanes
+ * 16 loads and 48 shuffles per block, where per-element gathers took 15 x 8 loads and GCC left
+ * the loop scalar. */
+PST_KHOT void pst_lanes_coefs(const double *coef, int nk, const uint32_t *j, pst_vl c[16])
 {
-    const double *p[PST_LANES], *q[PST_LANES];
-    for (int l = 0; l < PST_LANES; ++l) {
+    const double *p[PST_LW];
+    for (int l = 0; l < PST_LW; ++l)
         p[l] = coef + (size_t)nk * j[l];
+#if PST_LW == 8
+    const double *q[PST_LANES];
+    for (int l = 0; l < PST_LANES; ++l)
         q[l] = p[l] + (nk - PST_LANES);
-    }
     pst_v8_transpose8(p, c);
     if (nk > PST_LANES)
         pst_v8_transpose8(q, c + (nk - PST_LANES));
+#else
+    for (int m0 = 0; m0 < nk; m0 += PST_LW) {
+        const int m = m0 + PST_LW <= nk ? m0 : nk - PST_LW;
+        pst_vl r[PST_LW];
+        for (int l = 0; l < PST_LW; ++l)
+            memcpy(&r[l], p[l] + m, sizeof r[l]);
+#if PST_LW == 4
+        pst_v4 e01 = __builtin_shufflevector(r[0], r[1], 0, 4, 2, 6);
+        pst_v4 o01 = __builtin_shufflevector(r[0], r[1], 1, 5, 3, 7);
+        pst_v4 e23 = __builtin_shufflevector(r[2], r[3], 0, 4, 2, 6);
+        pst_v4 o23 = __builtin_shufflevector(r[2], r[3], 1, 5, 3, 7);
+        c[m] = __builtin_shufflevector(e01, e23, 0, 1, 4, 5);
+        c[m + 1] = __builtin_shufflevector(o01, o23, 0, 1, 4, 5);
+        c[m + 2] = __builtin_shufflevector(e01, e23, 2, 3, 6, 7);
+        c[m + 3] = __builtin_shufflevector(o01, o23, 2, 3, 6, 7);
+#else
+        c[m] = __builtin_shufflevector(r[0], r[1], 0, 2);
+        c[m + 1] = __builtin_shufflevector(r[0], r[1], 1, 3);
+#endif
+    }
+#endif
 }
 
 /* One block of a half-list row (pairs (I, J > I)) with both of its weights: y_J -= a_JI
  * (u_J - u_I) for the block's pairs whose J is not a Dirichlet row, one at a time (the lanes
- * hold 8 different J), and acc + a_IJ (u_J - u_I) returned for row I's sum. */
-PST_KHOT pst_v8 pst_lanes_half_add(pst_v8 acc, pst_v8 wij, pst_v8 wji, const pst_lanes_block *b,
+ * hold different J), and acc + a_IJ (u_J - u_I) returned for row I's sum. */
+PST_KHOT pst_vl pst_lanes_half_add(pst_vl acc, pst_vl wij, pst_vl wji, const pst_lanes_block *b,
                                    const uint8_t *kind, double *y)
 {
-    pst_v8 t = wji * b->du;
+    pst_vl t = wji * b->du;
     for (int l = 0; l < b->n; ++l)
         if (kind[b->j[l]] != PST_DIRICHLET)
             y[b->j[l]] -= t[l];
     return pst_lanes_add(acc, wij * b->du, b->n);
 }
 
-/* The pairs idx[e0 .. e1) of row L (dimension D), 8 at a time: `step`, a statement in b (a
- * const pst_lanes_block *), for each block in order. The blocks read idx up to lim
- * (pst_lanes_take): e1 pads a row's last block with the row's own particle, a degenerate pair
- * that adds exactly 0; a farther lim (the list's length) takes the next row's neighbours there,
- * which the step keeps out of its sums (pst_lanes_add with b->n). Each block is taken (its loads,
- * transposes and sqrt) one block ahead of the step that uses it: the latency of the loads and
- * of the sqrt then overlaps the previous block's arithmetic, where in program order the core's
- * scheduler did not reach that far (3D 10^6, 1 and 2 threads: 13-21 % off the qsfdi, lpmps
- * and lsmps applies; two blocks ahead gained nothing more). The same operations in the same
- * order as one block at a time: the same bits. */
+/* The pairs idx[e0 .. e1) of row L (dimension D), PST_LW at a time: `step`, a statement in b
+ * (a const pst_lanes_block *), for each block in order, over whole groups of 8 (the blocks of
+ * a row's last group past e1 have b->n <= 0), so that the lanes are those of 8-lane blocks
+ * whatever the width. The blocks read idx up to lim (pst_lanes_take): e1 pads a row's last
+ * blocks with the row's own particle, a degenerate pair that adds exactly 0; a farther lim (the
+ * list's length) takes the next row's neighbours there, which the step keeps out of its sums
+ * (pst_lanes_add with b->n). Each block is taken (its loads, transposes and sqrt) one block
+ * ahead of the step that uses it: the latency of the loads and of the sqrt then overlaps the
+ * previous block's arithmetic, where in program order the core's scheduler did not reach that
+ * far (3D 10^6, 1 and 2 threads: 13-21 % off the qsfdi, lpmps and lsmps applies; two blocks
+ * ahead gained nothing more). The same operations in the same order as one block at a time:
+ * the same bits. */
 #define PST_LANES_EACH_TO(L, D, idx, e0, e1, lim, b, step)                                     \
     do {                                                                                       \
-        int64_t pst_e_ = (e0), pst_n_ = (e1), pst_l_ = (lim);                                  \
-        uint32_t pst_pa_[PST_LANES], pst_pb_[PST_LANES];                                       \
+        const int64_t pst_0_ = (e0), pst_n_ = (e1), pst_l_ = (lim);                            \
+        const int64_t pst_end_ =                                                               \
+            pst_0_ + (pst_n_ - pst_0_ + PST_LANES - 1) / PST_LANES * PST_LANES;                \
+        uint32_t pst_pa_[PST_LW], pst_pb_[PST_LW];                                             \
         pst_lanes_block pst_a_, pst_b_;                                                        \
-        if (pst_e_ < pst_n_)                                                                   \
-            pst_lanes_take(&(L), D, idx, pst_e_, pst_n_, pst_l_, pst_pa_, &pst_a_);            \
-        for (; pst_e_ < pst_n_; pst_e_ += 2 * PST_LANES) {                                     \
-            if (pst_e_ + PST_LANES < pst_n_)                                                   \
-                pst_lanes_take(&(L), D, idx, pst_e_ + PST_LANES, pst_n_, pst_l_, pst_pb_,      \
-                               &pst_b_);                                                       \
+        int64_t pst_e_ = pst_0_;                                                               \
+        if (pst_e_ < pst_end_)                                                                 \
+            pst_lanes_take(&(L), D, idx, pst_e_, pst_n_, pst_l_, 0, pst_pa_, &pst_a_);         \
+        for (; pst_e_ < pst_end_; pst_e_ += 2 * PST_LW) {                                      \
+            const int pst_s_ = (int)((pst_e_ - pst_0_) / PST_LW % PST_LSUMS);                  \
+            if (pst_e_ + PST_LW < pst_end_)                                                    \
+                pst_lanes_take(&(L), D, idx, pst_e_ + PST_LW, pst_n_, pst_l_,                  \
+                               (pst_s_ + 1) % PST_LSUMS, pst_pb_, &pst_b_);                    \
             {                                                                                  \
                 const pst_lanes_block *b = &pst_a_;                                            \
                 step;                                                                          \
             }                                                                                  \
-            if (pst_e_ + PST_LANES >= pst_n_)                                                  \
+            if (pst_e_ + PST_LW >= pst_end_)                                                   \
                 break;                                                                         \
-            if (pst_e_ + 2 * PST_LANES < pst_n_)                                               \
-                pst_lanes_take(&(L), D, idx, pst_e_ + 2 * PST_LANES, pst_n_, pst_l_, pst_pa_,  \
-                               &pst_a_);                                                       \
+            if (pst_e_ + 2 * PST_LW < pst_end_)                                                \
+                pst_lanes_take(&(L), D, idx, pst_e_ + 2 * PST_LW, pst_n_, pst_l_,              \
+                               (pst_s_ + 2) % PST_LSUMS, pst_pa_, &pst_a_);                    \
             {                                                                                  \
                 const pst_lanes_block *b = &pst_b_;                                            \
                 step;                                                                          \
@@ -240,22 +395,23 @@ PST_KHOT pst_v8 pst_lanes_half_add(pst_v8 acc, pst_v8 wij, pst_v8 wji, const pst
         }                                                                                      \
     } while (0)
 
-/* PST_LANES_EACH_TO with the row's last block padded. */
+/* PST_LANES_EACH_TO with the row's last blocks padded. */
 #define PST_LANES_EACH(L, D, idx, e0, e1, b, step) PST_LANES_EACH_TO(L, D, idx, e0, e1, e1, b, step)
 
-/* The pairs idx[e0 .. e1) of row L (dimension D) into L.acc: for each block of 8 (b),
- * `weights`, an expression in b, times u_J - u_I (PST_LANES_EACH). */
+/* The pairs idx[e0 .. e1) of row L (dimension D) into L.acc: for each block (b), `weights`,
+ * an expression in b, times u_J - u_I (PST_LANES_EACH). */
 #define PST_LANES_ROW(L, D, idx, e0, e1, b, weights)                                           \
-    PST_LANES_EACH(L, D, idx, e0, e1, b, (L).acc += (weights) * b->du)
+    PST_LANES_EACH(L, D, idx, e0, e1, b, (L).acc[b->s] += (weights) * b->du)
 
 /* The pairs idx[e0 .. e1) of half-list row L (pairs (I, J > I); dimension D): for each block
- * (b), L.acc = `step`, an expression in b and L.acc that writes the block's y_J and returns
- * row I's sum so far (pst_lanes_half_add); then y_I += that sum unless I is a Dirichlet row. */
+ * (b), L.acc[b->s] = `step`, an expression in b and L.acc[b->s] that writes the block's y_J
+ * and returns row I's sums so far (pst_lanes_half_add); then y_I += their sum unless I is a
+ * Dirichlet row. */
 #define PST_LANES_HALF_ROW(L, D, idx, e0, e1, b, kind, y, step)                                \
     do {                                                                                       \
-        PST_LANES_EACH(L, D, idx, e0, e1, b, (L).acc = (step));                                \
+        PST_LANES_EACH(L, D, idx, e0, e1, b, (L).acc[b->s] = (step));                          \
         if ((kind)[(L).i] != PST_DIRICHLET)                                                    \
-            (y)[(L).i] += pst_v8_sum((L).acc);                                                 \
+            (y)[(L).i] += pst_lanes_sum((L).acc);                                              \
     } while (0)
 
 #endif /* PSTENCIL_LANES_H */

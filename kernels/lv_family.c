@@ -20,8 +20,9 @@
  * Fallback chain (docs/schemes/): too few neighbours or a singular C / Gamma -> the Brookshaw
  * row (s = 1, zeta = 0); Neumann rows with a singular C use C = I. Never NaN.
  * This file: the precompute, the applies' dispatch and the scheme table. The rows are in
- * lv_lanes.c and lv_half_lanes.c (G1, 8 pairs at a time) and lv_rows.c and lv_half_rows.c (the
- * rest, a chunk at a time), the pair arithmetic they share in lv_family.h and lv_chunks.h. */
+ * lv_lanes.c and lv_half_lanes.c (G1, a block of pairs at a time) and lv_rows.c and
+ * lv_half_rows.c (the rest, a chunk at a time), the pair arithmetic they share in lv_family.h
+ * and lv_chunks.h. */
 #include "isa.h"
 #include "lv_chunks.h"
 #include "small_matrix.h"
@@ -367,7 +368,7 @@ static int pre_msph(pst_op *op, char *err) { return precompute(op, LV_MSPH, err)
 /* ---- apply, emission and the rest of the table ------------------------------------------ */
 
 /* Matrix-free apply: recompute each pair's geometry and weight from the positions and the
- * per-particle data, 8 pairs at a time (the G1 rows, kernels/lv_lanes.c) or a chunk of
+ * per-particle data, a block of pairs at a time (the G1 rows, kernels/lv_lanes.c) or a chunk of
  * neighbours at a time (row_t, kernels/lv_rows.c: G2-G4 and the Neumann rows), in vector
  * lanes. Compute-bound: a sqrt, two divisions and ~40 flops per pair (more for G2/G4 and
  * tensors) against 4 bytes of list and the packed row of J; measured (3D 10^6, G1, 1 thread,

@@ -5,6 +5,7 @@
 #ifndef PSTENCIL_LV_FAMILY_H
 #define PSTENCIL_LV_FAMILY_H
 
+#include "isa.h"
 #include "kernel_common.h"
 #include "sph_kernels.h"
 
@@ -125,17 +126,18 @@ PST_KHOT double tensor_weight(int D, int H, double Vs, const double *mi, double 
 }
 
 /* The matrix-free apply's rows [i0, i1) that are neither Dirichlet nor Neumann rows into y,
- * 8 pairs at a time (kernels/lv_lanes.c). */
+ * a block of pairs at a time (kernels/lv_lanes.c). */
 typedef void (*lv_lane_rows_fn)(const lv_ctx *k, const int64_t *off, const uint32_t *idx,
                                 size_t i0, size_t i1, double *y);
 
-/* The lane rows of k's operator, or NULL where only the chunk rows serve it (lv_lanes.c). */
-lv_lane_rows_fn lv_lane_rows_for(const lv_ctx *k);
+/* The lane rows of k's operator, or NULL where only the chunk rows serve it (lv_lanes.c, compiled
+ * once per ISA level: the rows of the CPU's level, src/core/isa.h). */
+PST_LEVEL_ENTRY(lv_lane_rows_fn, lv_lane_rows_for, (const lv_ctx *k), (k))
 
 /* The half-list rows [i0, i1) in lanes, every row but the Neumann rows (half_rows' rule: a
  * Dirichlet row I still writes its pairs' y_J), or NULL where they go in chunks (lv_half_rows.c):
- * the G1 operators (lv_half_lanes.c). */
-lv_lane_rows_fn lv_half_lane_rows_for(const lv_ctx *k);
+ * the G1 operators (lv_half_lanes.c, compiled once per ISA level like lv_lanes.c). */
+PST_LEVEL_ENTRY(lv_lane_rows_fn, lv_half_lane_rows_for, (const lv_ctx *k), (k))
 
 /* Row i of the whole list in chunks (kernels/lv_rows.c): the matrix-free apply's row into y[i]
  * (w NULL; u_J - u_I from the packed rows), or the row's weights into w (emission). */

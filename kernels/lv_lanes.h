@@ -1,6 +1,6 @@
 /* The Lukyanov-Vuik family's G1 rows in lanes, what the whole-list rows (kernels/lv_lanes.c)
  * and the half-list rows (kernels/lv_half_lanes.c) share: a row's own data and the weights of
- * a block of 8 of its pairs, through the pair rules of lv_family.h, so that both have the chunk
+ * a block of its pairs, through the pair rules of lv_family.h, so that both have the chunk
  * rows' weights bit for bit (docs/operators.md, "Matrix-free rows in lanes"). Internal; every
  * function is inlined into the rows that call it. */
 #ifndef PSTENCIL_LV_LANES_H
@@ -18,20 +18,20 @@ typedef struct {
     const double *mob[3];
 } lv_lane_row;
 
-/* The weights of a block of 8 pairs of such a row, lane by lane through the chunk rows' own
+/* The weights of a block of pairs of such a row, lane by lane through the chunk rows' own
  * functions (pair_a, pair_mobility, scalar_weight or tensor_weight; the G1 gradient is a x):
  * their weights bit for bit. T: a diagonal tensor; H: the harmonic pair mean; HS: h per
  * particle, h~ = (h_I + h_J) / 2 as the chunk rows form it. V_J, the mobility of J (mj[0], or
  * the tensor's D components) and h_J gathered for the block (hj read only with HS). With g
  * as an array (gradient_from, weight_from) GCC 12 does not vectorise the lane loop: 3x
  * slower. The pairs' a into *av (the half-list rows' other direction reads it). */
-PST_KHOT pst_v8 g1_lane_weights(pst_kernel K, int D, int T, int H, int HS,
-                                const lv_lane_row *r, const pst_lanes_block *b, pst_v8 vj,
-                                const pst_v8 mj[3], pst_v8 hj, pst_v8 *av)
+PST_KHOT pst_vl g1_lane_weights(pst_kernel K, int D, int T, int H, int HS,
+                                const lv_lane_row *r, const pst_lanes_block *b, pst_vl vj,
+                                const pst_vl mj[3], pst_vl hj, pst_vl *av)
 {
-    pst_v8 w;
+    pst_vl w;
 #pragma omp simd
-    for (int l = 0; l < PST_LANES; ++l) {
+    for (int l = 0; l < PST_LW; ++l) {
         double ht = HS ? 0.5 * (r->hi + hj[l]) : r->ht;
         double a = pair_a(K, D, b->q[l], ht, r->eps); /* G1 (15): g = a x, F = a */
         double gx = a * b->x[l], gy = a * b->y[l], gz = a * b->z[l], wv;
@@ -49,13 +49,13 @@ PST_KHOT pst_v8 g1_lane_weights(pst_kernel K, int D, int T, int H, int HS,
 
 /* What a block of such a row gathers of its neighbours J: V_J (returned), the mobility of J
  * (mj[0], or the tensor's D components) and, with HS, h_J. */
-PST_KHOT pst_v8 g1_lane_gathers(const lv_ctx *k, int D, int T, int HS, const lv_lane_row *r,
-                                const pst_lanes_block *b, pst_v8 mj[3], pst_v8 *hj)
+PST_KHOT pst_vl g1_lane_gathers(const lv_ctx *k, int D, int T, int HS, const lv_lane_row *r,
+                                const pst_lanes_block *b, pst_vl mj[3], pst_vl *hj)
 {
     for (int a = 0; a < (T ? D : 1); ++a)
-        mj[a] = r->mob[a] ? pst_v8_gather(r->mob[a], b->j) : pst_v8_splat(1.0);
-    *hj = HS ? pst_v8_gather(k->c.h, b->j) : pst_v8_splat(0.0);
-    return pst_v8_gather(k->c.V, b->j);
+        mj[a] = r->mob[a] ? pst_vl_gather(r->mob[a], b->j) : pst_vl_splat(1.0);
+    *hj = HS ? pst_vl_gather(k->c.h, b->j) : pst_vl_splat(0.0);
+    return pst_vl_gather(k->c.V, b->j);
 }
 
 /* What row i reads besides its pairs (lv_lane_row). */

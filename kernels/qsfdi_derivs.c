@@ -26,26 +26,27 @@ PST_KHOT double qs_deriv_dot(int D, const double *kap, const double *du2, const 
 
 /* The 15 (3D; 2D: 8) sums of the data moments, as named vectors so that they stay in
  * registers (an array of them was kept on the stack: a load and a store per update). In
- * (r2s, r2c) order: xx yy zz xy xz yz (2D: xx yy xy, in the xx, yy, zz slots). */
+ * (r2s, r2c) order: xx yy zz xy xz yz (2D: xx yy xy, in the xx, yy, zz slots). A row keeps
+ * PST_LSUMS of them, one per block of each group of 8 pairs (kernels/lanes.h). */
 typedef struct {
-    pst_v8 x, y, z, xx2, yy2, zz2, xy2, xz2, yz2, xx4, yy4, zz4, xy4, xz4, yz4;
+    pst_vl x, y, z, xx2, yy2, zz2, xy2, xz2, yz2, xx4, yy4, zz4, xy4, xz4, yz4;
 } qs_dsums;
 
-/* The data moments of a block of 8 pairs (kernels/lanes.h) added to *s: qs_data_moments'
+/* The data moments of a block of pairs (kernels/lanes.h) added to *s: qs_data_moments'
  * terms. */
 PST_KHOT void qs_data_block(const qs_ctx *k, int D, pst_kernel K, const pst_lanes_block *b,
                             qs_dsums *s)
 {
-    const pst_v8 x = b->x, y = b->y, z = b->z, du = b->du;
-    pst_v8 o2 = pst_v8_splat(0.0), o4 = o2;
+    const pst_vl x = b->x, y = b->y, z = b->z, du = b->du;
+    pst_vl o2 = pst_vl_splat(0.0), o4 = o2;
 #pragma omp simd
-    for (int l = 0; l < PST_LANES; ++l) {
+    for (int l = 0; l < PST_LW; ++l) {
         double a2, id2;
         qs_omega_q(K, D, k->supp, k->c.pair_eps, b->d2[l], b->q[l], &a2, &id2);
         o2[l] = a2;
         o4[l] = a2 * id2;
     }
-    const pst_v8 o2u = o2 * du, o4u = o4 * du, xx = x * x, yy = y * y, xy = x * y;
+    const pst_vl o2u = o2 * du, o4u = o4 * du, xx = x * x, yy = y * y, xy = x * y;
     s->x += o2u * x;
     s->y += o2u * y;
     s->xx2 += o2u * xx;
@@ -57,7 +58,7 @@ PST_KHOT void qs_data_block(const qs_ctx *k, int D, pst_kernel K, const pst_lane
         s->zz4 += o4u * xy;
         return;
     }
-    const pst_v8 zz = z * z, xz = x * z, yz = y * z;
+    const pst_vl zz = z * z, xz = x * z, yz = y * z;
     s->z += o2u * z;
     s->zz2 += o2u * zz;
     s->xy2 += o2u * xy;
@@ -71,25 +72,36 @@ PST_KHOT void qs_data_block(const qs_ctx *k, int D, pst_kernel K, const pst_lane
 
 /* The data moments of row i for u (op->xyzu holds it, pst_op_gradient / _hessian wrote it):
  * du2 = sum omega2 m (u_j - u_i) (the D linear then the quadratic monomials, in the order of
- * (r, r2s, r2c)) and du4 = sum omega4 (r2s, r2c) (u_j - u_i), 8 neighbours at a time from the
- * packed rows (kernels/lanes.h, each block taken one ahead) with qs_omega_q lane by lane,
- * into 8 lanes per sum: the same sums for every ISA level and thread count. Per neighbour a
+ * (r, r2s, r2c)) and du4 = sum omega4 (r2s, r2c) (u_j - u_i), a block of neighbours at a time
+ * from the packed rows (kernels/lanes.h, each block taken one ahead) with qs_omega_q lane by
+ * lane, into 8 partial sums per sum: the same sums for every ISA level, block width and thread
+ * count. Per neighbour a
  * sqrt, a division, ~19 flops of kernel and 2 per each of the 15 (3D) sums, in vector lanes. */
 PST_KHOT void qs_data_moments(const qs_ctx *k, int D, pst_kernel K, size_t i, double ih,
                               const int64_t *off, const uint32_t *idx, double *du2, double *du4)
 {
-    const pst_v8 zero = pst_v8_splat(0.0);
-    qs_dsums s = {zero, zero, zero, zero, zero, zero, zero, zero,
-                  zero, zero, zero, zero, zero, zero, zero};
+    const pst_vl zero = pst_vl_splat(0.0);
+    qs_dsums s[PST_LSUMS];
+    for (int p = 0; p < PST_LSUMS; ++p)
+        s[p] = (qs_dsums){zero, zero, zero, zero, zero, zero, zero, zero,
+                          zero, zero, zero, zero, zero, zero, zero};
     pst_lanes L = pst_lanes_row(&k->c, i, ih);
-    PST_LANES_EACH(L, D, idx, off[i], off[i + 1], b, qs_data_block(k, D, K, b, &s));
-    const pst_v8 v2[9] = {s.x, s.y, s.z, s.xx2, s.yy2, s.zz2, s.xy2, s.xz2, s.yz2};
-    const pst_v8 v4[6] = {s.xx4, s.yy4, s.zz4, s.xy4, s.xz4, s.yz4};
+    PST_LANES_EACH(L, D, idx, off[i], off[i + 1], b, qs_data_block(k, D, K, b, &s[b->s]));
+    pst_vl v2[9][PST_LSUMS], v4[6][PST_LSUMS];
+    for (int p = 0; p < PST_LSUMS; ++p) {
+        const qs_dsums *t = &s[p];
+        const pst_vl s2[9] = {t->x, t->y, t->z, t->xx2, t->yy2, t->zz2, t->xy2, t->xz2, t->yz2};
+        const pst_vl s4[6] = {t->xx4, t->yy4, t->zz4, t->xy4, t->xz4, t->yz4};
+        for (int a = 0; a < 9; ++a)
+            v2[a][p] = s2[a];
+        for (int a = 0; a < 6; ++a)
+            v4[a][p] = s4[a];
+    }
     for (int a = 0; a < D; ++a)
-        du2[a] = pst_v8_sum(v2[a]);
+        du2[a] = pst_lanes_sum(v2[a]);
     for (int a = 0; a < QS_NQ(D); ++a) {
-        du2[D + a] = pst_v8_sum(v2[3 + a]);
-        du4[a] = pst_v8_sum(v4[a]);
+        du2[D + a] = pst_lanes_sum(v2[3 + a]);
+        du4[a] = pst_lanes_sum(v4[a]);
     }
 }
 

@@ -4,6 +4,7 @@
 #ifndef PSTENCIL_WLS_H
 #define PSTENCIL_WLS_H
 
+#include "isa.h"
 #include "kernel_common.h"
 #include "operator.h"
 
@@ -16,10 +17,16 @@ typedef void (*wls_solve_fn)(int dim, int nb, const double *M, const double *fac
 int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn solve,
                        char *err);
 int pst_wls_min_neighbours(int dim);
-void pst_wls_apply(const pst_op *op, const double *u, double *y);
-void pst_wls_emit_row(const pst_op *op, size_t i, double *w);
-void pst_wls_half_rows(const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
-                       size_t i1, const double *u, double *y);
+/* The rows (kernels/wls_rows.c, compiled once per ISA level: each of these calls the copy of
+ * the CPU's level, src/core/isa.h): the matrix-free apply, one row's weights, the half-list
+ * rows. */
+PST_LEVEL_ENTRY_VOID(pst_wls_apply, (const pst_op *op, const double *u, double *y),
+                     (op, u, y))
+PST_LEVEL_ENTRY_VOID(pst_wls_emit_row, (const pst_op *op, size_t i, double *w), (op, i, w))
+PST_LEVEL_ENTRY_VOID(pst_wls_half_rows,
+                     (const pst_op *op, const int64_t *off, const uint32_t *idx, size_t i0,
+                      size_t i1, const double *u, double *y),
+                     (op, off, idx, i0, i1, u, y))
 void pst_wls_gradient(const pst_op *op, const double *u, double *const grad[3]);
 void pst_wls_hessian(const pst_op *op, const double *u, double *const hess[6]);
 int pst_wls_interpolate(const pst_op *op, const double *const pts[3], size_t m,

@@ -28,6 +28,7 @@ typedef double pst_v2 __attribute__((vector_size(16)));
 typedef int64_t pst_v8i __attribute__((vector_size(64))); /* a comparison's lanes: 0 or -1 */
 typedef float pst_v8f __attribute__((vector_size(32)));
 typedef int64_t pst_v4i __attribute__((vector_size(32)));
+typedef int64_t pst_v2i __attribute__((vector_size(16)));
 
 /* Vectors of run-time values are built as shuffles of short initialisers, never as an
  * initialiser of 8 elements: in the AVX-512 clones of a target_clones function
