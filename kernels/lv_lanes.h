@@ -29,7 +29,9 @@ PST_KHOT pst_vl g1_lane_weights(pst_kernel K, int D, int T, int H, int HS,
                                 const lv_lane_row *r, const pst_lanes_block *b, pst_vl vj,
                                 const pst_vl mj[3], pst_vl hj, pst_vl *av)
 {
-    pst_vl w;
+    /* every lane is written below; the zeros keep GCC's flow analysis quiet (in the 2-lane
+     * copy it saw the lanes "maybe uninitialized") */
+    pst_vl w = pst_vl_splat(0.0), a_all = w;
 #pragma omp simd
     for (int l = 0; l < PST_LW; ++l) {
         double ht = HS ? 0.5 * (r->hi + hj[l]) : r->ht;
@@ -42,8 +44,9 @@ PST_KHOT pst_vl g1_lane_weights(pst_kernel K, int D, int T, int H, int HS,
             wv = scalar_weight(D, r->s * vj[l], pair_mobility(r->m[0], mj[0][l], H), a, r->eta,
                                gx, gy, gz);
         w[l] = a == 0.0 ? 0.0 : wv;
-        (*av)[l] = a;
+        a_all[l] = a;
     }
+    *av = a_all;
     return w;
 }
 
