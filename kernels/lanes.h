@@ -63,8 +63,7 @@ PST_V8_INLINE pst_vl pst_vl_gather_stride(const double *a, size_t s, const uint3
 #if PST_LW == 8
     return pst_v8_gather_stride(a, s, j);
 #elif PST_LW == 4
-    pst_v2 p0 = {a[s * j[0]], a[s * j[1]]}, p1 = {a[s * j[2]], a[s * j[3]]};
-    return __builtin_shufflevector(p0, p1, 0, 1, 2, 3);
+    return pst_v4_gather_stride(a, s, j);
 #else
     return (pst_vl){a[s * j[0]], a[s * j[1]]};
 #endif
@@ -92,34 +91,40 @@ PST_V8_INLINE pst_vl pst_vl_add_below(pst_vl acc, pst_vl terms, double len)
 #endif
 }
 
+#if PST_LW < 8
+/* rows[l][0..PST_LW) for l < PST_LW as PST_LW vectors, out[c][l] = rows[l][c]. */
+PST_V8_INLINE void pst_vl_transpose(const double *const rows[PST_LW], pst_vl out[PST_LW])
+{
+#if PST_LW == 4
+    pst_v4_transpose4(rows, out);
+#else
+    pst_v2_transpose2(rows, out);
+#endif
+}
+#endif
+
 /* Rows j[0 .. PST_LW) of the packed rows (x, y, z, u) as four vectors, one per column (with 8
- * lanes pst_v8_rows4; with 4, one 4 x 4 transpose; with 2, of two pairs of halves). */
+ * lanes pst_v8_rows4; with 4, one 4 x 4 transpose; with 2, two 2 x 2 ones). */
 PST_V8_INLINE void pst_vl_rows4(const double *rows, const uint32_t *j, pst_vl *x, pst_vl *y,
                                 pst_vl *z, pst_vl *u)
 {
 #if PST_LW == 8
     pst_v8_rows4(rows, j, x, y, z, u);
-#elif PST_LW == 4
-    pst_v4 r0 = pst_v8_row4(rows, j[0]), r1 = pst_v8_row4(rows, j[1]),
-           r2 = pst_v8_row4(rows, j[2]), r3 = pst_v8_row4(rows, j[3]);
-    pst_v4 xz01 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6);
-    pst_v4 yu01 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
-    pst_v4 xz23 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6);
-    pst_v4 yu23 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
-    *x = __builtin_shufflevector(xz01, xz23, 0, 1, 4, 5);
-    *z = __builtin_shufflevector(xz01, xz23, 2, 3, 6, 7);
-    *y = __builtin_shufflevector(yu01, yu23, 0, 1, 4, 5);
-    *u = __builtin_shufflevector(yu01, yu23, 2, 3, 6, 7);
 #else
-    pst_v2 a0, b0, a1, b1;
-    memcpy(&a0, rows + 4 * (size_t)j[0], sizeof a0);
-    memcpy(&b0, rows + 4 * (size_t)j[0] + 2, sizeof b0);
-    memcpy(&a1, rows + 4 * (size_t)j[1], sizeof a1);
-    memcpy(&b1, rows + 4 * (size_t)j[1] + 2, sizeof b1);
-    *x = __builtin_shufflevector(a0, a1, 0, 2);
-    *y = __builtin_shufflevector(a0, a1, 1, 3);
-    *z = __builtin_shufflevector(b0, b1, 0, 2);
-    *u = __builtin_shufflevector(b0, b1, 1, 3);
+    const double *p[PST_LW];
+    for (int l = 0; l < PST_LW; ++l)
+        p[l] = rows + 4 * (size_t)j[l];
+    pst_vl c[4];
+    pst_vl_transpose(p, c);
+    if (PST_LW == 2) {
+        for (int l = 0; l < PST_LW; ++l)
+            p[l] += 2;
+        pst_vl_transpose(p, c + 2);
+    }
+    *x = c[0];
+    *y = c[1];
+    *z = c[2];
+    *u = c[3];
 #endif
 }
 
@@ -319,22 +324,10 @@ PST_KHOT void pst_lanes_coefs(const double *coef, int nk, const uint32_t *j, pst
 #else
     for (int m0 = 0; m0 < nk; m0 += PST_LW) {
         const int m = m0 + PST_LW <= nk ? m0 : nk - PST_LW;
-        pst_vl r[PST_LW];
+        const double *q[PST_LW];
         for (int l = 0; l < PST_LW; ++l)
-            memcpy(&r[l], p[l] + m, sizeof r[l]);
-#if PST_LW == 4
-        pst_v4 e01 = __builtin_shufflevector(r[0], r[1], 0, 4, 2, 6);
-        pst_v4 o01 = __builtin_shufflevector(r[0], r[1], 1, 5, 3, 7);
-        pst_v4 e23 = __builtin_shufflevector(r[2], r[3], 0, 4, 2, 6);
-        pst_v4 o23 = __builtin_shufflevector(r[2], r[3], 1, 5, 3, 7);
-        c[m] = __builtin_shufflevector(e01, e23, 0, 1, 4, 5);
-        c[m + 1] = __builtin_shufflevector(o01, o23, 0, 1, 4, 5);
-        c[m + 2] = __builtin_shufflevector(e01, e23, 2, 3, 6, 7);
-        c[m + 3] = __builtin_shufflevector(o01, o23, 2, 3, 6, 7);
-#else
-        c[m] = __builtin_shufflevector(r[0], r[1], 0, 2);
-        c[m + 1] = __builtin_shufflevector(r[0], r[1], 1, 3);
-#endif
+            q[l] = p[l] + m;
+        pst_vl_transpose(q, c + m);
     }
 #endif
 }

@@ -53,14 +53,22 @@ int pst_isa_level(void);
     ret f##_v4 params;                                                                         \
     ret f##_v3 params;                                                                         \
     ret f##_generic params;
-#define PST_LEVEL_PICK(f, args)                                                                \
-    (pst_isa_level() == 2 ? f##_v4 args : pst_isa_level() == 1 ? f##_v3 args : f##_generic args)
+#define PST_LEVEL_PICK(level, f, args)                                                         \
+    ((level) == 2 ? f##_v4 args : (level) == 1 ? f##_v3 args : f##_generic args)
 #define PST_LEVEL_ENTRY(ret, f, params, args)                                                  \
     PST_LEVEL_COPIES(ret, f, params)                                                           \
-    static inline ret f params { return PST_LEVEL_PICK(f, args); }
+    static inline ret f params                                                                 \
+    {                                                                                          \
+        const int pst_level_ = pst_isa_level();                                                \
+        return PST_LEVEL_PICK(pst_level_, f, args);                                            \
+    }
 #define PST_LEVEL_ENTRY_VOID(f, params, args)                                                  \
     PST_LEVEL_COPIES(void, f, params)                                                          \
-    static inline void f params { PST_LEVEL_PICK(f, args); }
+    static inline void f params                                                                \
+    {                                                                                          \
+        const int pst_level_ = pst_isa_level();                                                \
+        PST_LEVEL_PICK(pst_level_, f, args);                                                   \
+    }
 #else
 #define PST_LEVEL_ENTRY(ret, f, params, args) ret f params;
 #define PST_LEVEL_ENTRY_VOID(f, params, args) void f params;

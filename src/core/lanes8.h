@@ -104,11 +104,44 @@ PST_V8_INLINE pst_v4 pst_v4_splat(double a)
     return __builtin_shufflevector(v, v, 0, 0, 0, 0);
 }
 
+/* a[s j[0]], ..., a[s j[3]] (s: the stride). */
+PST_V8_INLINE pst_v4 pst_v4_gather_stride(const double *a, size_t s, const uint32_t *j)
+{
+    pst_v2 p0 = {a[s * j[0]], a[s * j[1]]}, p1 = {a[s * j[2]], a[s * j[3]]};
+    return __builtin_shufflevector(p0, p1, 0, 1, 2, 3);
+}
+
 /* a[j[0]], ..., a[j[3]]. */
 PST_V8_INLINE pst_v4 pst_v4_gather(const double *a, const uint32_t *j)
 {
-    pst_v2 p0 = {a[j[0]], a[j[1]]}, p1 = {a[j[2]], a[j[3]]};
-    return __builtin_shufflevector(p0, p1, 0, 1, 2, 3);
+    return pst_v4_gather_stride(a, 1, j);
+}
+
+/* rows[l][0..4) for l < 4 as four vectors, out[c][l] = rows[l][c]: four 32-byte loads and two
+ * rounds of 4 shuffles (pairs of elements, then of 128-bit pieces). */
+PST_V8_INLINE void pst_v4_transpose4(const double *const rows[4], pst_v4 out[4])
+{
+    pst_v4 r[4];
+    for (int l = 0; l < 4; ++l)
+        memcpy(&r[l], rows[l], sizeof r[l]);
+    pst_v4 e01 = __builtin_shufflevector(r[0], r[1], 0, 4, 2, 6);
+    pst_v4 o01 = __builtin_shufflevector(r[0], r[1], 1, 5, 3, 7);
+    pst_v4 e23 = __builtin_shufflevector(r[2], r[3], 0, 4, 2, 6);
+    pst_v4 o23 = __builtin_shufflevector(r[2], r[3], 1, 5, 3, 7);
+    out[0] = __builtin_shufflevector(e01, e23, 0, 1, 4, 5);
+    out[1] = __builtin_shufflevector(o01, o23, 0, 1, 4, 5);
+    out[2] = __builtin_shufflevector(e01, e23, 2, 3, 6, 7);
+    out[3] = __builtin_shufflevector(o01, o23, 2, 3, 6, 7);
+}
+
+/* rows[l][0..2) for l < 2 as two vectors, out[c][l] = rows[l][c]. */
+PST_V8_INLINE void pst_v2_transpose2(const double *const rows[2], pst_v2 out[2])
+{
+    pst_v2 r0, r1;
+    memcpy(&r0, rows[0], sizeof r0);
+    memcpy(&r1, rows[1], sizeof r1);
+    out[0] = __builtin_shufflevector(r0, r1, 0, 2);
+    out[1] = __builtin_shufflevector(r0, r1, 1, 3);
 }
 
 /* f[0..8) widened to double (exactly) as two halves: one load and one conversion with AVX-512
