@@ -118,10 +118,14 @@ PST_V8_INLINE pst_v4 pst_v4_gather(const double *a, const uint32_t *j)
 }
 
 /* rows[l][0..4) for l < 4 as four vectors, out[c][l] = rows[l][c]: four 32-byte loads and two
- * rounds of 4 shuffles (pairs of elements, then of 128-bit pieces). */
+ * rounds of 4 shuffles (pairs of elements, then of 128-bit pieces). The loads' loop is unrolled:
+ * as a loop, GCC 12's x86-64-v3 code copied the rows to the stack 16 bytes at a time and loaded
+ * them back 32 at a time, a failed store-to-load forwarding per row, and the AVX2 matrix-free
+ * applies took twice as long (docs/building.md, "Vector instructions"). */
 PST_V8_INLINE void pst_v4_transpose4(const double *const rows[4], pst_v4 out[4])
 {
     pst_v4 r[4];
+#pragma GCC unroll 4
     for (int l = 0; l < 4; ++l)
         memcpy(&r[l], rows[l], sizeof r[l]);
     pst_v4 e01 = __builtin_shufflevector(r[0], r[1], 0, 4, 2, 6);
