@@ -3,12 +3,10 @@
  * (one AVX-512 register, two AVX2 or four SSE2 registers per vector; without AVX-512 not for
  * a variable a loop carries, which stays in memory: "Half vectors" below) with the same IEEE
  * operations in every clone: the results do not depend on the ISA. The hot loops that keep
- * 8 partial sums use them (kernels/lanes.h; the stored apply in halves, below). Internal; the
- * functions are inlined. */
+ * 8 partial sums use them (src/core/lanes_level.h, kernels/lanes.h; the stored apply in halves,
+ * below). Internal; the functions are inlined. */
 #ifndef PSTENCIL_LANES8_H
 #define PSTENCIL_LANES8_H
-
-#include "min_image.h"
 
 #include <stdint.h>
 #include <string.h>
@@ -40,14 +38,6 @@ PST_V8_INLINE pst_v8 pst_v8_splat(double a)
 {
     pst_v4 v = {a};
     return __builtin_shufflevector(v, v, 0, 0, 0, 0, 0, 0, 0, 0);
-}
-
-/* pst_min_image (cloud_layout.h) in every lane: the same operations, so the same bits. */
-PST_V8_INLINE pst_v8 pst_v8_min_image(pst_v8 d, double P, double hP)
-{
-    for (int l = 0; l < 8; ++l)
-        d[l] = pst_min_image(d[l], P, hP);
-    return d;
 }
 
 /* The lanes' sum in one fixed order, ((a0 + a4) + (a2 + a6)) + ((a1 + a5) + (a3 + a7)), as

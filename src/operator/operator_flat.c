@@ -7,8 +7,7 @@
 #include "operator.h"
 
 #include "internal.h"
-#include "isa.h"
-#include "lanes8.h"
+#include "operator_flat_sums.h"
 #include "small_matrix.h"
 
 #include <math.h>
@@ -64,91 +63,12 @@ typedef struct {
                     1/cond_max of the largest); 0 when the set is not near-flat            */
 } spread;
 
-/* Sums over row i's live neighbours of 1, x and x x^T (upper triangle, packed), offsets
- * scaled by 1/h_I. A pair is live when it is farther than min_pair_distance h_I and within the
- * kernel support of the larger smoothing length, so the test never sees fewer neighbours than
- * a scheme does. D is a constant in the instantiations below. The neighbours come 8 at a time
- * from the packed positions (op->xyzu, src/core/lanes8.h), the last block padded with the row's
- * own particle (distance 0: not live), into 8 lanes per sum: bound by the loads and the ~25
- * vector operations per block. Measured (3D 10^6, perf, 1 thread): 12 % of lv's precompute
- * with element gathers and an omp simd reduction, 10 % now; lsmps's precompute 7-14 % faster
- * in all (2 threads). */
-static inline __attribute__((always_inline)) void moments(const pst_op *op, int D, int PH,
-                                                          size_t i, double *s)
-{
-    const pst_cloud *c = op->cloud;
-    const int64_t *off = pst_nlist_offsets(op->nl);
-    const uint32_t *idx = pst_nlist_indices(op->nl);
-    const double hi = pst_cloud_h_at(c, i), ih = 1.0 / hi, supp = pst_kernel_support(op->kernel);
-    const double eps2 = op->opts.min_pair_distance * op->opts.min_pair_distance, *h = c->h;
-    const double *p = op->xyzu + 4 * i;
-    const pst_image im = pst_cloud_image(c);
-    const pst_v8 xi = pst_v8_splat(p[0]), yi = pst_v8_splat(p[1]), zi = pst_v8_splat(p[2]);
-    const pst_v8 zero = pst_v8_splat(0.0);
-    pst_v8 acc[10];
-    for (int k = 0; k < 10; ++k)
-        acc[k] = zero;
-    for (int64_t e = off[i]; e < off[i + 1]; e += PST_LANES) {
-        uint32_t pad[PST_LANES];
-        const uint32_t *j = idx + e;
-        if (off[i + 1] - e < PST_LANES) {
-            for (int l = 0; l < PST_LANES; ++l)
-                pad[l] = e + l < off[i + 1] ? idx[e + l] : (uint32_t)i;
-            j = pad;
-        }
-        pst_v8 X, Y, Z, U, r = pst_v8_splat(supp);
-        pst_v8_rows4(op->xyzu, j, &X, &Y, &Z, &U);
-        pst_v8 ox = X - xi, oy = Y - yi, oz = Z - zi;
-        if (im.any) { /* minimum images in a periodic box, as the kernels' offsets */
-            ox = pst_v8_min_image(ox, im.P[0], im.hP[0]);
-            oy = pst_v8_min_image(oy, im.P[1], im.hP[1]);
-            oz = pst_v8_min_image(oz, im.P[2], im.hP[2]);
-        }
-        const pst_v8 dx = ox * ih, dy = oy * ih, dz = D == 3 ? oz * ih : zero;
-        const pst_v8 d2 = dx * dx + dy * dy + dz * dz;
-        if (PH) /* the larger h's support, in h_I */
-            for (int l = 0; l < PST_LANES; ++l)
-                r[l] = supp * fmax(hi, h[j[l]]) * ih;
-        pst_v8 live = zero;
-#pragma omp simd
-        for (int l = 0; l < PST_LANES; ++l)
-            live[l] = ((d2[l] > eps2) & (d2[l] < r[l] * r[l])) ? 1.0 : 0.0;
-        const pst_v8 v[10] = {live,           live * dx,      live * dy,      live * dz,
-                              live * dx * dx, live * dx * dy, live * dx * dz, live * dy * dy,
-                              live * dy * dz, live * dz * dz};
-        for (int k = 0; k < 10; ++k)
-            acc[k] += v[k];
-    }
-    for (int k = 0; k < 10; ++k)
-        s[k] = pst_v8_sum(acc[k]);
-}
-
-/* The instantiations: dimension, and per-particle (PH = 1) or uniform smoothing length; in the
- * widest vector ISA (row_spread runs inside an OpenMP region, which the clones do not reach). */
-PST_ISA_DISPATCH static void moments2u(const pst_op *op, size_t i, double *s)
-{
-    moments(op, 2, 0, i, s);
-}
-PST_ISA_DISPATCH static void moments2p(const pst_op *op, size_t i, double *s)
-{
-    moments(op, 2, 1, i, s);
-}
-PST_ISA_DISPATCH static void moments3u(const pst_op *op, size_t i, double *s)
-{
-    moments(op, 3, 0, i, s);
-}
-PST_ISA_DISPATCH static void moments3p(const pst_op *op, size_t i, double *s)
-{
-    moments(op, 3, 1, i, s);
-}
-
 /* The spread of row i's live neighbours; the eigenvectors only for near-flat rows. */
 static spread row_spread(const pst_op *op, size_t i)
 {
     const int D = op->dim;
-    double m[10];
-    int ph = op->cloud->h != NULL;
-    (D == 2 ? (ph ? moments2p : moments2u) : (ph ? moments3p : moments3u))(op, i, m);
+    double m[PST_FLAT_SUMS];
+    pst_flat_sums(op, i, m);
     const double s0 = m[0], s1[3] = {m[1], m[2], m[3]};
     const double s2[3][3] = {{m[4], m[5], m[6]}, {m[5], m[7], m[8]}, {m[6], m[8], m[9]}};
     spread sp = {INFINITY, 0};
