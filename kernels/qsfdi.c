@@ -21,6 +21,7 @@
  * neighbour the row is 0. Neumann rows fall back to n . (linear WLS gradient), else 0. */
 #include "check.h"
 #include "isa.h"
+#include "qsfdi_derivs.h"
 #include "qsfdi_fit.h"
 #include "qsfdi_lanes.h"
 

@@ -1,14 +1,12 @@
-/* QSFDI's one-off derivatives (gradient and Hessian at the particles, eqs. 20-27) and its
- * interpolation at points (eqs. 32-35), from the fit of qsfdi_fit.h. */
-#include "check.h"
-#include "isa.h"
+/* QSFDI's one-off derivatives (gradient and Hessian at the particles, eqs. 20-27) from the fit
+ * of qsfdi_fit.h. A file compiled once per ISA level (src/core/isa.h), so that the blocks of
+ * its data-moment loop, and the 15 x 8 partial sums it carries from block to block, are as wide
+ * as the level's vectors (src/core/lanes_level.h): as target_clones functions in 8-lane
+ * vectors their x86-64-v3 copies kept them in memory, and the kept-kappa gradient took 2.4x
+ * the time of 4-lane blocks (3D, 132 651 particles, 1 thread). */
 #include "lanes.h"
+#include "qsfdi_derivs.h"
 #include "qsfdi_fit.h"
-
-#include <omp.h>
-#include <stdlib.h>
-
-/* ---- one-off derivatives: gradient and Hessian -------------------------------------------- */
 
 /* Component c of the gradient (which = 0) or Hessian (1) at row i from its kappa and the data
  * moments, with the h factors. */
@@ -75,8 +73,8 @@ PST_KHOT void qs_data_block(const qs_ctx *k, int D, pst_kernel K, const pst_lane
  * (r, r2s, r2c)) and du4 = sum omega4 (r2s, r2c) (u_j - u_i), a block of neighbours at a time
  * from the packed rows (kernels/lanes.h, each block taken one ahead) with qs_omega_q lane by
  * lane, into 8 partial sums per sum: the same sums for every ISA level, block width and thread
- * count. Per neighbour a
- * sqrt, a division, ~19 flops of kernel and 2 per each of the 15 (3D) sums, in vector lanes. */
+ * count. Per neighbour a sqrt, a division, ~19 flops of kernel and 2 per each of the 15 (3D)
+ * sums, in vector lanes. */
 PST_KHOT void qs_data_moments(const qs_ctx *k, int D, pst_kernel K, size_t i, double ih,
                               const int64_t *off, const uint32_t *idx, double *du2, double *du4)
 {
@@ -106,8 +104,8 @@ PST_KHOT void qs_data_moments(const qs_ctx *k, int D, pst_kernel K, size_t i, do
 }
 
 /* Gradient or Hessian at row i for the constant D and kernel K. With the kappas kept by the
- * precompute (with_kept, a constant: opts.keep): the data moments dotted with them (bit for bit the computed result:
- * the same sums, the same kappa). Otherwise one pass of geometry moments, the inversions,
+ * precompute (with_kept, a constant: opts.keep): the data moments dotted with them (bit for
+ * bit the computed result: the same sums, the same kappa). Otherwise one pass of geometry moments, the inversions,
  * then one kappa per component (no stored weights needed: docs/schemes/qsfdi.md); fallback
  * rows take the linear WLS gradient (or 0) and a zero Hessian, as the kept kappas do
  * (qs_keep_row). */
@@ -146,23 +144,21 @@ PST_KHOT void qs_deriv_row_t(const qs_ctx *k, const double *kept, int D, pst_ker
     }
 }
 
-/* qs_deriv_row_t per dimension and kernel, in the widest vector ISA; the rows with kept
- * kappas apart, so that the inversions inlined into the others do not crowd the registers of
+/* qs_deriv_row_t per dimension and kernel; the rows with kept kappas in a function of their
+ * own (noinline), so that the inversions inlined into the others do not crowd the registers of
  * their data-moment loop. */
 typedef void (*qs_deriv_fn)(const qs_ctx *, const double *, size_t, const int64_t *,
                             const uint32_t *, double *const[6], int);
 #define QS_DERIV(D, K, name)                                                                   \
-    PST_ISA_DISPATCH static void qs_kept_##D##_##name(const qs_ctx *k, const double *kept,      \
-                                                      size_t i, const int64_t *off,            \
-                                                      const uint32_t *idx,                     \
-                                                      double *const out[6], int which)         \
+    __attribute__((noinline)) static void qs_kept_##D##_##name(                                \
+        const qs_ctx *k, const double *kept, size_t i, const int64_t *off, const uint32_t *idx, \
+        double *const out[6], int which)                                                       \
     {                                                                                          \
         qs_deriv_row_t(k, kept, D, K, i, off, idx, out, which, 1);                             \
     }                                                                                          \
-    PST_ISA_DISPATCH static void qs_deriv_##D##_##name(const qs_ctx *k, const double *kept,     \
-                                                       size_t i, const int64_t *off,           \
-                                                       const uint32_t *idx,                    \
-                                                       double *const out[6], int which)        \
+    static void qs_deriv_##D##_##name(const qs_ctx *k, const double *kept, size_t i,           \
+                                      const int64_t *off, const uint32_t *idx,                 \
+                                      double *const out[6], int which)                         \
     {                                                                                          \
         if (kept)                                                                              \
             qs_kept_##D##_##name(k, kept, i, off, idx, out, which);                            \
@@ -189,127 +185,15 @@ static void qs_derivs(const pst_op *op, double *const out[6], int which)
             row(&k, kept, i, off, idx, out, which);
 }
 
-void pst_qsfdi_gradient(const pst_op *op, const double *u, double *const grad[3])
+void PST_LEVEL_NAME(pst_qsfdi_gradient)(const pst_op *op, const double *u, double *const grad[3])
 {
     (void)u; /* read from op->xyzu */
     double *const out[6] = {grad[0], grad[1], grad[2], NULL, NULL, NULL};
     qs_derivs(op, out, 0);
 }
 
-void pst_qsfdi_hessian(const pst_op *op, const double *u, double *const hess[6])
+void PST_LEVEL_NAME(pst_qsfdi_hessian)(const pst_op *op, const double *u, double *const hess[6])
 {
     (void)u; /* read from op->xyzu */
     qs_derivs(op, hess, 1);
-}
-
-/* ---- interpolation at points (eqs. 32-35) ---------------------------------------------------- */
-
-/* Value and Laplacian at point p with neighbours idx[e0..e1) and smoothing length h:
- * Phi_k = omega1_k - tau^T Phi^all_k, <p> = sum Phi_k u_k / M0, lap = sum a_k (u_k - <p>).
- * Returns 0 (fallback) for too few neighbours, a singular fit or M0 not positive. The data
- * are taken relative to uref (the nearest neighbour's value) to keep rounding small. */
-PST_KHOT int qs_point_t(const qs_ctx *k, int D, const double p[3], double h, const uint32_t *idx,
-                      int64_t e0, int64_t e1, const double *u, double uref, double *value,
-                      double *lap)
-{
-    const int n2 = QS_N2(D), nq = QS_NQ(D);
-    double mom[QS_NMOM], ih = 1.0 / h;
-    if (qs_moments(k, D, p, ih, idx, e0, e1, mom, mom + n2) < qs_min(D))
-        return 0;
-    qs_state st;
-    if (qs_invert(k, D, mom, mom + n2, &st) >= PST_ROW_RANK_DEFICIENT)
-        return 0;
-    /* tau = sum omega1 (r; r2s / 2; r2c), omega1 = w / d */
-    double tau[9] = {0};
-    for (int64_t e = e0; e < e1; ++e) {
-        double r[3] = {0, 0, 0}, o2, id2, qm[6];
-        qs_pair(k, D, p, ih, idx[e], r, &o2, &id2);
-        qs_quad(D, r, qm);
-        double o1 = o2 * sqrt(qm[0] + qm[1] + (D == 3 ? qm[2] : 0.0)); /* w/d = omega2 d */
-        for (int a = 0; a < D; ++a)
-            tau[a] += o1 * r[a];
-        for (int a = 0; a < nq; ++a)
-            tau[D + a] += o1 * (a < D ? 0.5 : 1.0) * qm[a];
-    }
-    double kt[15], kl[15], one[3] = {1, 1, 1}, zero[3] = {0, 0, 0};
-    qs_functional(D, &st, tau, tau + D, tau + 2 * D, kt);
-    qs_functional(D, &st, zero, one, zero, kl);
-    double sp = 0, m0 = 0, sphi = 0, sa = 0, sau = 0;
-    for (int64_t e = e0; e < e1; ++e) {
-        double r[3] = {0, 0, 0}, o2, id2;
-        size_t j = idx[e];
-        qs_pair(k, D, p, ih, j, r, &o2, &id2);
-        double d2 = 0;
-        for (int a = 0; a < D; ++a)
-            d2 += r[a] * r[a];
-        double o1 = o2 * sqrt(d2);
-        double phi = o1 - qs_weight(D, r, o2, id2, kt), a = qs_weight(D, r, o2, id2, kl);
-        double du = u[j] - uref;
-        sp += phi * du;
-        m0 += phi;
-        sphi += fabs(phi);
-        sa += a;
-        sau += a * du;
-    }
-    if (!(fabs(m0) > k->rank_tol * sphi))
-        return 0; /* M0 = 0: the value is undetermined (e.g. neighbours on one circle) */
-    double v = sp / m0;
-    *value = uref + v;
-    *lap = (sau - sa * v) * ih * ih;
-    return 1;
-}
-
-int pst_qsfdi_interpolate(const pst_op *op, const double *const pts[3], size_t m,
-                          const double *u, double *value, double *lap, size_t *fallbacks,
-                          char *err)
-{
-    qs_ctx k = make_ctx(op);
-    int D = op->dim;
-    double h = pst_cloud_h_max(op->cloud);
-    int64_t *off;
-    uint32_t *idx;
-    int st = pst_points_neighbours(op->cloud, pts, m, k.supp * h, &off, &idx, err);
-    if (st != PST_OK)
-        return st;
-    size_t nfb = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : nfb)
-    for (size_t b = 0; b < pst_chunks(m, PST_CHUNK); ++b)
-        PST_CHUNK_ROWS(op->tally, b, m, PST_CHUNK, q) {
-            double p[3] = {0, 0, 0}, v = 0, l = 0;
-            for (int a = 0; a < D; ++a)
-                p[a] = pts[a][q];
-            /* the nearest particle: among the neighbours, else over the whole cloud (rare) */
-            size_t near = 0;
-            double best = INFINITY;
-            int64_t e0 = off[q], e1 = off[q + 1];
-            size_t cand = e0 < e1 ? (size_t)(e1 - e0) : op->n;
-            for (size_t t = 0; t < cand; ++t) {
-                size_t j = e0 < e1 ? idx[e0 + (int64_t)t] : t;
-                double d2 = 0;
-                for (int a = 0; a < D; ++a) {
-                    double t = pst_offset(&k.c, a, k.c.x[a][j], p[a]);
-                    d2 += t * t;
-                }
-                if (d2 < best) {
-                    best = d2;
-                    near = j;
-                }
-            }
-            double uref = op->n ? u[near] : 0.0;
-            int ok = D == 2 ? qs_point_t(&k, 2, p, h, idx, e0, e1, u, uref, &v, &l)
-                            : qs_point_t(&k, 3, p, h, idx, e0, e1, u, uref, &v, &l);
-            if (!ok) {
-                v = uref;
-                l = 0;
-                ++nfb;
-            }
-            if (value)
-                value[q] = v;
-            if (lap)
-                lap[q] = l;
-        }
-    pst_free(off);
-    pst_free(idx);
-    *fallbacks = nfb;
-    return PST_OK;
 }

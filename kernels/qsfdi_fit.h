@@ -562,15 +562,13 @@ PST_KHOT void qs_fallback_gradient(const qs_ctx *k, int D, const double *nu, con
 static inline int qs_min(int dim) { return dim == 2 ? 5 : 9; } /* choice 6, docs/choices.md */
 
 /* The table [D - 2][K] of the functions prefix_D_name: the rows instantiated per dimension and
- * kernel with PST_FOR_KERNELS (qsfdi.c, qsfdi_derivs.c). */
+ * kernel with PST_FOR_KERNELS (qsfdi.c, qsfdi_derivs.c, qsfdi_lanes.c). */
 #define QS_KERNEL_TABLE(prefix)                                                                \
     {{prefix##_2_cubic, prefix##_2_quintic, prefix##_2_wc2, prefix##_2_wc4},                   \
      {prefix##_3_cubic, prefix##_3_quintic, prefix##_3_wc2, prefix##_3_wc4}}
 
-/* The one-off derivatives and the interpolation at points (qsfdi_derivs.c), the hooks of the
- * scheme table. */
-void pst_qsfdi_gradient(const pst_op *op, const double *u, double *const grad[3]);
-void pst_qsfdi_hessian(const pst_op *op, const double *u, double *const hess[6]);
+/* The interpolation at points (qsfdi_points.c), the hook of the scheme table (the gradient
+ * and Hessian: qsfdi_derivs.h). */
 int pst_qsfdi_interpolate(const pst_op *op, const double *const pts[3], size_t m, const double *u,
                           double *value, double *lap, size_t *fallbacks, char *err);
 
