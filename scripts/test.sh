@@ -24,14 +24,15 @@ phase "Release build"
 ctest --test-dir build --output-on-failure -j "$jobs"
 phase "Release tests"
 
-# The matrix-free lane rows take blocks as wide as the ISA level's vectors (kernels/lanes.h):
-# the Release tests above run this CPU's level (blocks of 8 with AVX-512), the sanitizer build
-# below blocks of 2. Where the CPU has x86-64-v3, a build for that level alone runs the tests
-# that hold the lane rows to the stored apply and the half list in blocks of 4 (about 3 min).
+# The files compiled once per ISA level take blocks as wide as the level's vectors
+# (src/core/lanes_level.h): the Release tests above run this CPU's level (blocks of 8 with
+# AVX-512), the sanitizer build below blocks of 2. Where the CPU has x86-64-v3, a build for that
+# level alone runs, in blocks of 4, the tests that hold the lane rows to the stored apply and
+# the half list, the kept derivatives to the computed ones, and the flatness check (about 3 min).
 printf 'int main(void) { __builtin_cpu_init(); return !__builtin_cpu_supports("x86-64-v3"); }\n' \
   > build/has_v3.c
 if cc build/has_v3.c -o build/has_v3 && build/has_v3; then
-  lane_tests="test_lanes test_half test_qsfdi test_lsmps test_lv test_periodic"
+  lane_tests="test_lanes test_half test_qsfdi test_lsmps test_lv test_periodic test_contract"
   cmake -S . -B build-v3 -DCMAKE_BUILD_TYPE=Release -DPSTENCIL_WERROR=ON -DPSTENCIL_BUILD_BENCH=OFF \
     -DPSTENCIL_ISA_DISPATCH=OFF -DCMAKE_C_FLAGS=-march=x86-64-v3 -DCMAKE_CXX_FLAGS=-march=x86-64-v3
   cmake --build build-v3 -j "$jobs" --target $lane_tests

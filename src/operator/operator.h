@@ -166,7 +166,8 @@ void pst_half_schedule_free(struct pst_half_schedule *h);
 
 /* Flag interior rows whose live neighbours are flat (on one line in 2D, one plane in 3D):
  * rank-deficient and degraded (scheme->degrade) when the condition of their centred second
- * moment reaches 1/rank_tol, ill-conditioned above cond_max (src/operator_flat.c). */
+ * moment reaches 1/rank_tol, ill-conditioned above cond_max (operator_flat.c; its sums in
+ * operator_flat_sums.c, compiled once per ISA level). */
 void pst_op_check_flat_rows(pst_op *op);
 
 /* 1 for the schemes CG can solve through their symmetric scaling (brookshaw, cb). */
