@@ -78,7 +78,11 @@ int main(int argc, char **argv)
     double dims[3] = {2, 3}, ratios[8] = {0.75, 0.9, 1.2};
     int ndims = 2, nratios = 3, reps = 3;
     const char *json = NULL;
-    for (int i = 1; i + 1 < argc; i += 2) {
+    for (int i = 1; i < argc; i += 2) {
+        if (i + 1 == argc) {
+            fprintf(stderr, "bench_compare: %s needs a value\n", argv[i]);
+            return 1;
+        }
         if (strcmp(argv[i], "--n") == 0)
             n = (size_t)atol(argv[i + 1]);
         else if (strcmp(argv[i], "--dims") == 0)

@@ -97,7 +97,11 @@ int main(int argc, char **argv)
         print_header();
         return 0;
     }
-    for (int i = 1; i + 1 < argc; i += 2) {
+    for (int i = 1; i < argc; i += 2) {
+        if (i + 1 == argc) {
+            fprintf(stderr, "bench_solve: %s needs a value\n", argv[i]);
+            return 1;
+        }
         if (strcmp(argv[i], "--dim") == 0)
             dim = atoi(argv[i + 1]);
         else if (strcmp(argv[i], "--n") == 0)

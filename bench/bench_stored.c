@@ -55,9 +55,17 @@ static int parse(int argc, char **argv, args *a)
                 .sizes = {100000, 1000000, 125000, 1000000}, .speed = 1, .accuracy = 1};
     for (int k = 0; k < 4; ++k)
         a->schemes[k] = defaults[k];
-    for (int i = 1; i + 1 < argc; i += 2) {
+    for (int i = 1; i < argc; i += 2) {
+        if (i + 1 == argc) {
+            fprintf(stderr, "bench_stored: %s needs a value\n", argv[i]);
+            return -1;
+        }
         const char *v = argv[i + 1];
         if (strcmp(argv[i], "--part") == 0) {
+            if (strcmp(v, "speed") != 0 && strcmp(v, "accuracy") != 0 && strcmp(v, "all") != 0) {
+                fprintf(stderr, "bench_stored: --part speed|accuracy|all, not %s\n", v);
+                return -1;
+            }
             a->speed = strcmp(v, "accuracy") != 0;
             a->accuracy = strcmp(v, "speed") != 0;
         } else if (strcmp(argv[i], "--dims") == 0 || strcmp(argv[i], "--threads") == 0) {
