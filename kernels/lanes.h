@@ -2,10 +2,10 @@
  * lanes").
  *
  * A row's neighbours are taken PST_LW at a time, as many as the vectors of the level the file
- * is compiled for hold (src/core/lanes_level.h). Their positions and values come from the packed array
- * op->xyzu, (x, y, z, u) per particle (pst_op_apply fills u): one 32-byte load per neighbour
- * and a transpose in vector shuffles give one vector per component, where per-element gathers
- * of four separate arrays cost about four times the instructions. The scheme's pair arithmetic
+ * is compiled for hold (src/core/lanes_level.h). Their positions and values come from the
+ * packed array op->xyzu, (x, y, z, u) per particle (pst_op_apply fills u): one 32-byte load per
+ * neighbour and a transpose in vector shuffles give one vector per component, where
+ * per-element gathers of four separate arrays cost about four times the instructions. The scheme's pair arithmetic
  * then runs once per lane over these vectors (its own scalar inline functions in a loop over
  * the lanes, which the compiler turns into vector instructions), so a weight is bit for bit
  * the one its emission computes pair by pair; and the products w (u_J - u_I) go into 8 partial
@@ -13,8 +13,8 @@
  * pst_v8_sum's order: the apply's row sum is the same for every level, block width and thread
  * count.
  *
- * The vectors are those of src/core/lanes_level.h and lanes8.h. Internal; every function is inlined into the
- * row that calls it. */
+ * The vectors are those of src/core/lanes_level.h and lanes8.h. Internal; every function is
+ * inlined into the row that calls it. */
 #ifndef PSTENCIL_LANES_H
 #define PSTENCIL_LANES_H
 

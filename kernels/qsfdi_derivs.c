@@ -105,10 +105,10 @@ PST_KHOT void qs_data_moments(const qs_ctx *k, int D, pst_kernel K, size_t i, do
 
 /* Gradient or Hessian at row i for the constant D and kernel K. With the kappas kept by the
  * precompute (with_kept, a constant: opts.keep): the data moments dotted with them (bit for
- * bit the computed result: the same sums, the same kappa). Otherwise one pass of geometry moments, the inversions,
- * then one kappa per component (no stored weights needed: docs/schemes/qsfdi.md); fallback
- * rows take the linear WLS gradient (or 0) and a zero Hessian, as the kept kappas do
- * (qs_keep_row). */
+ * bit the computed result: the same sums, the same kappa). Otherwise one pass of geometry
+ * moments, the inversions, then one kappa per component (no stored weights needed:
+ * docs/schemes/qsfdi.md); fallback rows take the linear WLS gradient (or 0) and a zero
+ * Hessian, as the kept kappas do (qs_keep_row). */
 PST_KHOT void qs_deriv_row_t(const qs_ctx *k, const double *kept, int D, pst_kernel K, size_t i,
                              const int64_t *off, const uint32_t *idx, double *const out[6],
                              int which, int with_kept)

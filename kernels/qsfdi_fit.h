@@ -1,7 +1,7 @@
 /* The QSFDI fit (qsfdi.c's file comment): sizes, pair geometry, the moment pass, the inversions,
  * the functionals and the fallbacks, shared by the operator (qsfdi.c, qsfdi_lanes.c), the
- * one-off derivatives (qsfdi_derivs.c) and the interpolation (qsfdi_points.c). Internal: every function is inlined into
- * the hot loop that calls it. */
+ * one-off derivatives (qsfdi_derivs.c) and the interpolation (qsfdi_points.c). Internal: every
+ * function is inlined into the hot loop that calls it. */
 #ifndef PSTENCIL_QSFDI_FIT_H
 #define PSTENCIL_QSFDI_FIT_H
 

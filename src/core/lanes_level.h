@@ -17,7 +17,7 @@
  * 2 without. Without AVX-512 GCC 12 has no register for an 8-lane vector and keeps every one
  * that lives across statements in memory (the blocks taken ahead, the row's centre and sums),
  * copying it between stack slots 16 bytes at a time: the x86-64-v3 copies of the lane rows,
- * in 8-lane blocks, took 2.2-5.6x the time of the AVX-512 ones, in 4-lane blocks 1.4-1.85x
+ * in 8-lane blocks, took 2.2-5.6x the time of the AVX-512 ones, in 4-lane blocks 1.4-2.0x
  * (docs/building.md, "Vector instructions"). A file with target_clones functions compiles one
  * source for the three levels and keeps 8. */
 #if defined(PST_ISA_CLONES) || defined(__AVX512F__)
