@@ -41,8 +41,14 @@
 #endif
 
 /* The level the per-level files run at on this CPU: 2 for x86-64-v4, 1 for x86-64-v3, 0 for
- * generic x86-64 (the target_clones resolver's choice; runtime.c). */
+ * generic x86-64 (the target_clones resolver's choice; runtime.c), or lower when capped. */
 int pst_isa_level(void);
+
+/* For tests and benchmarks: the per-level files run the copy of the lower of level (clamped to
+ * 0..2) and the CPU's level from now on; 2 lifts the cap. Returns the level in effect. The
+ * target_clones functions keep the loader's choice, and pst_isa() still names the CPU's level.
+ * Call it between operations, not while another thread runs the library's kernels. */
+int pst_isa_level_cap(int level);
 
 /* Declares the entry point f (returning ret, parameters params, called with args) of a file
  * compiled per level: with dispatch, its three copies and a static inline f that calls the

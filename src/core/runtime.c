@@ -16,10 +16,10 @@ const char *pst_version(void)
 
 int pst_threads(void) { return omp_get_max_threads(); }
 
-/* The same test as the target_clones resolver of PST_ISA_DISPATCH (isa.h), which picks the
- * widest level the CPU supports; once (the per-level files ask at every apply, and the WLS
- * emission at every row). */
-int pst_isa_level(void)
+/* The CPU's level, by the same test as the target_clones resolver of PST_ISA_DISPATCH (isa.h),
+ * which picks the widest level the CPU supports; once (the per-level files ask at every apply,
+ * and the WLS emission at every row). */
+static int cpu_level(void)
 {
     static _Atomic int level = -1;
     int l = atomic_load_explicit(&level, memory_order_relaxed);
@@ -35,12 +35,27 @@ int pst_isa_level(void)
     return l;
 }
 
+static _Atomic int level_cap = 2; /* pst_isa_level_cap */
+
+int pst_isa_level(void)
+{
+    int l = cpu_level(), cap = atomic_load_explicit(&level_cap, memory_order_relaxed);
+    return l < cap ? l : cap;
+}
+
+int pst_isa_level_cap(int level)
+{
+    atomic_store_explicit(&level_cap, level < 0 ? 0 : level > 2 ? 2 : level,
+                          memory_order_relaxed);
+    return pst_isa_level();
+}
+
 const char *pst_isa(void)
 {
 #if defined(PSTENCIL_NATIVE_BUILD)
     return "native";
 #else
     static const char *const names[] = {"generic", "x86-64-v3", "x86-64-v4"};
-    return names[pst_isa_level()];
+    return names[cpu_level()];
 #endif
 }
