@@ -147,6 +147,23 @@ void test_make_neumann(pst_cloud *c, size_t stride)
             kind[i] = PST_NEUMANN;
 }
 
+pst_cloud *test_lane_cloud(int dim, int per_particle_h)
+{
+    pst_cloud *c = dim == 2 ? test_lattice(2, 0, 1, 1.0 / 37, 1.3, 0.4, 11, 1)
+                            : test_lattice(3, 0, 1, 1.0 / 12, 1.2, 0.4, 11, 1);
+    test_make_neumann(c, 5);
+    if (per_particle_h) {
+        double *h = pst_cloud_h_per_particle(c);
+        if (!h) {
+            fprintf(stderr, "test_lane_cloud: out of memory\n");
+            exit(1);
+        }
+        for (size_t i = 0; i < pst_cloud_size(c); ++i)
+            h[i] *= 1.0 + 0.15 * sin(7.0 * (double)i);
+    }
+    return c;
+}
+
 void test_rough_mobility(pst_cloud *c, int ncomp)
 {
     size_t n = pst_cloud_size(c);

@@ -52,6 +52,11 @@ int test_inside(const pst_cloud *c, size_t i, double lo, double hi, double margi
 /* Every stride-th particle (0, stride, 2 stride, ..) that is Dirichlet becomes Neumann. */
 void test_make_neumann(pst_cloud *c, size_t stride);
 
+/* The cloud of the lane rows' tests: a jittered lattice on [0, 1]^dim (2D s0 = 1/37, h = 1.3 s0;
+ * 3D s0 = 1/12, h = 1.2 s0), test_make_neumann's stride 5; with per_particle_h, h varied by up
+ * to 15 % from particle to particle (inside lists built for 1.2 times the kernel's support). */
+pst_cloud *test_lane_cloud(int dim, int per_particle_h);
+
 /* Mobility with ncomp components (0: none), component k = 1 + k/2 with a 1e3 jump at every
  * particle i with (i * 2654435761) mod 5 == 0: heterogeneous by six orders of magnitude. */
 void test_rough_mobility(pst_cloud *c, int ncomp);

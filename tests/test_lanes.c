@@ -55,23 +55,9 @@ static void check_op(const pst_cloud *c, const pst_nlist *nl, const pst_op_opts 
     pst_op_destroy(op);
 }
 
-static pst_cloud *cloud_of(int dim, int per_particle_h)
-{
-    pst_cloud *c = dim == 2 ? test_lattice(2, 0, 1, 1.0 / 37, 1.3, 0.4, 11, 1)
-                            : test_lattice(3, 0, 1, 1.0 / 12, 1.2, 0.4, 11, 1);
-    test_make_neumann(c, 5);
-    if (per_particle_h) {
-        double *h = pst_cloud_h_per_particle(c);
-        CHECK(h != NULL);
-        for (size_t i = 0; i < pst_cloud_size(c); ++i)
-            h[i] *= 1.0 + 0.15 * sin(7.0 * (double)i); /* within the list's margin below */
-    }
-    return c;
-}
-
 static void check_schemes(int dim, int per_particle_h)
 {
-    pst_cloud *c = cloud_of(dim, per_particle_h);
+    pst_cloud *c = test_lane_cloud(dim, per_particle_h);
     unsigned tails = 0;
     const char *quadric[] = {"qsfdi", "lpmps", "lsmps"};
     pst_nlist *wide = test_nlist(c, 3.0 * 1.2); /* the quintic support, with h's spread */

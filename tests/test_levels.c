@@ -89,15 +89,7 @@ static void compare_levels(const pst_cloud *c, const pst_nlist *nl, const pst_op
 
 static void check_cloud(int dim, int per_particle_h, int top)
 {
-    pst_cloud *c = dim == 2 ? test_lattice(2, 0, 1, 1.0 / 37, 1.3, 0.4, 11, 1)
-                            : test_lattice(3, 0, 1, 1.0 / 12, 1.2, 0.4, 11, 1);
-    test_make_neumann(c, 5);
-    if (per_particle_h) {
-        double *h = pst_cloud_h_per_particle(c);
-        CHECK(h != NULL);
-        for (size_t i = 0; i < pst_cloud_size(c); ++i)
-            h[i] *= 1.0 + 0.15 * sin(7.0 * (double)i); /* within the lists' margin below */
-    }
+    pst_cloud *c = test_lane_cloud(dim, per_particle_h);
     pst_nlist *wide = test_nlist(c, 3.0 * 1.2), *nl = test_nlist(c, 2.0 * 1.2);
     const char *quadric[] = {"qsfdi", "lpmps", "lsmps"};
     for (int s = 0; s < 3; ++s)
