@@ -83,6 +83,10 @@ static int parse(int argc, char **argv, args *a)
                 MAXREPS, MAXSKINS);
         return -1;
     }
+    if (pst_scheme_default_kernel(a->scheme) == PST_KERNEL_UNKNOWN) {
+        fprintf(stderr, "bench_moving: unknown scheme '%s'\n", a->scheme);
+        return -1;
+    }
     return 0;
 }
 

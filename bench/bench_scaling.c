@@ -77,6 +77,10 @@ static int parse(int argc, char **argv, args *a)
         fprintf(stderr, "bench_scaling: --dim 2|3, --reps 1..%d, --n 1000..1e8\n", MAXREPS);
         return -1;
     }
+    if (pst_scheme_default_kernel(a->scheme) == PST_KERNEL_UNKNOWN) {
+        fprintf(stderr, "bench_scaling: unknown scheme '%s'\n", a->scheme);
+        return -1;
+    }
     return 0;
 }
 
