@@ -5,13 +5,14 @@
  * is compiled for hold (src/core/lanes_level.h). Their positions and values come from the
  * packed array op->xyzu, (x, y, z, u) per particle (pst_op_apply fills u): one 32-byte load per
  * neighbour and a transpose in vector shuffles give one vector per component, where
- * per-element gathers of four separate arrays cost about four times the instructions. The scheme's pair arithmetic
- * then runs once per lane over these vectors (its own scalar inline functions in a loop over
- * the lanes, which the compiler turns into vector instructions), so a weight is bit for bit
- * the one its emission computes pair by pair; and the products w (u_J - u_I) go into 8 partial
- * sums, neighbour c into sum c mod 8 (8 / PST_LW vectors, pst_lanes_sum), combined in
- * pst_v8_sum's order: the apply's row sum is the same for every level, block width and thread
- * count.
+ * per-element gathers of four separate arrays cost about four times the instructions
+ * (pst_lanes_pairs, src/operator/operator_lanes.h, which the flatness check shares). The
+ * scheme's pair arithmetic then runs once per lane over these vectors (its own scalar inline
+ * functions in a loop over the lanes, which the compiler turns into vector instructions), so a
+ * weight is bit for bit the one its emission computes pair by pair; and the products
+ * w (u_J - u_I) go into 8 partial sums, neighbour c into sum c mod 8 (8 / PST_LW vectors,
+ * pst_lanes_sum), combined in pst_v8_sum's order: the apply's row sum is the same for every
+ * level, block width and thread count.
  *
  * The vectors are those of src/core/lanes_level.h and lanes8.h. Internal; every function is
  * inlined into the row that calls it. */
@@ -20,19 +21,10 @@
 
 #include "kernel_common.h"
 #include "lanes_level.h"
-#include "min_image.h"
+#include "operator_lanes.h"
 
 #include <math.h>
 #include <string.h>
-
-/* One row in lanes: its centre and value, 1/h, the partial sums, and the periodic box
- * (im.any = 0: none). */
-typedef struct {
-    const double *xyzu;
-    size_t i;
-    pst_vl xi, yi, zi, ui, ih, acc[PST_LSUMS];
-    pst_image im;
-} pst_lanes;
 
 /* Row i of the kernel context k's packed rows, scaled by ih. */
 PST_KHOT pst_lanes pst_lanes_row(const pst_kctx *k, size_t i, double ih)
@@ -44,38 +36,6 @@ PST_KHOT pst_lanes pst_lanes_row(const pst_kctx *k, size_t i, double ih)
     for (int s = 0; s < PST_LSUMS; ++s)
         L.acc[s] = pst_vl_splat(0.0);
     return L;
-}
-
-/* The pairs idx[e .. e + PST_LW) of the row (fewer before e1, none at or past it: the missing
- * lanes are the row's own particle, a pair at distance 0, which every scheme's rule counts as
- * degenerate with weight 0 and whose u_J - u_I is 0): the scaled offsets (x_J - x_I) / h_I as
- * the rows' gathers form them (minimum images in a periodic box, as pst_offset), and
- * u_J - u_I. Returns the neighbours (idx + e, or pad filled). */
-PST_KHOT const uint32_t *pst_lanes_pairs(const pst_lanes *L, const uint32_t *idx, int64_t e,
-                                         int64_t e1, uint32_t pad[PST_LW], pst_vl *x,
-                                         pst_vl *y, pst_vl *z, pst_vl *du)
-{
-    const uint32_t *j = idx + e;
-    if (e1 - e < PST_LW) {
-        for (int l = 0; l < PST_LW; ++l)
-            pad[l] = l < e1 - e ? j[l] : (uint32_t)L->i;
-        j = pad;
-    }
-    pst_vl X, Y, Z, U;
-    pst_vl_rows4(L->xyzu, j, &X, &Y, &Z, &U);
-    pst_vl dx = X - L->xi, dy = Y - L->yi, dz = Z - L->zi;
-    if (L->im.any) { /* pst_offset's minimum images; a cloud without a box skips them */
-        for (int l = 0; l < PST_LW; ++l) {
-            dx[l] = pst_min_image(dx[l], L->im.P[0], L->im.hP[0]);
-            dy[l] = pst_min_image(dy[l], L->im.P[1], L->im.hP[1]);
-            dz[l] = pst_min_image(dz[l], L->im.P[2], L->im.hP[2]);
-        }
-    }
-    *x = dx * L->ih;
-    *y = dy * L->ih;
-    *z = dz * L->ih;
-    *du = U - L->ui;
-    return j;
 }
 
 /* The neighbours idx[0..n) of row L into arrays, for the rows that work a chunk at a time:

@@ -1,14 +1,14 @@
-/* The sums of the flatness check (operator_flat_sums.h) a block of neighbours at a time. A
- * file compiled once per ISA level (src/core/isa.h), so that its blocks, and the 10 x 8 partial
- * sums it carries from block to block, are as wide as the level's vectors
- * (src/core/lanes_level.h): as one target_clones function in 8-lane vectors its x86-64-v3 copy
- * kept them in memory and took 3.1-4.5x the AVX-512 copy's time, in 4-lane blocks 1.1-1.4x
- * (3D 10^6, perf samples of the lv and cspm precomputes). */
+/* The sums of the flatness check (operator_flat_sums.h) a block of neighbours at a time, the
+ * blocks of the kernels' rows in lanes (operator_lanes.h). A file compiled once per ISA level
+ * (src/core/isa.h), so that its blocks, and the 10 x 8 partial sums it carries from block to
+ * block, are as wide as the level's vectors (src/core/lanes_level.h): as one target_clones
+ * function in 8-lane vectors its x86-64-v3 copy kept them in memory and took 3.1-4.5x the
+ * AVX-512 copy's time, in 4-lane blocks 1.1-1.4x (3D 10^6, perf samples of the lv and cspm
+ * precomputes). */
 #include "operator_flat_sums.h"
 
 #include "internal.h"
-#include "lanes_level.h"
-#include "min_image.h"
+#include "operator_lanes.h"
 
 #include <math.h>
 
@@ -28,9 +28,11 @@ static inline __attribute__((always_inline)) void flat_sums(const pst_op *op, in
     const double hi = pst_cloud_h_at(c, i), ih = 1.0 / hi, supp = pst_kernel_support(op->kernel);
     const double eps2 = op->opts.min_pair_distance * op->opts.min_pair_distance, *h = c->h;
     const double *p = op->xyzu + 4 * i;
-    const pst_image im = pst_cloud_image(c);
-    const pst_vl xi = pst_vl_splat(p[0]), yi = pst_vl_splat(p[1]), zi = pst_vl_splat(p[2]);
     const pst_vl zero = pst_vl_splat(0.0);
+    const pst_lanes L = {.xyzu = op->xyzu, .i = i, .xi = pst_vl_splat(p[0]),
+                         .yi = pst_vl_splat(p[1]), .zi = pst_vl_splat(p[2]),
+                         .ui = pst_vl_splat(p[3]), .ih = pst_vl_splat(ih),
+                         .im = pst_cloud_image(c)};
     pst_vl acc[PST_FLAT_SUMS][PST_LSUMS];
     for (int k = 0; k < PST_FLAT_SUMS; ++k)
         for (int b = 0; b < PST_LSUMS; ++b)
@@ -38,24 +40,12 @@ static inline __attribute__((always_inline)) void flat_sums(const pst_op *op, in
     for (int64_t g = e0; g < e1; g += PST_LANES) {
 #pragma GCC unroll 4
         for (int b = 0; b < PST_LSUMS; ++b) { /* block b of the group: partial sums acc[.][b] */
-            const int64_t e = g + b * PST_LW;
             uint32_t pad[PST_LW];
-            const uint32_t *j = idx + e;
-            if (e1 - e < PST_LW) {
-                for (int l = 0; l < PST_LW; ++l)
-                    pad[l] = e + l < e1 ? idx[e + l] : (uint32_t)i;
-                j = pad;
-            }
-            pst_vl X, Y, Z, U, r = pst_vl_splat(supp);
-            pst_vl_rows4(op->xyzu, j, &X, &Y, &Z, &U);
-            pst_vl ox = X - xi, oy = Y - yi, oz = Z - zi;
-            if (im.any) /* minimum images in a periodic box, as the kernels' offsets */
-                for (int l = 0; l < PST_LW; ++l) {
-                    ox[l] = pst_min_image(ox[l], im.P[0], im.hP[0]);
-                    oy[l] = pst_min_image(oy[l], im.P[1], im.hP[1]);
-                    oz[l] = pst_min_image(oz[l], im.P[2], im.hP[2]);
-                }
-            const pst_vl dx = ox * ih, dy = oy * ih, dz = D == 3 ? oz * ih : zero;
+            pst_vl dx, dy, dz, du, r = pst_vl_splat(supp);
+            const uint32_t *j =
+                pst_lanes_pairs(&L, idx, g + b * PST_LW, e1, pad, &dx, &dy, &dz, &du);
+            if (D == 2)
+                dz = zero;
             const pst_vl d2 = dx * dx + dy * dy + dz * dz;
             if (PH) /* the larger h's support, in h_I */
                 for (int l = 0; l < PST_LW; ++l)
