@@ -26,7 +26,7 @@
  * volumes) and its interior row is the Brookshaw row V_J sum_a (M^a_I + M^a_J) a_IJ x_a^2 / d^2.
  * Neumann rows are n . M_I . (D u)_I with the particle's gradient. Never NaN.
  *
- * This file holds the three scheme tables. */
+ * This file holds the three scheme tables; the code map is in docs/schemes/mixed.md. */
 #include "mixed.h"
 
 static int pre_ordinary(pst_op *op, char *err) { return pst_mx_precompute(op, MX_ORDINARY, err); }
@@ -39,7 +39,7 @@ static int pre_quadratic(pst_op *op, char *err) { return pst_mx_precompute(op, M
 /* HALO, the hops a row reaches (pst_scheme.halo): 2, the neighbours' gradients, whose fits read
  * their own neighbours; 3 for mixed0, whose fits weigh those neighbours by volumes V~ that come
  * from the next ring. */
-#define MX_SCHEME(ID, NAME, DESC, FALLBACK, DEG, HALO, PRE, MIN, HESS, BYTES2, BYTES3)        \
+#define MX_SCHEME(ID, NAME, DESC, FALLBACK, DEG, HALO, PRE, MIN, HESS, BYTES2, BYTES3)         \
     const pst_scheme ID = {.name = NAME,                                                       \
                            .description = DESC,                                                \
                            .fallback = FALLBACK,                                               \
@@ -50,12 +50,12 @@ static int pre_quadratic(pst_op *op, char *err) { return pst_mx_precompute(op, M
                            .halo = HALO,                                                       \
                            .min_neighbours = MIN,                                              \
                            .precompute = PRE,                                                  \
-                           .wide_pattern = pst_mx_wide_pattern,                                    \
-                           .apply = pst_mx_apply,                                                  \
-                           .emit_row = pst_mx_emit_row,                                            \
-                           .gradient = pst_mx_gradient,                                            \
+                           .wide_pattern = pst_mx_wide_pattern,                                \
+                           .apply = pst_mx_apply,                                              \
+                           .emit_row = pst_mx_emit_row,                                        \
+                           .gradient = pst_mx_gradient,                                        \
                            .hessian = HESS,                                                    \
-                           .free_data = pst_mx_free,                                               \
+                           .free_data = pst_mx_free,                                           \
                            .data_bytes = {BYTES2, BYTES3}} /* Q, mode, Vn (mixed0) */
 
 MX_SCHEME(pst_scheme_mixed0, "mixed0",
