@@ -45,22 +45,33 @@ static inline int basis_size(int D, int S)
     return S == MX_QUADRATIC ? (D + 1) * (D + 2) / 2 : D + 1;
 }
 
-/* Taylor basis at offset x: 1, x_a, then (quadratic) x_a^2/2 and the cross products in the
- * order of pst_op_hessian (2D: xx, yy, xy; 3D: xx, yy, zz, xy, xz, yz). */
-PST_KHOT void basis(int D, int S, const double x[3], double *p)
+/* Taylor basis at offset (x, y, z): 1, x_a, then (quadratic) x_a^2/2 and the cross products in
+ * the order of pst_op_hessian (2D: xx, yy, xy; 3D: xx, yy, zz, xy, xz, yz); z is not read in
+ * 2D. The components as scalars, not an array: the form that vectorises across neighbours
+ * (GCC 12 finds no vector type for an array built from a chunk's columns). */
+PST_KHOT void basis_xyz(int D, int S, double x, double y, double z, double *p)
 {
     p[0] = 1.0;
-    for (int a = 0; a < D; ++a)
-        p[1 + a] = x[a];
+    p[1] = x;
+    p[2] = y;
+    if (D == 3)
+        p[3] = z;
     if (S != MX_QUADRATIC)
         return;
-    for (int a = 0; a < D; ++a)
-        p[1 + D + a] = 0.5 * x[a] * x[a];
-    p[1 + 2 * D] = x[0] * x[1];
+    p[1 + D] = 0.5 * x * x;
+    p[2 + D] = 0.5 * y * y;
+    if (D == 3)
+        p[3 + D] = 0.5 * z * z;
+    p[1 + 2 * D] = x * y;
     if (D == 3) {
-        p[8] = x[0] * x[2];
-        p[9] = x[1] * x[2];
+        p[8] = x * z;
+        p[9] = y * z;
     }
+}
+
+PST_KHOT void basis(int D, int S, const double x[3], double *p)
+{
+    basis_xyz(D, S, x[0], x[1], D == 3 ? x[2] : 0.0, p);
 }
 
 /* Offset x = r_j - r_i, its length, and whether the pair is non-degenerate. */
@@ -122,6 +133,58 @@ PST_KHOT double brookshaw_weight(const mx_ctx *k, int D, size_t i, size_t j)
     for (int c = 0; c < D; ++c)
         s += (pst_mob(&k->c, c, i) + pst_mob(&k->c, c, j)) * x[c] * x[c];
     return k->c.V[j] * a * s / d2;
+}
+
+/* The passes over a row's neighbours (the fits' moments and volumes, the rows' derivative
+ * weights) gather them, a chunk at a time, into stack arrays (structure of arrays) and evaluate
+ * the kernel in vector loops; their sums have an order fixed by the code, the same for every
+ * row and thread count. A 3D row (~190 neighbours) is one chunk. */
+#define MX_CHUNK 256
+
+/* W(d_c, h) of a chunk, 0 for degenerate pairs (d <= eps h): pst_sph_w per element (its
+ * uncut value, then its cut) with the kernel K a constant, so these are fit_weight's numbers
+ * bit for bit. */
+PST_KHOT void chunk_w(pst_kernel K, int D, int n, const double *d, double h, double eh,
+                      double *w)
+{
+    const double cut = pst_sph_support[K] * h;
+#pragma omp simd
+    for (int c = 0; c < n; ++c)
+        w[c] = pst_sph_uncut(K, D, d[c], h, 0);
+#pragma omp simd
+    for (int c = 0; c < n; ++c)
+        w[c] = ((d[c] < cut) & (d[c] > eh)) ? w[c] : 0.0;
+}
+
+/* Offsets x_j - x_I of the neighbours idx[0..n) of the point xi into r (scaled by ih unless ih is
+ * 0) and their weights into w: pair_offset's distance and live rule and pst_sph_w with h, so
+ * w is fit_weight's value bit for bit (times vn[j] when vn is given: mixed0). Separate loops,
+ * so that the sqrt runs in vector instructions (no math errno) and the kernel loop has no
+ * gather in it. Bound by the gather of x_j and the kernel's ~20 flops. */
+PST_KHOT void mx_gather(const mx_ctx *k, int D, const double xi[3], double h, double ih,
+                        const uint32_t *idx, int n, const double *vn, double (*r)[MX_CHUNK],
+                        double *w)
+{
+    double d[MX_CHUNK];
+    for (int c = 0; c < n; ++c)
+        for (int a = 0; a < D; ++a)
+            r[a][c] = pst_offset(&k->c, a, k->c.x[a][idx[c]], xi[a]);
+    for (int c = 0; c < n; ++c) /* pst_pair_offset's sum, in its order */
+        d[c] = sqrt(r[0][c] * r[0][c] + r[1][c] * r[1][c] + (D == 3 ? r[2][c] * r[2][c] : 0.0));
+    const double eh = k->c.pair_eps * h;
+    switch (k->c.kernel) { /* one vectorised instantiation per kernel */
+    case PST_KERNEL_CUBIC: chunk_w(PST_KERNEL_CUBIC, D, n, d, h, eh, w); break;
+    case PST_KERNEL_QUINTIC: chunk_w(PST_KERNEL_QUINTIC, D, n, d, h, eh, w); break;
+    case PST_KERNEL_WENDLAND_C2: chunk_w(PST_KERNEL_WENDLAND_C2, D, n, d, h, eh, w); break;
+    default: chunk_w(PST_KERNEL_WENDLAND_C4, D, n, d, h, eh, w); break;
+    }
+    if (vn)
+        for (int c = 0; c < n; ++c)
+            w[c] *= vn[idx[c]];
+    if (ih != 0.0)
+        for (int a = 0; a < D; ++a)
+            for (int c = 0; c < n; ++c)
+                r[a][c] *= ih;
 }
 
 /* Choice 6 (docs/choices.md) by analogy: the fit of m unknowns includes I, so it needs m - 1

@@ -29,60 +29,6 @@ void pst_mx_free(void *p)
 
 static inline uint8_t worse(uint8_t a, uint8_t b) { return a > b ? a : b; }
 
-/* ---- the moment and volume passes: the neighbours a chunk at a time ---------------------- */
-
-/* A row's neighbours are gathered, a chunk at a time, into stack arrays (structure of arrays),
- * then summed in wls_sums.h's vectorised reduction loops, as qsfdi and the WLS schemes do; the
- * order of a sum is fixed by the code, the same for every row and thread count. A 3D row (~190
- * neighbours) is one chunk. */
-#define MX_CHUNK 256
-
-/* W(d_c, h) of a chunk, 0 for degenerate pairs (d <= eps h): pst_sph_w per element (its
- * uncut value, then its cut) with the kernel K a constant, so these are fit_weight's numbers
- * bit for bit. */
-PST_KHOT void chunk_w(pst_kernel K, int D, int n, const double *d, double h, double eh,
-                      double *w)
-{
-    const double cut = pst_sph_support[K] * h;
-#pragma omp simd
-    for (int c = 0; c < n; ++c)
-        w[c] = pst_sph_uncut(K, D, d[c], h, 0);
-#pragma omp simd
-    for (int c = 0; c < n; ++c)
-        w[c] = ((d[c] < cut) & (d[c] > eh)) ? w[c] : 0.0;
-}
-
-/* Offsets x_j - x_I of the neighbours idx[0..n) of the point xi into r (scaled by ih unless ih is
- * 0) and their weights into w: pair_offset's distance and live rule and pst_sph_w with h, so
- * w is fit_weight's value bit for bit (times vn[j] when vn is given: mixed0). Separate loops,
- * so that the sqrt runs in vector instructions (no math errno) and the kernel loop has no
- * gather in it. Bound by the gather of x_j and the kernel's ~20 flops. */
-PST_KHOT void mx_gather(const mx_ctx *k, int D, const double xi[3], double h, double ih,
-                        const uint32_t *idx, int n, const double *vn, double (*r)[MX_CHUNK],
-                        double *w)
-{
-    double d[MX_CHUNK];
-    for (int c = 0; c < n; ++c)
-        for (int a = 0; a < D; ++a)
-            r[a][c] = pst_offset(&k->c, a, k->c.x[a][idx[c]], xi[a]);
-    for (int c = 0; c < n; ++c) /* pst_pair_offset's sum, in its order */
-        d[c] = sqrt(r[0][c] * r[0][c] + r[1][c] * r[1][c] + (D == 3 ? r[2][c] * r[2][c] : 0.0));
-    const double eh = k->c.pair_eps * h;
-    switch (k->c.kernel) { /* one vectorised instantiation per kernel */
-    case PST_KERNEL_CUBIC: chunk_w(PST_KERNEL_CUBIC, D, n, d, h, eh, w); break;
-    case PST_KERNEL_QUINTIC: chunk_w(PST_KERNEL_QUINTIC, D, n, d, h, eh, w); break;
-    case PST_KERNEL_WENDLAND_C2: chunk_w(PST_KERNEL_WENDLAND_C2, D, n, d, h, eh, w); break;
-    default: chunk_w(PST_KERNEL_WENDLAND_C4, D, n, d, h, eh, w); break;
-    }
-    if (vn)
-        for (int c = 0; c < n; ++c)
-            w[c] *= vn[idx[c]];
-    if (ih != 0.0)
-        for (int a = 0; a < D; ++a)
-            for (int c = 0; c < n; ++c)
-                r[a][c] *= ih;
-}
-
 /* V~_i = 1 / (W(0) + sum_j W_ij), h_i (eq. 4, as choice 3): mx_gather's weights summed in
  * wls_msum0's loop. Bound like the moments by the gather and the kernel. Measured (3D, 1
  * thread, AVX-512 clone): 1.8 ns per neighbour (was 7.3 as a scalar pair loop). */
