@@ -19,8 +19,10 @@
  *
  * This file holds the three scheme tables; cspm_family.h the parts the others share,
  * cspm_moments.c the volumes and moments, cspm_fit.c the inversions, coefficients and the
- * precompute, cspm_rows.c the apply and emission, cspm_derivs.c the gradient and Hessian. */
+ * precompute, cspm_lanes.c the matrix-free apply, cspm_rows.c the emission, cspm_derivs.c the
+ * gradient and Hessian. */
 #include "cspm_family.h"
+#include "cspm_lanes.h"
 
 static int cs_min_icspm(int dim) { return level_min(CS_ICSPM, dim); }
 static int cs_min_cspm(int dim) { return level_min(CS_CSPM, dim); }
@@ -41,6 +43,7 @@ static int pre_csph(pst_op *op, char *err) { return pst_cs_precompute(op, CS_CSP
                            .min_neighbours = MIN,                                             \
                            .precompute = PRE,                                                 \
                            .apply = pst_cs_apply,                                             \
+                           .lanes = 1,                                                        \
                            .emit_row = pst_cs_emit_row,                                       \
                            .gradient = pst_cs_gradient,                                       \
                            .hessian = HESS,                                                   \

@@ -121,6 +121,36 @@ PST_KHOT void cs_gather(const cs_ctx *k, int D, int withV, const double xi[3],
     double in = (((d) > (kc)->lo) & ((d) < (kc)->hi)) ? 1.0 : 0.0;                             \
     double id = in / ((d) + (1.0 - in))
 
+/* a_Ij of cspm_family.c's head comment for one pair: offset (x, y, z) (z not read in 2D), its
+ * length d, V_j, with the row's kernel constants kc and coefficients Ki; 0 for a dead pair. The
+ * chunk rows (cs_weights, the emission) and the lane rows (cspm_lanes.c, the apply) both call
+ * it, so the two applies have the same weights bit for bit; the components are scalars (the
+ * form that vectorises across neighbours). Per pair the two kernel shapes (~30 flops), the
+ * n2 quadratic monomials in two forms, mu . r, one division. */
+PST_KHOT double cs_weight_xyz(pst_kernel K, int D, const cs_kc *kc, const double *Ki, double x,
+                              double y, double z, double d, double V)
+{
+    const int n2 = cs_n2(D);
+    const double *lam = Ki, *sig = Ki + n2, *mu = Ki + 2 * n2, c0 = Ki[2 * n2 + D];
+    const double q = d * kc->ih;
+    CS_LIVE(kc, d, in, id);
+    double w1 = kc->s1 * pst_sph_shape(K, D, q, 1), w2 = kc->s2 * pst_sph_shape(K, D, q, 2);
+    /* the packed components in cs_pa / cs_pb's order: 2D xx, xy, yy; 3D xx, xy, xz, yy, yz, zz */
+    const double m[6] = {x * x, x * y, D == 3 ? x * z : y * y, D == 3 ? y * y : 0.0,
+                         D == 3 ? y * z : 0.0, D == 3 ? z * z : 0.0};
+    double ql = 0, qs = 0, mr = 0;
+    for (int p = 0; p < n2; ++p) {
+        ql += lam[p] * m[p];
+        qs += sig[p] * m[p];
+    }
+    mr += mu[0] * x;
+    mr += mu[1] * y;
+    if (D == 3)
+        mr += mu[2] * z;
+    double id2 = id * id, a1 = w1 * id;
+    return V * ((w2 * ql + a1 * qs) * id2 + a1 * (c0 - mr));
+}
+
 /* The inverses a row's coefficients need, kept between the inversion and weights passes. */
 typedef struct {
     double M1inv[9];  /* M1^-1, or -I when M1 is singular (the kernel gradient)          */
@@ -155,8 +185,7 @@ int pst_cs_precompute(pst_op *op, int which, char *err);
 void pst_cs_degrade(pst_op *op, size_t i);
 void pst_cs_free(void *p);
 
-/* cspm_rows.c: the matrix-free apply and the emission of a stored row. */
-void pst_cs_apply(const pst_op *op, const double *u, double *y);
+/* cspm_rows.c: the emission of a stored row (the apply: cspm_lanes.h). */
 void pst_cs_emit_row(const pst_op *op, size_t i, double *w);
 
 /* cspm_derivs.c: the gradient and the Hessian, refitted from the moments and the data. */

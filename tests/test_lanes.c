@@ -1,9 +1,10 @@
 /* The matrix-free rows in lanes (kernels/lanes.h, docs/operators.md "Matrix-free rows in
- * lanes"): for qsfdi, lpmps, lsmps and the LV family the matrix-free apply takes 8 pairs at a
- * time from the packed (x, y, z, u) rows and sums in the stored apply's 8 lanes, so the two
- * applies give the same numbers, row by row, not only to rounding. Checked in 2D and 3D with
- * Dirichlet and Neumann rows, uniform and per-particle h, the LV gradient variants, mobilities
- * and kernels (the LV rows in lanes beside its chunk rows), rows of every length modulo 8 (the
+ * lanes"): for qsfdi, lpmps, lsmps, the CSPM and the LV families the matrix-free apply takes 8
+ * pairs at a time from the packed (x, y, z, u) rows and sums in the stored apply's 8 lanes, so
+ * the two applies give the same numbers, row by row, not only to rounding. Checked in 2D and 3D
+ * with Dirichlet and Neumann rows, uniform and per-particle h, the LV gradient variants,
+ * mobilities and kernels (the LV rows in lanes beside its chunk rows; the CSPM rows, whose
+ * emission takes its chunks), rows of every length modulo 8 (the
  * last block padded, or read past the row) and rows longer than a chunk (256 neighbours); a
  * second apply with another u repacks u; an operator whose rows were skipped refuses the
  * apply. */
@@ -59,9 +60,9 @@ static void check_schemes(int dim, int per_particle_h)
 {
     pst_cloud *c = test_lane_cloud(dim, per_particle_h);
     unsigned tails = 0;
-    const char *quadric[] = {"qsfdi", "lpmps", "lsmps"};
+    const char *quadric[] = {"qsfdi", "lpmps", "lsmps", "cspm", "icspm", "csph2g"};
     pst_nlist *wide = test_nlist(c, 3.0 * 1.2); /* the quintic support, with h's spread */
-    for (int s = 0; s < 3; ++s) {
+    for (int s = 0; s < 6; ++s) {
         pst_op_opts o;
         pst_op_defaults(&o);
         o.scheme = quadric[s];
@@ -69,14 +70,15 @@ static void check_schemes(int dim, int per_particle_h)
     }
     const char *lv[] = {"brookshaw", "cb", "schwaiger", "lv"};
     pst_nlist *nl = test_nlist(c, 2.0 * 1.2); /* the cubic spline's */
-    /* the LV rows in lanes (G1) have an instantiation per kernel: the other three */
-    for (int K = PST_KERNEL_QUINTIC; K <= PST_KERNEL_WENDLAND_C4; ++K) {
-        pst_op_opts o;
-        pst_op_defaults(&o);
-        o.scheme = "lv";
-        o.kernel = (pst_kernel)K;
-        check_op(c, K == PST_KERNEL_QUINTIC ? wide : nl, &o, &tails);
-    }
+    /* the LV and CSPM rows in lanes have an instantiation per kernel: the other three */
+    for (int K = PST_KERNEL_QUINTIC; K <= PST_KERNEL_WENDLAND_C4; ++K)
+        for (int s = 0; s < 2; ++s) {
+            pst_op_opts o;
+            pst_op_defaults(&o);
+            o.scheme = s ? "cspm" : "lv";
+            o.kernel = (pst_kernel)K;
+            check_op(c, K == PST_KERNEL_QUINTIC ? wide : nl, &o, &tails);
+        }
     pst_nlist_destroy(wide);
     for (int s = 0; s < 4; ++s)
         for (int g = PST_GRAD_G1; g <= PST_GRAD_G4; ++g) {
@@ -111,8 +113,8 @@ static void check_long_rows(void)
     pst_nlist_get_stats(nl, &st);
     CHECK(st.max > 2 * 256);
     unsigned tails = 0;
-    const char *schemes[] = {"lv", "qsfdi"};
-    for (int s = 0; s < 2; ++s) {
+    const char *schemes[] = {"lv", "qsfdi", "cspm"};
+    for (int s = 0; s < 3; ++s) {
         pst_op_opts o;
         pst_op_defaults(&o);
         o.scheme = schemes[s];

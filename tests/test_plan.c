@@ -687,7 +687,8 @@ static void test_fit_memory(void)
     CHECK(p.task_amg_radius[0] == -1 && p.task_restart[0] == 50); /* room enough: as asked */
     /* the data, the status byte and the matrix-free apply's packed rows (32 bytes) */
     CHECK_INT(pst_scheme_apply_bytes("lpmps"), 32);
-    CHECK_INT(pst_scheme_apply_bytes("cspm"), 0);
+    CHECK_INT(pst_scheme_apply_bytes("cspm"), 32);
+    CHECK_INT(pst_scheme_apply_bytes("mixed1"), 0);
     CHECK_INT(pst_scheme_apply_bytes("nosuch"), 0);
     CHECK(fabs(p.bytes_operators - (double)n * (1 + pst_scheme_data_bytes("lpmps", 3) + 32)) < 1);
     double loose = p.bytes_total, avail = p.bytes_available;

@@ -151,9 +151,9 @@ int pst_scheme_data_bytes(const char *name, int dim);
 
 /* Bytes per particle that an operator keeps for its lane rows, the positions and values
  * packed for the precompute, the matrix-free apply and qsfdi's derivatives (32 for qsfdi,
- * lpmps, lsmps and the LV family; docs/operators.md, "Matrix-free rows in lanes"), beside its
- * data (pst_scheme_data_bytes), on a half list too (pst_op_use_half_list: its lane rows read
- * them). 0 for the other schemes and an unknown name. */
+ * lpmps, lsmps, the CSPM and the LV families; docs/operators.md, "Matrix-free rows in lanes"),
+ * beside its data (pst_scheme_data_bytes), on a half list too (pst_op_use_half_list: its lane
+ * rows read them). 0 for the other schemes and an unknown name. */
 int pst_scheme_apply_bytes(const char *name);
 
 /* 1 when a scheme's own assembled matrix serves AMG better than the Brookshaw proxy (lsmps;
@@ -220,8 +220,8 @@ void pst_op_set_progress(pst_op *op, const pst_progress *progress);
 /* Matrix-free apply: y = L u, pair geometry recomputed from the positions and the per-particle
  * data. u and y have one value per particle (cloud order) and must not alias. The apply is
  * parallel inside; two applies (gradients, Hessians) of one operator must not run at the same
- * time (qsfdi, lpmps, lsmps and the LV family write u into the operator's packed positions
- * and values, 32 bytes per particle). PST_EINVAL for an operator built without rows
+ * time (qsfdi, lpmps, lsmps, the CSPM and the LV families write u into the operator's packed
+ * positions and values, 32 bytes per particle). PST_EINVAL for an operator built without rows
  * (opts.laplacian = 0). */
 int pst_op_apply(const pst_op *op, const double *u, double *y);
 
