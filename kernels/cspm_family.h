@@ -96,8 +96,8 @@ static inline cs_kc kc_of(const cs_ctx *k, int D, double h)
                                        : F(PST_KERNEL_WENDLAND_C4, __VA_ARGS__))
 
 /* r, d^2 and d of the neighbours idx[0..n) of xi into g, with V_j (withV) into g->b. Three
- * loops, so that only the sqrt stays scalar (GCC does not vectorise sqrt while it may set
- * errno, the default -fmath-errno). d is pst_pair_offset's, bit for bit. */
+ * loops: the gather, d^2, then the sqrt in a loop of its own (vectorised: the library is built
+ * without math errno). d is pst_pair_offset's, bit for bit. */
 PST_KHOT void cs_gather(const cs_ctx *k, int D, int withV, const double xi[3],
                         const uint32_t *idx, int n, cs_chunk *g)
 {

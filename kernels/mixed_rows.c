@@ -155,7 +155,7 @@ static inline int64_t pattern_pos(const uint32_t *pidx, int64_t lo, int64_t hi, 
 
 /* The weights of row i in the pattern's order: the composition of the two sweeps with the
  * diagonal dropped (rows sum to zero, so it is minus the sum of the others). |N|^2 pair
- * evaluations and binary searches per row. */
+ * evaluations (each neighbour's row through phi_chunk) and binary searches per row. */
 PST_KHOT void emit_t(const mx_ctx *k, int D, int S, const int64_t *poff, const uint32_t *pidx,
                    size_t i, double *w)
 {
