@@ -1,13 +1,12 @@
-/* The matrix-free rows in lanes (kernels/lanes.h, docs/operators.md "Matrix-free rows in
- * lanes"): for qsfdi, lpmps, lsmps, the CSPM and the LV families the matrix-free apply takes 8
- * pairs at a time from the packed (x, y, z, u) rows and sums in the stored apply's 8 lanes, so
- * the two applies give the same numbers, row by row, not only to rounding. Checked in 2D and 3D
- * with Dirichlet and Neumann rows, uniform and per-particle h, the LV gradient variants,
- * mobilities and kernels (the LV rows in lanes beside its chunk rows; the CSPM rows, whose
- * emission takes its chunks), rows of every length modulo 8 (the
- * last block padded, or read past the row) and rows longer than a chunk (256 neighbours); a
- * second apply with another u repacks u; an operator whose rows were skipped refuses the
- * apply. */
+/* The matrix-free rows in lanes (kernels/lanes.h, docs/operators.md "Matrix-free rows in lanes"):
+ * for qsfdi, lpmps, lsmps, the CSPM and the LV families the matrix-free apply takes 8 pairs at a
+ * time from the packed (x, y, z, u) rows and sums in the stored apply's 8 lanes, so the two
+ * applies give the same numbers, row by row, not only to rounding. Checked in 2D and 3D with
+ * Dirichlet and Neumann rows, uniform and per-particle h, the LV gradient variants, mobilities and
+ * kernels (the LV rows in lanes beside its chunk rows; the CSPM rows, whose emission takes its
+ * chunks), rows of every length modulo 8 (the last block padded, or read past the row) and rows
+ * longer than a chunk (256 neighbours); a second apply with another u repacks u; an operator whose
+ * rows were skipped refuses the apply. */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"

@@ -1,13 +1,12 @@
 /* The files compiled once per ISA level (src/core/isa.h) give the same bits at every level this
  * CPU runs: pst_isa_level_cap runs the lower levels' copies here, so one dispatched build on an
- * AVX-512 machine checks the blocks of 8, 4 and 2 pairs against each other. Compared per level,
- * by a hash of their bytes: the operator built at that level (its row statuses, after the
- * flatness check), the flatness check's sums of every row, the matrix-free apply on the whole
- * list and on a half list (where the scheme has one), the stored apply, and qsfdi's gradient
- * and Hessian from kept kappas and computed; for qsfdi, lpmps, lsmps, the CSPM family and the LV
- * family (G1 in lanes, G2 in chunks, a tensor mobility), 2D and 3D with Neumann rows, one h and
- * h per particle. Where the build or the CPU
- * has one level only, there is nothing to compare and the test says so. */
+ * AVX-512 machine checks the blocks of 8, 4 and 2 pairs against each other. Compared per level, by
+ * a hash of their bytes: the operator built at that level (its row statuses, after the flatness
+ * check), the flatness check's sums of every row, the matrix-free apply on the whole list and on a
+ * half list (where the scheme has one), the stored apply, and qsfdi's gradient and Hessian from
+ * kept kappas and computed; for qsfdi, lpmps, lsmps, the CSPM family and the LV family (G1 in
+ * lanes, G2 in chunks, a tensor mobility), 2D and 3D with Neumann rows, one h and h per particle.
+ * Where the build or the CPU has one level only, there is nothing to compare and the test says so. */
 #include "check.h"
 #include "isa.h"
 #include "operator_flat_sums.h"
