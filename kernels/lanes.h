@@ -249,4 +249,20 @@ PST_KHOT pst_vl pst_lanes_half_add(pst_vl acc, pst_vl wij, pst_vl wji, const pst
             (y)[(L).i] += pst_lanes_sum((L).acc);                                              \
     } while (0)
 
+/* The rows [0, n) of a whole-list apply in blocks of PST_LANES_BLOCK rows, the blocks shared out
+ * statically among the threads: `rows`, a statement in i0 and i1 (a block's first and past-last
+ * rows), for each block. Rows are independent, so the split does not change a bit. */
+#define PST_LANES_BLOCK 256
+#define PST_LANES_ROW_BLOCKS(n, i0, i1, rows)                                                  \
+    do {                                                                                       \
+        const size_t pst_rn_ = (n);                                                            \
+        const size_t pst_nb_ = (pst_rn_ + PST_LANES_BLOCK - 1) / PST_LANES_BLOCK;              \
+        _Pragma("omp parallel for schedule(static)")                                           \
+        for (size_t pst_rb_ = 0; pst_rb_ < pst_nb_; ++pst_rb_) {                               \
+            const size_t i0 = pst_rb_ * PST_LANES_BLOCK;                                       \
+            const size_t i1 = i0 + PST_LANES_BLOCK < pst_rn_ ? i0 + PST_LANES_BLOCK : pst_rn_; \
+            rows;                                                                              \
+        }                                                                                      \
+    } while (0)
+
 #endif /* PSTENCIL_LANES_H */

@@ -62,10 +62,7 @@ void PST_LEVEL_NAME(pst_qs_apply)(const pst_op *op, const double *u, double *y)
     (void)u; /* read from op->xyzu */
     qs_ctx k = make_ctx(op);
     qs_rows_fn rows = qs_rows_table[k.c.dim - 2][k.c.kernel];
-    const size_t n = op->n, block = 256;
-#pragma omp parallel for schedule(static)
-    for (size_t b = 0; b < (n + block - 1) / block; ++b)
-        rows(&k, op->data, b * block, b * block + block < n ? b * block + block : n, y);
+    PST_LANES_ROW_BLOCKS(op->n, i0, i1, rows(&k, op->data, i0, i1, y));
 }
 
 /* Both weights of a block of half-list pairs (i, j[l] > i): a_IJ from row i's coefficients

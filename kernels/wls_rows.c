@@ -195,10 +195,7 @@ void PST_LEVEL_NAME(pst_wls_apply)(const pst_op *op, const double *u, double *y)
     (void)u; /* read from op->xyzu */
     wls_ctx k = make_ctx(op);
     rows_fn rows = rows_table[k.c.dim - 2][k.d->typeB][k.d->kernel];
-    const size_t n = op->n, block = 256;
-#pragma omp parallel for schedule(static)
-    for (size_t b = 0; b < (n + block - 1) / block; ++b)
-        rows(&k, b * block, b * block + block < n ? b * block + block : n, y);
+    PST_LANES_ROW_BLOCKS(op->n, i0, i1, rows(&k, i0, i1, y));
 }
 
 void PST_LEVEL_NAME(pst_wls_half_rows)(const pst_op *op, const int64_t *off, const uint32_t *idx,
