@@ -20,7 +20,7 @@
  * This file holds the three scheme tables; cspm_family.h the parts the others share,
  * cspm_moments.c the volumes and moments, cspm_fit.c the inversions, coefficients and the
  * precompute, cspm_lanes.c the matrix-free apply, cspm_rows.c the emission, cspm_derivs.c the
- * gradient and Hessian. */
+ * gradient and Hessian (linear in a row's data sums through matrices the precompute can keep). */
 #include "cspm_family.h"
 #include "cspm_lanes.h"
 
@@ -32,7 +32,9 @@ static int pre_icspm(pst_op *op, char *err) { return pst_cs_precompute(op, CS_IC
 static int pre_cspm(pst_op *op, char *err) { return pst_cs_precompute(op, CS_CSPM, err); }
 static int pre_csph(pst_op *op, char *err) { return pst_cs_precompute(op, CS_CSPH, err); }
 
-#define CS_SCHEME(ID, NAME, DESC, FALLBACK, DEG, PRE, MIN, HESS)                              \
+/* keep_bytes: the gradient's D x cs_ng and the Hessian's n2 x cs_ns doubles (ICSPM 1: the
+ * scheme whose rows have the ICSPM level and a Hessian) */
+#define CS_SCHEME(ID, NAME, DESC, FALLBACK, DEG, PRE, MIN, HESS, ICSPM)                       \
     const pst_scheme ID = {.name = NAME,                                                      \
                            .description = DESC,                                               \
                            .fallback = FALLBACK,                                              \
@@ -49,20 +51,22 @@ static int pre_csph(pst_op *op, char *err) { return pst_cs_precompute(op, CS_CSP
                            .hessian = HESS,                                                   \
                            .degrade = pst_cs_degrade,                                         \
                            .free_data = pst_cs_free,                                          \
+                           .keep_bytes = {{(ICSPM) ? 80 : 32, (ICSPM) * 120},                 \
+                                          {(ICSPM) ? 216 : 72, (ICSPM) * 432}},               \
                            .data_bytes = {80, 136}} /* V and cs_ncoef = 9 / 16 doubles */
 
 CS_SCHEME(pst_scheme_cspm, "cspm", "CSPM, Chen et al. 1999 (QSFDI eqs. 38-41)",
           "too few neighbours or singular -> csph2g row -> Brookshaw row -> zero row; flat "
           "neighbours off the particle -> normalised Brookshaw row",
-          1, pre_cspm, cs_min_cspm, NULL);
+          1, pre_cspm, cs_min_cspm, NULL, 0);
 CS_SCHEME(pst_scheme_icspm, "icspm", "improved CSPM, quadratic-exact (QSFDI eqs. 7, 47-48)",
           "too few neighbours or singular -> cspm row -> csph2g row -> Brookshaw row -> zero "
           "row; flat neighbours off the particle -> normalised Brookshaw row",
-          2, pre_icspm, cs_min_icspm, pst_cs_hessian);
+          2, pre_icspm, cs_min_icspm, pst_cs_hessian, 1);
 CS_SCHEME(pst_scheme_csph2g, "csph2g", "CSPH2Gamma, Schwaiger's variant (QSFDI eq. 45)",
           "too few neighbours or singular -> Brookshaw row -> zero row; flat neighbours off "
           "the particle -> normalised Brookshaw row",
-          1, pre_csph, cs_min_csph, NULL);
+          1, pre_csph, cs_min_csph, NULL, 0);
 
 /* The volumes of a CSPM-family operator (NULL for other schemes). Internal: for the tests. */
 const double *pst_cspm_volumes(const pst_op *op);

@@ -41,10 +41,20 @@ static inline int cs_index(int D, int a, int b, int c)
     return D == 2 ? cs_deg2[n] + (n - a) : cs_deg3[n] + (n - a) * (n - a + 1) / 2 + (n - a - b);
 }
 
+/* The data sums of a row that its derivatives are linear in: S = (S1, S2) with S1 = sum B r du
+ * (D) and S2_p = sum (A r_pa r_pb + B delta_p) du (n2), du = u_j - u_i. Only ICSPM's gradient
+ * reads S2 (and its Hessian); the other levels' gradient is M1^-1 S1, so the gradient matrix
+ * of a scheme has cs_ng columns. */
+static inline int cs_ns(int D) { return D + cs_n2(D); }
+static inline int cs_ng(int D, int which) { return which == CS_ICSPM ? cs_ns(D) : D; }
+
 typedef struct {
     int which;   /* CS_ICSPM, CS_CSPM or CS_CSPH                                  */
     double *V;   /* V_j = 1 / sum_k W(d_jk, h_j), self term included             */
     double *K;   /* cs_ncoef(dim) coefficients per particle: lam, sig, mu, c0    */
+    /* opts.keep: per particle the gradient's D x cs_ng and the Hessian's n2 x cs_ns matrix
+     * that take the data sums S to the derivatives (pst_cs_fold), or NULL */
+    double *G, *Hm;
 } cs_data;
 
 /* Everything the pair functions read, gathered once per call. */
@@ -171,11 +181,11 @@ static inline int level_min(int level, int D)
 }
 
 /* cspm_moments.c: the volumes V_j of every particle; the raw moments of row i for the level
- * `which` (B, A and C back to back in m), with the data sums S1, S2 when u is given. Returns
- * the contributing neighbours. */
+ * `which` (B, A and C back to back in m), returning the contributing neighbours; the first ns
+ * data sums of row i for the field u (ns: D, S1 alone, or cs_ns). */
 void pst_cs_volumes(const cs_ctx *k, double *V, size_t n);
-int pst_cs_moments(const cs_ctx *k, int which, size_t i, double *m, const double *u, double *S1,
-                   double *S2);
+int pst_cs_moments(const cs_ctx *k, int which, size_t i, double *m);
+void pst_cs_data_sums(const cs_ctx *k, size_t i, const double *u, int ns, double *S);
 
 /* cspm_fit.c: the fallback chain of row i from its moments m; the precompute of the scheme
  * `which`; a flat row's normalised Brookshaw row (pst_scheme.degrade); the data's release. */
@@ -188,7 +198,10 @@ void pst_cs_free(void *p);
 /* cspm_rows.c: the emission of a stored row (the apply: cspm_lanes.h). */
 void pst_cs_emit_row(const pst_op *op, size_t i, double *w);
 
-/* cspm_derivs.c: the gradient and the Hessian, refitted from the moments and the data. */
+/* cspm_derivs.c: the matrices that take row i's data sums to its gradient (G, D x ng, ng =
+ * cs_ng of the scheme) and second derivatives (Hm, n2 x cs_ns; either may be NULL) from its
+ * inverses; the gradient and the Hessian, from the kept matrices or from a refit. */
+void pst_cs_fold(int D, int ng, const cs_inv *v, double *G, double *Hm);
 void pst_cs_gradient(const pst_op *op, const double *u, double *const grad[3]);
 void pst_cs_hessian(const pst_op *op, const double *u, double *const hess[6]);
 

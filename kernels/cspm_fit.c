@@ -89,7 +89,7 @@ PST_KHOT void invert_t(const pst_op *op, const cs_ctx *k, int D, int which, size
         if (lev == CS_CSPH) {
             double mc[3 * CS_NM_MAX];
             if (which != CS_CSPH) { /* the C moments of a fallback row, as csph2g forms them */
-                pst_cs_moments(k, CS_CSPH, i, mc, NULL, NULL, NULL);
+                pst_cs_moments(k, CS_CSPH, i, mc);
                 mC = mc + 2 * cs_nm(D);
             }
             for (int a = 0; a < D; ++a)
@@ -276,23 +276,28 @@ void pst_cs_free(void *p)
         return;
     pst_free(d->V);
     pst_free(d->K);
+    pst_free(d->G);
+    pst_free(d->Hm);
     free(d);
 }
 
-/* The moments pass of one block (moments_t). */
-static void moments_block(const cs_ctx *k, size_t b0, size_t b1, double *mom_blk, int *count)
+/* Whether row i is fitted: every row but a Dirichlet one (the identity), which is fitted too
+ * when derivatives are kept (its gradient is still wanted). */
+static inline int fitted(const cs_ctx *k, int keep, size_t i)
+{
+    return keep || k->c.kind[i] != PST_DIRICHLET;
+}
+
+/* The moments pass of one block (moments_t), over the fitted rows. */
+static void moments_block(const cs_ctx *k, int keep, size_t b0, size_t b1, double *mom_blk,
+                          int *count)
 {
     const int D = k->c.dim, nm = cs_nm(D);
     /* the moments of row i depend on row i's neighbours only: no write is shared */
 #pragma omp parallel for schedule(dynamic, 64)
     for (size_t i = b0; i < b1; ++i) {
         double *m = mom_blk + (size_t)3 * nm * (i - b0);
-        if (k->c.kind[i] == PST_DIRICHLET) {
-            count[i - b0] = 0;
-            continue;
-        }
-        int c = pst_cs_moments(k, k->which, i, m, NULL, NULL, NULL);
-        count[i - b0] = c;
+        count[i - b0] = fitted(k, keep, i) ? pst_cs_moments(k, k->which, i, m) : 0;
     }
 }
 
@@ -304,13 +309,19 @@ int pst_cs_precompute(pst_op *op, int which, char *err)
     if (!d)
         return PST_ENOMEM;
     d->which = which;
+    const int keep = op->opts.keep, ng = cs_ng(D, which), nh = cs_n2(D) * cs_ns(D);
     PST_DATA_ARRAY(d->V, n * sizeof *d->V);
     PST_DATA_ARRAY(d->K, n * (size_t)nc * sizeof *d->K);
+    int kept = 1;
+    if (keep & PST_KEEP_GRADIENT)
+        kept = PST_DATA_ARRAY(d->G, n * (size_t)(D * ng) * sizeof *d->G) != NULL;
+    if (keep & PST_KEEP_HESSIAN)
+        kept = kept && PST_DATA_ARRAY(d->Hm, n * (size_t)nh * sizeof *d->Hm) != NULL;
     size_t blk = n < CS_BLOCK ? n : CS_BLOCK;
     double *mom_blk = pst_alloc((blk ? blk : 1) * (size_t)(3 * nm) * sizeof *mom_blk);
     cs_inv *inv_blk = pst_alloc((blk ? blk : 1) * sizeof *inv_blk);
     int *count = pst_alloc((blk ? blk : 1) * sizeof *count);
-    if (!d->V || !d->K || !mom_blk || !inv_blk || !count) {
+    if (!d->V || !d->K || !kept || !mom_blk || !inv_blk || !count) {
         pst_free(mom_blk);
         pst_free(inv_blk);
         pst_free(count);
@@ -325,14 +336,14 @@ int pst_cs_precompute(pst_op *op, int which, char *err)
     for (size_t b0 = 0; b0 < n; b0 += blk) {
         size_t b1 = b0 + blk < n ? b0 + blk : n;
         t = omp_get_wtime();
-        moments_block(&k, b0, b1, mom_blk, count);
+        moments_block(&k, keep, b0, b1, mom_blk, count);
         op->phase[PST_PHASE_MOMENTS] += omp_get_wtime() - t;
         t = omp_get_wtime();
         /* per particle a 2x2/3x3 and a 3x3/6x6 inversion; bound by the LU (~300 flops 3D) */
 #pragma omp parallel for schedule(static)
         for (size_t i = b0; i < b1; ++i) {
             const double *m = mom_blk + (size_t)3 * nm * (i - b0);
-            if (k.c.kind[i] == PST_DIRICHLET)
+            if (!fitted(&k, keep, i))
                 continue;
             pst_cs_invert(op, &k, i, k.c.kind[i] == PST_NEUMANN, count[i - b0], m,
                           &inv_blk[i - b0]);
@@ -342,6 +353,9 @@ int pst_cs_precompute(pst_op *op, int which, char *err)
 #pragma omp parallel for schedule(static)
         for (size_t i = b0; i < b1; ++i) {
             double *Ki = d->K + (size_t)nc * i;
+            if (keep)
+                pst_cs_fold(D, ng, &inv_blk[i - b0], d->G ? d->G + (size_t)(D * ng) * i : NULL,
+                            d->Hm ? d->Hm + (size_t)nh * i : NULL);
             if (k.c.kind[i] == PST_DIRICHLET) {
                 memset(Ki, 0, (size_t)nc * sizeof *Ki);
                 continue;
@@ -362,7 +376,7 @@ int pst_cs_precompute(pst_op *op, int which, char *err)
  * linear-exact and so has no diagonal there; the row becomes the Brookshaw row normalised to
  * be exact for |x - x_I|^2, c0 = -2D / sum_J V_J (-W') d (-2 with a full support; a flat,
  * one-sided neighbourhood would otherwise give a row too weak to pin u_I). The gradient and
- * Hessian hooks refit from scratch and do not read K. */
+ * the Hessian do not read K: they take the fit's own matrices (kept or refitted). */
 void pst_cs_degrade(pst_op *op, size_t i)
 {
     cs_ctx k = make_ctx(op);

@@ -1,6 +1,6 @@
-/* The CSPM family's pair passes of the precompute (kernels/cspm_family.c): the volumes V_j,
- * j's number density with its own h, and the raw moments of a row, with the data sums that the
- * derivatives refit from. */
+/* The CSPM family's pair passes but the rows' (kernels/cspm_family.c): the volumes V_j, j's
+ * number density with its own h, and the raw moments of a row, of the precompute; the data sums
+ * of a row, of the derivatives. */
 #include "cspm_family.h"
 #include "isa.h"
 #include "wls_sums.h"
@@ -85,28 +85,25 @@ PST_KHOT void cs_sum4(int D, int n, const cs_chunk *g, const double *w, double *
 
 /* Raw moments of row i: sum B m_k over degrees 1..3 (1..2 without ICSPM), sum A m_k (not for
  * CSPH) and sum C m_k (CSPH only: the others need them only on a fallback to CSPH, where
- * invert_t computes them) over degrees 3..4, and, with data du (u_j - u_i), S1 = sum B r du and
- * S2_p = sum (A r_pa r_pb + B delta_p) du. Returns the number of contributing neighbours. One
+ * invert_t computes them) over degrees 3..4. Returns the number of contributing neighbours. One
  * pass: per chunk the kernel loop, then 3 (csph2g) to 4 (icspm) reduction loops of 4-15 sums.
  * Compute-bound, the scalar sqrt ~30 % of it (perf, 1 thread). The whole precompute, 3D 10^6 at
  * 2 threads: 21 (csph2g) / 24 (cspm) / 22 (icspm) ns per neighbour and thread, qsfdi 23, was
  * 70-88 (bench/README.md). */
 PST_KHOT int moments_t(const cs_ctx *k, int D, int which, size_t i, double *mB, double *mA,
-                     double *mC, const double *u, double *S1, double *S2)
+                       double *mC)
 {
-    const int nm = cs_nm(D), n2 = cs_n2(D), d3 = cs_deg(D, 3), d4 = cs_deg(D, 4);
+    const int nm = cs_nm(D), d3 = cs_deg(D, 3), d4 = cs_deg(D, 4);
     const double xi[3] = {k->c.x[0][i], k->c.x[1][i], D == 3 ? k->c.x[2][i] : 0.0};
     const cs_kc kc = kc_of(k, D, pst_h(&k->c, i));
     const int64_t e0 = k->c.off[i], e1 = k->c.off[i + 1];
-    double dB[9] = {0}, dA[9] = {0}, sB = 0; /* the data sums: sum (B, A) du m, sum B du */
     int count = 0;
     for (int m = 0; m < nm; ++m)
         mB[m] = mA[m] = mC[m] = 0;
     for (int64_t c0 = e0; c0 < e1; c0 += CS_CHUNK) {
         const int n = (int)(e1 - c0 < CS_CHUNK ? e1 - c0 : CS_CHUNK);
-        const uint32_t *idx = k->c.idx + c0;
         cs_chunk g;
-        cs_gather(k, D, 1, xi, idx, n, &g);
+        cs_gather(k, D, 1, xi, k->c.idx + c0, n, &g);
         count += CS_BY_KERNEL(k->c.kernel, cs_bac, D, &kc, n, &g);
         cs_sum12(D, n, &g, g.b, mB);
         if (which == CS_ICSPM)
@@ -119,40 +116,67 @@ PST_KHOT int moments_t(const cs_ctx *k, int D, int which, size_t i, double *mB, 
             cs_sum3(D, n, &g, g.c, mC + d3);
             cs_sum4(D, n, &g, g.c, mC + d4);
         }
-        if (u) {
-            double bu[CS_CHUNK], au[CS_CHUNK];
-            for (int c = 0; c < n; ++c) {
-                double du = u[idx[c]] - u[i];
-                bu[c] = g.b[c] * du;
-                au[c] = g.a[c] * du;
-                sB += bu[c];
-            }
-            cs_sum12(D, n, &g, bu, dB);
-            cs_sum12(D, n, &g, au, dA);
-        }
-    }
-    if (u) {
-        for (int a = 0; a < D; ++a)
-            S1[a] = dB[a];
-        for (int p = 0; p < n2; ++p)
-            S2[p] = dA[D + p] + (cs_pa(D, p) == cs_pb(D, p) ? sB : 0.0);
     }
     return count;
 }
 
 /* One instantiation per (D, scheme), each compiled per ISA; m holds the B, A and C moments
  * back to back. */
-typedef int (*moments_fn)(const cs_ctx *, size_t, double *, const double *, double *,
-                          double *);
+typedef int (*moments_fn)(const cs_ctx *, size_t, double *);
 #define CS_MOM(D, W)                                                                           \
-    PST_ISA_DISPATCH static int moments_##D##_##W(const cs_ctx *k, size_t i, double *m,        \
-                                                  const double *u, double *S1, double *S2)     \
+    PST_ISA_DISPATCH static int moments_##D##_##W(const cs_ctx *k, size_t i, double *m)        \
     {                                                                                          \
-        return moments_t(k, D, W, i, m, m + cs_nm(D), m + 2 * cs_nm(D), u, S1, S2);            \
+        return moments_t(k, D, W, i, m, m + cs_nm(D), m + 2 * cs_nm(D));                       \
     }
 CS_MOM(2, 0) CS_MOM(2, 1) CS_MOM(2, 2) CS_MOM(3, 0) CS_MOM(3, 1) CS_MOM(3, 2)
 static const moments_fn moments_table[2][3] = {{moments_2_0, moments_2_1, moments_2_2},
                                                {moments_3_0, moments_3_1, moments_3_2}};
+
+/* The data sums S = (S1, S2) of row i (cspm_family.h's cs_ns), or S1 alone (full 0): the
+ * moment pass's kernel loop, then the products with du = u_j - u_i in one or two reductions of
+ * 5 (2D) / 9 (3D) sums and one of du B. Per pair about the apply's work; the derivatives dot S
+ * with a row's matrices. */
+PST_KHOT void data_sums_t(const cs_ctx *k, int D, int full, size_t i, const double *u,
+                          double *S)
+{
+    const int n2 = cs_n2(D);
+    const double xi[3] = {k->c.x[0][i], k->c.x[1][i], D == 3 ? k->c.x[2][i] : 0.0};
+    const cs_kc kc = kc_of(k, D, pst_h(&k->c, i));
+    const int64_t e0 = k->c.off[i], e1 = k->c.off[i + 1];
+    double dB[9] = {0}, dA[9] = {0}, sB = 0; /* sum (B, A) du m over degrees 1, 2; sum B du */
+    for (int64_t c0 = e0; c0 < e1; c0 += CS_CHUNK) {
+        const int n = (int)(e1 - c0 < CS_CHUNK ? e1 - c0 : CS_CHUNK);
+        const uint32_t *idx = k->c.idx + c0;
+        cs_chunk g;
+        double bu[CS_CHUNK], au[CS_CHUNK];
+        cs_gather(k, D, 1, xi, idx, n, &g);
+        CS_BY_KERNEL(k->c.kernel, cs_bac, D, &kc, n, &g);
+        for (int c = 0; c < n; ++c) {
+            double du = u[idx[c]] - u[i];
+            bu[c] = g.b[c] * du;
+            if (full) {
+                au[c] = g.a[c] * du;
+                sB += bu[c];
+            }
+        }
+        cs_sum12(D, n, &g, bu, dB);
+        if (full)
+            cs_sum12(D, n, &g, au, dA);
+    }
+    for (int a = 0; a < D; ++a)
+        S[a] = dB[a];
+    for (int p = 0; full && p < n2; ++p)
+        S[D + p] = dA[D + p] + (cs_pa(D, p) == cs_pb(D, p) ? sB : 0.0);
+}
+
+PST_ISA_DISPATCH void pst_cs_data_sums(const cs_ctx *k, size_t i, const double *u, int ns,
+                                       double *S)
+{
+    if (k->c.dim == 2)
+        ns == 2 ? data_sums_t(k, 2, 0, i, u, S) : data_sums_t(k, 2, 1, i, u, S);
+    else
+        ns == 3 ? data_sums_t(k, 3, 0, i, u, S) : data_sums_t(k, 3, 1, i, u, S);
+}
 
 /* sum_k f(d_jk / h_j) over the chunk's distances (g->c) within the support, for the kernel
  * shape f (the constant sigma / h^D is applied once, by the caller). */
@@ -198,8 +222,7 @@ void pst_cs_volumes(const cs_ctx *k, double *V, size_t n)
         V[j] = volume_of(k, j);
 }
 
-int pst_cs_moments(const cs_ctx *k, int which, size_t i, double *m, const double *u, double *S1,
-                   double *S2)
+int pst_cs_moments(const cs_ctx *k, int which, size_t i, double *m)
 {
-    return moments_table[k->c.dim - 2][which](k, i, m, u, S1, S2);
+    return moments_table[k->c.dim - 2][which](k, i, m);
 }

@@ -3,12 +3,14 @@
  * (Laplacian, gradient, Hessian) at full-support particles of jittered clouds (K = 0.8), cspm's
  * second order on a lattice and its inexactness on disorder, the lattice symbol's weak
  * checkerboard response (why the Poisson operators lose stability, icspm.md), Neumann rows, the
- * two apply paths and assembly, thread independence, degenerate rows and bad options. */
+ * two apply paths and assembly, thread independence, degenerate rows, the kept derivatives and
+ * bad options. */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -429,6 +431,102 @@ static void test_degenerate(void)
     pst_cloud_destroy(c);
 }
 
+/* The number of entries where a and b (ncomp arrays of n) differ in any bit. */
+static size_t differ(double *const a[6], double *const b[6], int ncomp, size_t n)
+{
+    size_t d = 0;
+    for (int k = 0; k < ncomp; ++k)
+        d += memcmp(a[k], b[k], n * sizeof(double)) != 0;
+    return d;
+}
+
+/* opts.keep: the gradient and (icspm) Hessian from the kept matrices equal the refitted ones
+ * bit for bit, on clouds with fallback rows (2D, h = 0.5 s0), Dirichlet and Neumann rows (3D;
+ * kept at the Dirichlet rows too) and per-particle h; bit-identical for 1 and 2 threads; still
+ * exact on quadratics (icspm) at full support; a kept Hessian on a scheme without one refused. */
+static void test_keep(void)
+{
+    for (int t = 0; t < 2; ++t) {
+        int dim = t == 0 ? 2 : 3, nq = dim * (dim + 1) / 2;
+        pst_cloud *c = t == 0 ? test_lattice(2, 2.0, 3.0, 0.05, 0.5, 0.8, 3, 0)
+                              : test_lattice(3, 2.0, 3.0, spacing(3), 1.2, 0.6, 5, 1);
+        size_t n = pst_cloud_size(c);
+        if (t == 1) {
+            test_make_neumann(c, 2);
+            double *h = pst_cloud_h_per_particle(c);
+            for (size_t i = 0; i < n; ++i)
+                h[i] = 1.2 * spacing(3) * (1.0 + 0.2 * pst_rng_symmetric(5, i, 9));
+        }
+        pst_nlist *nl = test_nlist(c, 3.0);
+        double *u = field(c, 1), *a[4][6];
+        for (int r = 0; r < 4; ++r)
+            for (int k = 0; k < 6; ++k)
+                a[r][k] = malloc(n * sizeof(double));
+        for (int s = 0; s < NSCHEMES; ++s) {
+            int hess = s == 1, saved = omp_get_max_threads();
+            pst_op_opts o;
+            pst_op_defaults(&o);
+            o.scheme = schemes[s];
+            pst_op *plain = test_op_of(c, nl, &o);
+            o.keep = PST_KEEP_GRADIENT | (hess ? PST_KEEP_HESSIAN : 0);
+            pst_op *kept = test_op_of(c, nl, &o);
+            size_t counts[PST_ROW_NSTATUS];
+            pst_op_status_counts(kept, counts);
+            CHECK_INT(pst_op_gradient(plain, u, a[0]), PST_OK);
+            CHECK_INT(pst_op_gradient(kept, u, a[2]), PST_OK);
+            if (hess) {
+                CHECK_INT(pst_op_hessian(plain, u, a[1]), PST_OK);
+                CHECK_INT(pst_op_hessian(kept, u, a[3]), PST_OK);
+            }
+            errors e = measure(c, kept, 1, 3.0 * 1.2 * 1.2 * spacing(3), hess); /* 3 h at most */
+            printf("keep %dD %-6s: %zu rows ok, %zu fallback, %zu too few; kept against "
+                   "refitted: %zu + %zu arrays differ; quadratic gradient error %.1e, Hessian %.1e over %zu rows\n",
+                   dim, schemes[s], counts[PST_ROW_OK], counts[PST_ROW_FALLBACK],
+                   counts[PST_ROW_TOO_FEW], differ(a[2], a[0], dim, n),
+                   hess ? differ(a[3], a[1], nq, n) : 0, e.grad, e.hess, e.rows);
+            CHECK(t != 0 || counts[PST_ROW_OK] < n); /* the 2D cloud has fallback rows */
+            CHECK_INT(differ(a[2], a[0], dim, n), 0); /* the same sums and matrices */
+            CHECK_INT(hess ? differ(a[3], a[1], nq, n) : 0, 0);
+            CHECK(t == 0 || e.rows > 100);
+            CHECK(t == 0 || s != 1 || (e.grad <= 1e-8 && e.hess <= 1e-7)); /* quadratic-exact */
+            omp_set_num_threads(1);
+            CHECK_INT(pst_op_gradient(kept, u, a[0]), PST_OK);
+            if (hess)
+                CHECK_INT(pst_op_hessian(kept, u, a[1]), PST_OK);
+            omp_set_num_threads(saved > 1 ? saved : 2);
+            CHECK_INT(differ(a[0], a[2], dim, n), 0);
+            CHECK_INT(hess ? differ(a[1], a[3], nq, n) : 0, 0);
+            omp_set_num_threads(saved);
+            pst_op_destroy(plain);
+            pst_op_destroy(kept);
+        }
+        for (int r = 0; r < 4; ++r)
+            for (int k = 0; k < 6; ++k)
+                free(a[r][k]);
+        free(u);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+    pst_cloud *c = patch(2, 0.1, 0.3, 0);
+    pst_nlist *nl = test_nlist(c, 3.0);
+    pst_op_opts o;
+    pst_op_defaults(&o);
+    pst_op *op = NULL;
+    char err[PST_ERRLEN];
+    o.scheme = "cspm";
+    o.keep = PST_KEEP_HESSIAN;
+    CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
+    CHECK(strstr(err, "no Hessian") != NULL);
+    CHECK(op == NULL);
+    for (int s = 0; s < NSCHEMES; ++s)
+        CHECK_INT(pst_scheme_supports(schemes[s], PST_SUPPORTS_KEEP), 1);
+    CHECK_INT(pst_scheme_keep_bytes("icspm", 3, PST_KEEP_GRADIENT | PST_KEEP_HESSIAN), 648);
+    CHECK_INT(pst_scheme_keep_bytes("csph2g", 2, PST_KEEP_GRADIENT), 32); /* M1^-1 */
+    CHECK_INT(pst_scheme_keep_bytes("cspm", 3, PST_KEEP_GRADIENT), 72);
+    pst_nlist_destroy(nl);
+    pst_cloud_destroy(c);
+}
+
 static void test_errors(void)
 {
     pst_cloud *c = patch(2, 0.1, 0.0, 0);
@@ -463,6 +561,7 @@ int main(void)
     test_checkerboard();
     test_neumann();
     test_degenerate();
+    test_keep();
     test_errors();
     return check_summary("test_cspm");
 }

@@ -669,6 +669,29 @@ static void test_half_list(void)
     }
 }
 
+/* The base operator keeps what its gradient and Hessian tasks need, on the schemes that keep
+ * (qsfdi and the CSPM family; lv keeps nothing). */
+static void test_keeps(void)
+{
+    const char *tasks = "tasks=[{\"type\":\"laplacian\",\"field\":\"u\"},"
+                        "{\"type\":\"gradient\",\"field\":\"u\"},"
+                        "{\"type\":\"hessian\",\"field\":\"u\"}]";
+    const char *cases[4][2] = {{"operator.scheme=qsfdi", "3"}, {"operator.scheme=icspm", "3"},
+                               {"operator.scheme=cspm", "1"}, {"operator.scheme=lv", "0"}};
+    for (int k = 0; k < 4; ++k) {
+        /* cspm and lv have no Hessian: their third task is a second gradient */
+        const char *ov[3] = {tasks, cases[k][0], "tasks.2.type=gradient"};
+        pst_scene s = scene(ov, k >= 2 ? 3 : 2);
+        pst_plan p;
+        pst_run_counters cnt;
+        pst_cloud *c = run(&s, &cnt, &p, PST_OK);
+        printf("keeps: %s, keep %d\n", cases[k][0], p.base_keep);
+        CHECK_INT(p.base_keep, atoi(cases[k][1]));
+        pst_cloud_destroy(c);
+        pst_scene_free(&s);
+    }
+}
+
 /* Where memory is short the plan of a matrix-free AMG solve first takes the half list, then
  * the tight proxy radius (1.3 h), then shortens the GMRES restart (not below 20), and each
  * plan fits its budget; the operator's estimate is the scheme's own per-particle bytes. The
@@ -803,6 +826,7 @@ int main(void)
     test_solve_plan();
     test_refusals();
     test_parameters();
+    test_keeps();
     test_fit_memory();
     test_half_list();
     test_amg_matrix_memory();

@@ -92,7 +92,8 @@ typedef struct {
     int keep;             /* PST_KEEP_* bits: what the precompute keeps beyond the rows, so
                              that later derivative calls reuse it (docs/operators.md, "Kept
                              derivatives"); 0 (default): nothing. Needs the rows (laplacian
-                             = 1) and a scheme with PST_SUPPORTS_KEEP, else PST_EINVAL     */
+                             = 1), a scheme with PST_SUPPORTS_KEEP and, for
+                             PST_KEEP_HESSIAN, a Hessian, else PST_EINVAL                  */
     /* The boundary description of the rows, instead of the cloud's own (a solve's boundary
      * groups): kinds[i] is particle i's pst_kind and normals[d][i] its outward normal, in
      * cloud order. NULL (the default) takes the cloud's kinds, and normals[0] == NULL the
@@ -112,8 +113,9 @@ typedef struct {
 /* What pst_op_opts.keep asks the precompute to keep: the weights of the derivative estimates
  * at every particle, which the precompute's inversions already give, so that pst_op_gradient
  * (pst_op_hessian) is one pass over the neighbours that forms the data moments and dots them
- * with the kept weights, instead of redoing the moments and inversions of every particle.
- * pst_scheme_keep_bytes gives the memory; the results are the computed ones, bit for bit. */
+ * with the kept weights, instead of redoing the moments and inversions of every particle
+ * (qsfdi and the CSPM family: PST_SUPPORTS_KEEP). pst_scheme_keep_bytes gives the memory; the
+ * results are the computed ones, bit for bit. */
 enum {
     PST_KEEP_GRADIENT = 1, /* what pst_op_gradient needs */
     PST_KEEP_HESSIAN = 2   /* what pst_op_hessian needs  */
@@ -176,7 +178,7 @@ enum {
     PST_SUPPORTS_SYMMETRIC,        /* CG through a symmetric scaling (with G1, no Neumann rows) */
     PST_SUPPORTS_DERIVATIVES_ONLY, /* derivatives without the rows (opts.laplacian = 0)        */
     PST_SUPPORTS_HALF_LIST,        /* the matrix-free apply on a half list (pst_op_use_half_list) */
-    PST_SUPPORTS_KEEP              /* pst_op_opts.keep (qsfdi)                                 */
+    PST_SUPPORTS_KEEP              /* pst_op_opts.keep (qsfdi, the CSPM family)                */
 };
 int pst_scheme_supports(const char *name, int what);
 
@@ -188,7 +190,8 @@ int pst_scheme_supports(const char *name, int what);
 int pst_scheme_halo(const char *name);
 
 /* Bytes per particle that pst_op_opts.keep = `keep` (PST_KEEP_* bits) adds to an operator of
- * the scheme in dimension dim; 0 for schemes without PST_SUPPORTS_KEEP. */
+ * the scheme in dimension dim; 0 for schemes without PST_SUPPORTS_KEEP (and for the Hessian
+ * of a scheme without one). */
 int pst_scheme_keep_bytes(const char *name, int dim, int keep);
 
 /* Build an operator: validate the inputs, precompute the per-particle data (one threaded
