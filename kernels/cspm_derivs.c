@@ -20,13 +20,7 @@ PST_KHOT void fold_t(int D, int ng, const cs_inv *v, double *G, double *Hm)
     memset(H, 0, sizeof H);
     if (v->level == CS_ICSPM || v->level == CS_CSPM) {
         double T[6 * 3];
-        for (int p = 0; p < n2; ++p)
-            for (int b = 0; b < D; ++b) {
-                double s = 0;
-                for (int c = 0; c < D; ++c)
-                    s += v->N21[p * D + c] * v->M1inv[c * D + b];
-                T[p * D + b] = s;
-            }
+        cs_n21_m1inv(D, v, T);
         for (int p = 0; p < n2; ++p) {
             for (int q = 0; q < n2; ++q)
                 H[p * ns + D + q] = 2.0 * v->Xinv[p * n2 + q];

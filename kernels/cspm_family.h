@@ -171,6 +171,18 @@ typedef struct {
     uint8_t status;
 } cs_inv;
 
+/* T = N21 M1^-1 (n2 x D), a product of the Schur complement (48) and of the derivatives' fold. */
+static inline void cs_n21_m1inv(int D, const cs_inv *v, double *T)
+{
+    for (int p = 0; p < cs_n2(D); ++p)
+        for (int b = 0; b < D; ++b) {
+            double s = 0;
+            for (int c = 0; c < D; ++c)
+                s += v->N21[p * D + c] * v->M1inv[c * D + b];
+            T[p * D + b] = s;
+        }
+}
+
 /* Minimum neighbours of each level (choice 6, docs/choices.md). */
 static inline int level_min(int level, int D)
 {

@@ -122,13 +122,7 @@ PST_KHOT void invert_t(const pst_op *op, const cs_ctx *k, int D, int which, size
                         v->N12[a * n2 + q] = (cs_pa(D, q) == cs_pb(D, q) ? 1.0 : 2.0) *
                                              mom(D, mB, a, cs_pa(D, q), cs_pb(D, q), -1);
                 double T[18];
-                for (int p = 0; p < n2; ++p)
-                    for (int b = 0; b < D; ++b) {
-                        double s = 0;
-                        for (int c = 0; c < D; ++c)
-                            s += v->N21[p * D + c] * v->M1inv[c * D + b];
-                        T[p * D + b] = s;
-                    }
+                cs_n21_m1inv(D, v, T);
                 for (int p = 0; p < n2; ++p)
                     for (int q = 0; q < n2; ++q) {
                         double s = 0;
