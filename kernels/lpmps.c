@@ -122,4 +122,5 @@ const pst_scheme pst_scheme_lpmps = {
     .description = "LP-MPS, block-eliminated quadratic WLS, weight w in both blocks "
                    "(QSFDI sec. 2.6, a reconstruction)",
     .precompute = lpmps_precompute,
+    .keep_bytes = {{2 * 40, 3 * 40}, {3 * 72, 6 * 72}}, /* D and nh kappas of nb = 5 / 9 */
     PST_WLS_ENTRY_POINTS};

@@ -50,4 +50,6 @@ const pst_scheme pst_scheme_lsmps = {
     .variants = 2,
     .precompute = lsmps_precompute,
     .amg_own = 1,
+    /* opts.keep: D and nh kappas of nb doubles, type B's nb (6 / 10), the larger */
+    .keep_bytes = {{2 * 48, 3 * 48}, {3 * 80, 6 * 80}},
     PST_WLS_ENTRY_POINTS};

@@ -1,7 +1,8 @@
 /* The weighted-least-squares engine of the quadric fits (docs/schemes/lsmps.md, lpmps.md): the
- * moment pass, the moment matrix, the fallback levels, the precompute, gradient and Hessian;
- * its rows (matrix-free apply, half-list rows, emission) are in wls_rows.c, interpolation at
- * points in wls_points.c, what they share in wls_common.h. A scheme supplies only its
+ * moment pass, the moment matrix, the fallback levels and the precompute; its rows (matrix-free
+ * apply, half-list rows, emission) are in wls_rows.c, the fit at the particles (gradient,
+ * Hessian, the data pass) in wls_derivs.c, interpolation at points in wls_points.c, what they
+ * share in wls_common.h. A scheme supplies only its
  * factorisation of the moment matrix (kernels/lsmps.c: LDL^T; kernels/lpmps.c: the Schur
  * complement); qsfdi and the mixed schemes use the vectorised moment sums (pst_wls_msums).
  *
@@ -19,7 +20,8 @@
  * block as three threaded passes timed separately: moments (the distinct weighted monomial sums
  * of degree 0 (B) / 2 (A) to 4, one neighbour pass: the neighbours gathered into arrays, then
  * one vectorised reduction loop per degree), inversion (the scheme's factorisation) and weights
- * (the solve for lambda, or the fallback chain). Fallback chain: quadric fit (status ok or
+ * (the solve for lambda, or the fallback chain; with opts.keep the derivatives' kappas of the
+ * same level, wls_derivs.c). Fallback chain: quadric fit (status ok or
  * ill-conditioned) -> the linear-exact fit on (x, y, |x|^2) (1 included for type B) -> a radial
  * row a_Ij = w_j |x^_j|^2 2D / (h^2 sum w |x^|^4) (exact for |x|^2) -> an empty row (no weighted
  * neighbour). Never NaN. */
@@ -78,38 +80,16 @@ PST_ISA_DISPATCH void pst_wls_msums(int dim, int deg, int n, const double *r, in
     }
 }
 
-/* The degree-2 sums of graded lexicographic order (xx xy yy / xx xy xz yy yz zz) in the
- * basis order (xx yy xy / xx yy zz xy xz yz). */
-static const unsigned char wls_gl2b[2][6] = {{0, 2, 1}, {0, 3, 5, 1, 2, 4}};
-
-/* s[0..nb) += sum_c w_c p(r_c), p the basis ((1,) x, y[, z], squares, crosses). */
-PST_KHOT void wls_basis_sums(int D, int B, int n, const double *x, const double *y,
-                            const double *z, const double *w, double *s)
+/* The weighted monomial sums of row i (degree 0..4 for B, 2..4 for A: mom[k - first]). Per
+ * neighbour: the gather, one sqrt and ~19 flops of kernel (gather()), then 2 flops per moment
+ * plus the shared products (15 / 35 moments for B, 12 / 31 for A) in the vectorised loops of
+ * wls_msum*: compute-bound. Measured (3D, 1 thread, type B / A): 8.8 / 8.1 ns per neighbour
+ * with default flags, 6.0 / 5.5 native (was ~26 ns). */
+PST_KHOT void moments_row(const wls_ctx *k, int D, int B, pst_kernel K, size_t i, double *mom)
 {
-    double g[6] = {0};
-    if (B)
-        wls_msum0(n, w, s);
-    wls_msum1(D, n, x, y, z, w, s + B);
-    wls_msum2(D, n, x, y, z, w, g);
-    for (int e = 0; e < D * (D + 1) / 2; ++e)
-        s[B + D + e] += g[wls_gl2b[D - 2][e]];
-}
-
-/* The weighted monomial sums of row i (degree 0..4 for B, 2..4 for A: mom[k - first]) and,
- * with u, the data vector b = sum_j w_j p_j (u_j - u_I). Per neighbour: the gather, one sqrt
- * and ~19 flops of kernel (gather()), then 2 flops per moment plus the shared products (15 /
- * 35 moments for B, 12 / 31 for A) in the vectorised loops of wls_msum*: compute-bound.
- * Measured (3D, 1 thread, type B / A): 8.8 / 8.1 ns per neighbour with default flags, 6.0 /
- * 5.5 native (was ~26 ns). */
-PST_KHOT void moments_row(const wls_ctx *k, int D, int B, pst_kernel K, size_t i,
-                         const double *u, double *mom, double *b)
-{
-    const int nm = WLS_NMOM(D), first = B ? 0 : D + 1, nb = D + D * (D + 1) / 2 + B;
+    const int nm = WLS_NMOM(D), first = B ? 0 : D + 1;
     const int o2 = D + 1, o3 = o2 + D * (D + 1) / 2, o4 = o3 + (D == 2 ? 4 : 10);
     double acc[35] = {0}, xc[3], ih = 1.0 / pst_h(&k->c, i);
-    if (b)
-        for (int e = 0; e < nb; ++e)
-            b[e] = 0;
     centre_of(k, D, i, xc);
     for (int64_t c0 = k->c.off[i]; c0 < k->c.off[i + 1]; c0 += WLS_CHUNK) {
         int n = (int)(k->c.off[i + 1] - c0 < WLS_CHUNK ? k->c.off[i + 1] - c0 : WLS_CHUNK);
@@ -122,15 +102,9 @@ PST_KHOT void moments_row(const wls_ctx *k, int D, int B, pst_kernel K, size_t i
         double g[6] = {0};
         wls_msum2(D, n, r[0], r[1], r[2], w, g);
         for (int e = 0; e < o3 - o2; ++e)
-            acc[o2 + e] += g[wls_gl2b[D - 2][e]];
+            acc[o2 + e] += g[wls_gl2b(D, e)];
         wls_msum3(D, n, r[0], r[1], r[2], w, acc + o3);
         wls_msum4(D, n, r[0], r[1], r[2], w, acc + o4);
-        if (b) {
-            double wu[WLS_CHUNK];
-            for (int c = 0; c < n; ++c)
-                wu[c] = w[c] * (u[k->c.idx[c0 + c]] - u[i]);
-            wls_basis_sums(D, B, n, r[0], r[1], r[2], wu, b);
-        }
     }
     if (B) /* the centre particle: p^(0) = e_0, weight f(0) */
         acc[0] += pst_sph_shape(K, D, 0.0, 0);
@@ -207,12 +181,12 @@ static int radial_solve(int D, int B, const double *M, double *b)
     return ok;
 }
 
-/* Solve M c = b at the row's level (b in, c out): the coefficients of the fit in scaled
- * coordinates. fac holds the scheme's factor for LVL_QUADRIC; fr is scratch. */
-static void solve_level(const wls_data *d, int level, const double *M, const double *fac,
-                        double *fr, double rank_tol, double *b)
+/* The reduced fit's factor is formed afresh (a fallback row is rare). */
+void wls_solve_level(const wls_data *d, int level, const double *M, const double *fac,
+                     double rank_tol, double *b)
 {
     int D = d->dim, B = d->typeB;
+    double fr[(WLS_NBMAX - 3) * (WLS_NBMAX - 3)];
     if (level == LVL_QUADRIC)
         d->solve(D, d->nb, M, fac, b);
     else if (level == LVL_REDUCED && reduced_factor(D, B, M, fr, rank_tol))
@@ -242,7 +216,7 @@ typedef void (*moments_fn)(const wls_ctx *, size_t, size_t, double *);
     {                                                                                          \
         const int nm = WLS_NMOM(D) - (B ? 0 : D + 1);                                          \
         for (size_t i = i0; i < i1; ++i)                                                       \
-            moments_row(k, D, B, (pst_kernel)K, i, NULL, mom + (size_t)nm * (i - b0), NULL);   \
+            moments_row(k, D, B, (pst_kernel)K, i, mom + (size_t)nm * (i - b0));               \
     }                                                                                          \
     static void moments_##D##_##B##_##K(const wls_ctx *k, size_t b0, size_t b1, double *mom)    \
     {                                                                                          \
@@ -261,6 +235,18 @@ static const moments_fn moments_table[2][2][4] = {
      {moments_2_1_0, moments_2_1_1, moments_2_1_2, moments_2_1_3}},
     {{moments_3_0_0, moments_3_0_1, moments_3_0_2, moments_3_0_3},
      {moments_3_1_0, moments_3_1_1, moments_3_1_2, moments_3_1_3}}};
+typedef void (*mrows_fn)(const wls_ctx *, size_t, size_t, size_t, double *);
+static const mrows_fn mrows_table[2][2][4] = {
+    {{mrows_2_0_0, mrows_2_0_1, mrows_2_0_2, mrows_2_0_3},
+     {mrows_2_1_0, mrows_2_1_1, mrows_2_1_2, mrows_2_1_3}},
+    {{mrows_3_0_0, mrows_3_0_1, mrows_3_0_2, mrows_3_0_3},
+     {mrows_3_1_0, mrows_3_1_1, mrows_3_1_2, mrows_3_1_3}}};
+
+void wls_row_moments(const wls_ctx *k, size_t i, double *mom)
+{
+    const wls_data *d = k->d;
+    mrows_table[d->dim - 2][d->typeB][d->kernel](k, i, i + 1, i, mom);
+}
 
 void pst_wls_free(void *p)
 {
@@ -269,6 +255,8 @@ void pst_wls_free(void *p)
         return;
     pst_free(d->lam);
     pst_free(d->level);
+    pst_free(d->gkap);
+    pst_free(d->hkap);
     free(d);
 }
 
@@ -310,10 +298,16 @@ int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn
     if (!d->lam && PST_DATA_ARRAY(d->lam, (n * (size_t)nb + PST_LANES) * sizeof *d->lam))
         memset(d->lam + n * (size_t)nb, 0, PST_LANES * sizeof *d->lam);
     PST_DATA_ARRAY(d->level, n);
+    const int nh = D * (D + 1) / 2;
+    int kept = 1;
+    if (op->opts.keep & PST_KEEP_GRADIENT)
+        kept = PST_DATA_ARRAY(d->gkap, n * (size_t)(D * nb) * sizeof *d->gkap) != NULL;
+    if (op->opts.keep & PST_KEEP_HESSIAN)
+        kept = kept && PST_DATA_ARRAY(d->hkap, n * (size_t)(nh * nb) * sizeof *d->hkap) != NULL;
     double *mom = pst_alloc(blk * (size_t)nm * sizeof *mom);
     double *Mb = pst_alloc(blk * (size_t)(nb * nb) * sizeof *Mb);
     double *fac = pst_alloc(blk * (size_t)(nb * nb) * sizeof *fac);
-    if (!d->lam || !d->level || !mom || !Mb || !fac) {
+    if (!d->lam || !d->level || !kept || !mom || !Mb || !fac) {
         pst_free(mom);
         pst_free(Mb);
         pst_free(fac);
@@ -366,6 +360,10 @@ int pst_wls_precompute(pst_op *op, int typeB, wls_factor_fn factor, wls_solve_fn
                 solve(D, nb, M, fac + (size_t)(nb * nb) * (i - b0), lam);
             }
             d->level[i] = lvl;
+            if (d->gkap || d->hkap) /* the derivatives' kappas of the same level (opts.keep) */
+                wls_kappas(d, lvl, M, fac + (size_t)(nb * nb) * (i - b0), rank_tol,
+                           1.0 / pst_h(&k.c, i), d->gkap ? d->gkap + (size_t)(D * nb) * i : NULL,
+                           d->hkap ? d->hkap + (size_t)(nh * nb) * i : NULL);
         }
         op->phase[PST_PHASE_WEIGHTS] += omp_get_wtime() - t;
         pst_tally_add(op->tally, b1 - b0); /* the block's rows are done */
@@ -383,55 +381,14 @@ void pst_wls_degrade(pst_op *op, size_t i)
 {
     wls_ctx k = make_ctx(op);
     wls_data *d = op->data;
-    int D = d->dim, B = d->typeB;
-    double mom[35], M[WLS_NBMAX * WLS_NBMAX], *lam = d->lam + (size_t)d->nb * i;
-    moments_row(&k, D, B, d->kernel, i, NULL, mom, NULL);
+    int D = d->dim, B = d->typeB, nb = d->nb, nh = D * (D + 1) / 2;
+    double mom[35], M[WLS_NBMAX * WLS_NBMAX], *lam = d->lam + (size_t)nb * i;
+    wls_row_moments(&k, i, mom);
     wls_build_matrix(D, B, mom, M);
     row_rhs(&k, i, lam);
     d->level[i] = radial_solve(D, B, M, lam) ? LVL_RADIAL : LVL_EMPTY;
-}
-
-/* ---- the fit at the particles: gradient and Hessian --------------------------------------- */
-
-void wls_fit_row(const pst_op *op, const wls_ctx *k, size_t i, const double *u, double *c)
-{
-    const wls_data *d = k->d;
-    int D = d->dim, B = d->typeB, nb = d->nb;
-    double mom[35], M[WLS_NBMAX * WLS_NBMAX], fac[WLS_NBMAX * WLS_NBMAX],
-        fr[(WLS_NBMAX - 3) * (WLS_NBMAX - 3)];
-    moments_row(k, D, B, d->kernel, i, u, mom, c);
-    wls_build_matrix(D, B, mom, M);
-    int lvl = d->level[i];
-    if (lvl == LVL_QUADRIC && !(d->factor(D, nb, M, fac) * op->opts.rank_tol < 1.0))
-        lvl = LVL_REDUCED; /* cannot happen for a row classified as quadric; keeps c finite */
-    solve_level(d, lvl, M, fac, fr, op->opts.rank_tol, c);
-}
-
-void pst_wls_gradient(const pst_op *op, const double *u, double *const grad[3])
-{
-    wls_ctx k = make_ctx(op);
-    int D = k.c.dim, B = k.d->typeB;
-#pragma omp parallel for schedule(static)
-    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
-        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
-            double c[WLS_NBMAX], ih = 1.0 / pst_h(&k.c, i);
-            wls_fit_row(op, &k, i, u, c);
-            for (int a = 0; a < D; ++a)
-                grad[a][i] = c[B + a] * ih;
-        }
-}
-
-void pst_wls_hessian(const pst_op *op, const double *u, double *const hess[6])
-{
-    wls_ctx k = make_ctx(op);
-    int D = k.c.dim, B = k.d->typeB, nh = D * (D + 1) / 2;
-#pragma omp parallel for schedule(static)
-    for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
-        PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
-            double c[WLS_NBMAX], ih = 1.0 / pst_h(&k.c, i);
-            wls_fit_row(op, &k, i, u, c);
-            /* the squares' coefficients are u_aa / 2, the crosses' u_ab (the layout of hess) */
-            for (int e = 0; e < nh; ++e)
-                hess[e][i] = (e < D ? 2.0 : 1.0) * c[B + D + e] * ih * ih;
-        }
+    if (d->gkap || d->hkap) /* kept kappas follow the row's level, as a refit would */
+        wls_kappas(d, d->level[i], M, NULL, op->opts.rank_tol, 1.0 / pst_h(&k.c, i),
+                   d->gkap ? d->gkap + (size_t)(D * nb) * i : NULL,
+                   d->hkap ? d->hkap + (size_t)(nh * nb) * i : NULL);
 }

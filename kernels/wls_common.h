@@ -26,6 +26,7 @@ typedef struct {
     wls_solve_fn solve;
     double *lam;           /* nb per particle: a_Ij = w_j lam_I . p_j            */
     uint8_t *level;        /* LVL_* per particle                                 */
+    double *gkap, *hkap;   /* opts.keep: D (nh) x nb kappas per particle, or NULL */
 } wls_data;
 
 /* Everything the pair functions read, gathered once per call (the rows are those of the
@@ -56,6 +57,14 @@ PST_KHOT double cut_weight(int D, pst_kernel K, double q, double supp, double ep
  * vectorises. The order of a vectorised sum is fixed by the code, the same for every row and
  * thread: results do not depend on the thread count. A 3D row (~190 neighbours) is one chunk. */
 #define WLS_CHUNK 256
+
+/* The index among the degree-2 sums of graded lexicographic order (xx xy yy / xx xy xz yy yz
+ * zz) of basis entry e's square or cross (basis order xx yy xy / xx yy zz xy xz yz). */
+static inline int wls_gl2b(int D, int e)
+{
+    static const unsigned char order[2][6] = {{0, 2, 1}, {0, 3, 5, 1, 2, 4}};
+    return order[D - 2][e];
+}
 
 /* Scaled offsets r[a][c] of the neighbours idx[0..n) of xc and their weights w (cut_weight's
  * values). Separate loops, so that the sqrt runs in vector instructions (the library is built
@@ -114,11 +123,21 @@ PST_KHOT double basis_weight_xyz(int D, int B, double w, double x, double y, dou
     return basis_weight_strided(D, B, w, x, y, z, lam, 1);
 }
 
-/* The fit coefficients c of row i for data u (scaled coordinates), at the row's level
- * (kernels/wls.c). */
-void wls_fit_row(const pst_op *op, const wls_ctx *k, size_t i, const double *u, double *c);
-
-/* M (nb x nb) of a row from its moments (kernels/wls.c). */
+/* kernels/wls.c: the weighted monomial sums of row i (the precompute's, in the CPU's widest
+ * ISA); M (nb x nb) of a row from its moments; M c = b solved at a row's level (b in, c out:
+ * the coefficients of the fit in scaled coordinates; fac holds the scheme's factor of M, read
+ * on LVL_QUADRIC only). */
+void wls_row_moments(const wls_ctx *k, size_t i, double *mom);
 void wls_build_matrix(int D, int B, const double *mom, double *M);
+void wls_solve_level(const wls_data *d, int level, const double *M, const double *fac,
+                     double rank_tol, double *b);
+
+/* kernels/wls_derivs.c: the fit coefficients c of row i for data u (scaled coordinates), at
+ * the row's level; the kappas of the row's gradient (gk, D x nb) and second derivatives (hk,
+ * nh x nb; either may be NULL) at the given level, with ih = 1 / h_I: the derivatives are
+ * kappa . b, b the row's data vector. */
+void wls_fit_row(const pst_op *op, const wls_ctx *k, size_t i, const double *u, double *c);
+void wls_kappas(const wls_data *d, int level, const double *M, const double *fac,
+                double rank_tol, double ih, double *gk, double *hk);
 
 #endif /* PSTENCIL_WLS_COMMON_H */

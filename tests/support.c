@@ -175,6 +175,14 @@ void test_rough_mobility(pst_cloud *c, int ncomp)
     }
 }
 
+size_t test_arrays_differ(double *const a[], double *const b[], int ncomp, size_t n)
+{
+    size_t d = 0;
+    for (int k = 0; k < ncomp; ++k)
+        d += memcmp(a[k], b[k], n * sizeof(double)) != 0;
+    return d;
+}
+
 size_t test_flat_layout(pst_cloud *c)
 {
     int dim = pst_cloud_dim(c);

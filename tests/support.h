@@ -49,6 +49,9 @@ double *test_field(const pst_cloud *c, double (*fn)(const double *x));
 /* Full support: every coordinate of particle i at least `margin` inside [lo, hi]. */
 int test_inside(const pst_cloud *c, size_t i, double lo, double hi, double margin);
 
+/* How many of the ncomp arrays a[k], b[k] of n doubles differ in any bit. */
+size_t test_arrays_differ(double *const a[], double *const b[], int ncomp, size_t n);
+
 /* Every stride-th particle (0, stride, 2 stride, ..) that is Dirichlet becomes Neumann. */
 void test_make_neumann(pst_cloud *c, size_t stride);
 

@@ -431,15 +431,6 @@ static void test_degenerate(void)
     pst_cloud_destroy(c);
 }
 
-/* The number of entries where a and b (ncomp arrays of n) differ in any bit. */
-static size_t differ(double *const a[6], double *const b[6], int ncomp, size_t n)
-{
-    size_t d = 0;
-    for (int k = 0; k < ncomp; ++k)
-        d += memcmp(a[k], b[k], n * sizeof(double)) != 0;
-    return d;
-}
-
 /* opts.keep: the gradient and (icspm) Hessian from the kept matrices equal the refitted ones
  * bit for bit, on clouds with fallback rows (2D, h = 0.5 s0), Dirichlet and Neumann rows (3D;
  * kept at the Dirichlet rows too) and per-particle h; bit-identical for 1 and 2 threads; still
@@ -479,14 +470,16 @@ static void test_keep(void)
                 CHECK_INT(pst_op_hessian(kept, u, a[3]), PST_OK);
             }
             errors e = measure(c, kept, 1, 3.0 * 1.2 * 1.2 * spacing(3), hess); /* 3 h at most */
+            size_t dg = test_arrays_differ(a[2], a[0], dim, n);
+            size_t dh = hess ? test_arrays_differ(a[3], a[1], nq, n) : 0;
             printf("keep %dD %-6s: %zu rows ok, %zu fallback, %zu too few; kept against "
-                   "refitted: %zu + %zu arrays differ; quadratic gradient error %.1e, Hessian %.1e over %zu rows\n",
+                   "refitted: %zu + %zu arrays differ; quadratic gradient error %.1e, Hessian "
+                   "%.1e over %zu rows\n",
                    dim, schemes[s], counts[PST_ROW_OK], counts[PST_ROW_FALLBACK],
-                   counts[PST_ROW_TOO_FEW], differ(a[2], a[0], dim, n),
-                   hess ? differ(a[3], a[1], nq, n) : 0, e.grad, e.hess, e.rows);
+                   counts[PST_ROW_TOO_FEW], dg, dh, e.grad, e.hess, e.rows);
             CHECK(t != 0 || counts[PST_ROW_OK] < n); /* the 2D cloud has fallback rows */
-            CHECK_INT(differ(a[2], a[0], dim, n), 0); /* the same sums and matrices */
-            CHECK_INT(hess ? differ(a[3], a[1], nq, n) : 0, 0);
+            CHECK_INT(dg, 0); /* the same sums and matrices */
+            CHECK_INT(dh, 0);
             CHECK(t == 0 || e.rows > 100);
             CHECK(t == 0 || s != 1 || (e.grad <= 1e-8 && e.hess <= 1e-7)); /* quadratic-exact */
             omp_set_num_threads(1);
@@ -494,8 +487,8 @@ static void test_keep(void)
             if (hess)
                 CHECK_INT(pst_op_hessian(kept, u, a[1]), PST_OK);
             omp_set_num_threads(saved > 1 ? saved : 2);
-            CHECK_INT(differ(a[0], a[2], dim, n), 0);
-            CHECK_INT(hess ? differ(a[1], a[3], nq, n) : 0, 0);
+            CHECK_INT(test_arrays_differ(a[0], a[2], dim, n), 0);
+            CHECK_INT(hess ? test_arrays_differ(a[1], a[3], nq, n) : 0, 0);
             omp_set_num_threads(saved);
             pst_op_destroy(plain);
             pst_op_destroy(kept);

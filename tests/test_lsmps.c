@@ -1,11 +1,12 @@
 /* Quadric LSMPS (types B and A) and LP-MPS on the operator object: quadratic exactness of the
  * Laplacian, gradient, Hessian and interpolation on jittered clouds (K = 0.8), LP-MPS == LSMPS
  * type A, Neumann rows, the two apply paths and assembly, thread independence, degenerate rows
- * and the fallback chain, bad options. */
+ * and the fallback chain, the kept derivatives, bad options. */
 #include "check.h"
 #include "pstencil.h"
 #include "support.h"
 
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -408,12 +409,107 @@ static void test_errors(void)
     pst_cloud_destroy(c);
 }
 
+/* opts.keep: the gradient and Hessian from the kept kappas equal the refitted ones bit for bit,
+ * on a 2D cloud whose rows reach every fallback level (h = 0.5 s0), a 3D one with Dirichlet
+ * and Neumann rows and per-particle h, and a flat neighbourhood (the degraded rows), for the
+ * three configurations; bit-identical for 1 and 2 threads; exact on quadratics where the fit
+ * is. */
+static void test_keep(void)
+{
+    for (int t = 0; t < 3; ++t) {
+        int dim = t == 0 ? 2 : 3, nh = dim * (dim + 1) / 2;
+        pst_cloud *c;
+        if (t == 2) {
+            CHECK_INT(pst_cloud_create(&c, 3, 26, NULL), PST_OK);
+            test_flat_layout(c); /* a 5 x 5 plane and one particle off it: a flat row */
+            const double off[3] = {0.2, 0.2, 0.05};
+            for (int d = 0; d < 3; ++d)
+                pst_cloud_coord(c, d)[25] = off[d];
+            pst_cloud_set_h_uniform(c, 0.1, NULL);
+        } else {
+            c = t == 0 ? test_lattice(2, 2.0, 3.0, 0.05, 0.5, 0.8, 3, 0)
+                       : test_lattice(3, 2.0, 3.0, 1.0 / 16, 1.2, 0.6, 5, 1);
+        }
+        size_t n = pst_cloud_size(c);
+        if (t == 1) {
+            test_make_neumann(c, 2);
+            double *h = pst_cloud_h_per_particle(c);
+            for (size_t i = 0; i < n; ++i)
+                h[i] = 1.2 / 16 * (1.0 + 0.2 * pst_rng_symmetric(5, i, 9));
+        }
+        pst_nlist *nl = test_nlist(c, 3.0);
+        double *u = test_field(c, quad3), *a[4][6];
+        for (int r = 0; r < 4; ++r)
+            for (int k = 0; k < 6; ++k)
+                a[r][k] = malloc(n * sizeof(double));
+        for (int cfg = 0; cfg < 3; ++cfg) {
+            int saved = omp_get_max_threads();
+            pst_op_opts o;
+            pst_op_defaults(&o);
+            o.scheme = cfg_scheme[cfg];
+            o.variant = cfg_variant[cfg];
+            pst_op *plain = test_op_of(c, nl, &o);
+            o.keep = PST_KEEP_GRADIENT | PST_KEEP_HESSIAN;
+            pst_op *kept = test_op_of(c, nl, &o);
+            size_t counts[PST_ROW_NSTATUS];
+            pst_op_status_counts(kept, counts);
+            CHECK_INT(pst_op_gradient(plain, u, a[0]), PST_OK);
+            CHECK_INT(pst_op_hessian(plain, u, a[1]), PST_OK);
+            CHECK_INT(pst_op_gradient(kept, u, a[2]), PST_OK);
+            CHECK_INT(pst_op_hessian(kept, u, a[3]), PST_OK);
+            double eg = 0, eh = 0;
+            size_t used = 0;
+            for (size_t i = 0; t == 1 && i < n; ++i) {
+                if (!inner(c, i, 3.0 * 1.44 / 16) || pst_op_status(kept)[i] != PST_ROW_OK)
+                    continue;
+                double x[3];
+                test_position(c, i, x);
+                ++used;
+                for (int d = 0; d < dim; ++d)
+                    eg = fmax(eg, fabs(a[2][d][i] - quad_grad(dim, x, d)));
+                for (int e = 0; e < nh; ++e)
+                    eh = fmax(eh, fabs(a[3][e][i] - quad_hess(dim, e)));
+            }
+            size_t dg = test_arrays_differ(a[2], a[0], dim, n);
+            size_t dh = test_arrays_differ(a[3], a[1], nh, n);
+            printf("keep %dD %-7s: %zu ok, %zu rank-deficient, %zu too few; kept against "
+                   "refitted: %zu + %zu arrays differ; quadratic errors %.1e / %.1e over %zu "
+                   "rows\n",
+                   dim, cfg_name[cfg], counts[PST_ROW_OK], counts[PST_ROW_RANK_DEFICIENT],
+                   counts[PST_ROW_TOO_FEW], dg, dh, eg, eh, used);
+            CHECK(t == 1 || counts[PST_ROW_OK] < n); /* the fallback levels are reached */
+            CHECK_INT(dg, 0); /* the same kappas and data vector */
+            CHECK_INT(dh, 0);
+            CHECK(t != 1 || (used > 100 && eg <= 1e-10 && eh <= 1e-8));
+            omp_set_num_threads(1);
+            CHECK_INT(pst_op_gradient(kept, u, a[0]), PST_OK);
+            CHECK_INT(pst_op_hessian(kept, u, a[1]), PST_OK);
+            omp_set_num_threads(saved > 1 ? saved : 2);
+            CHECK_INT(test_arrays_differ(a[0], a[2], dim, n), 0);
+            CHECK_INT(test_arrays_differ(a[1], a[3], nh, n), 0);
+            omp_set_num_threads(saved);
+            pst_op_destroy(plain);
+            pst_op_destroy(kept);
+        }
+        for (int r = 0; r < 4; ++r)
+            for (int k = 0; k < 6; ++k)
+                free(a[r][k]);
+        free(u);
+        pst_nlist_destroy(nl);
+        pst_cloud_destroy(c);
+    }
+    CHECK_INT(pst_scheme_supports("lpmps", PST_SUPPORTS_KEEP), 1);
+    CHECK_INT(pst_scheme_keep_bytes("lsmps", 3, PST_KEEP_GRADIENT | PST_KEEP_HESSIAN), 720);
+    CHECK_INT(pst_scheme_keep_bytes("lpmps", 2, PST_KEEP_GRADIENT), 80);
+}
+
 int main(void)
 {
     test_exactness();
     test_lpmps_is_lsmps_a();
     test_neumann();
     test_degenerate();
+    test_keep();
     test_errors();
     return check_summary("test_lsmps");
 }

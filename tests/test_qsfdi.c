@@ -510,7 +510,7 @@ static void test_keep(void)
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "laplacian = 1") != NULL);
     o.laplacian = 1;
-    o.scheme = "lsmps";
+    o.scheme = "lv";
     CHECK_INT(pst_op_create(&op, c, nl, &o, err), PST_EINVAL);
     CHECK(strstr(err, "only qsfdi") != NULL);
     CHECK(op == NULL);

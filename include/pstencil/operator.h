@@ -178,7 +178,7 @@ enum {
     PST_SUPPORTS_SYMMETRIC,        /* CG through a symmetric scaling (with G1, no Neumann rows) */
     PST_SUPPORTS_DERIVATIVES_ONLY, /* derivatives without the rows (opts.laplacian = 0)        */
     PST_SUPPORTS_HALF_LIST,        /* the matrix-free apply on a half list (pst_op_use_half_list) */
-    PST_SUPPORTS_KEEP              /* pst_op_opts.keep (qsfdi, the CSPM family)                */
+    PST_SUPPORTS_KEEP              /* pst_op_opts.keep (qsfdi, lsmps, lpmps, the CSPM family)  */
 };
 int pst_scheme_supports(const char *name, int what);
 

@@ -114,8 +114,8 @@ static int check_opts(const pst_op_opts *o, const pst_cloud *c, const pst_nlist 
               "(got %d)",
               o->keep);
     PST_CHECK(o->keep && !(*scheme)->keep_bytes[1][0], PST_EINVAL, err,
-              "%s keeps no derivative weights (keep = %d): only qsfdi and the CSPM family "
-              "(cspm, icspm, csph2g) do; its derivatives are computed when asked",
+              "%s keeps no derivative weights (keep = %d): only qsfdi, lsmps, lpmps and the "
+              "CSPM family (cspm, icspm, csph2g) do; its derivatives are computed when asked",
               (*scheme)->name, o->keep);
     PST_CHECK((o->keep & PST_KEEP_HESSIAN) && !(*scheme)->hessian, PST_EINVAL, err,
               "%s has no Hessian estimate, so it cannot keep one (keep = %d)", (*scheme)->name,
