@@ -670,18 +670,19 @@ static void test_half_list(void)
 }
 
 /* The base operator keeps what its gradient and Hessian tasks need, on the schemes that keep
- * (qsfdi and the CSPM family; lv keeps nothing). */
+ * (qsfdi, the WLS schemes and the CSPM family; lv keeps nothing). */
 static void test_keeps(void)
 {
     const char *tasks = "tasks=[{\"type\":\"laplacian\",\"field\":\"u\"},"
                         "{\"type\":\"gradient\",\"field\":\"u\"},"
                         "{\"type\":\"hessian\",\"field\":\"u\"}]";
-    const char *cases[4][2] = {{"operator.scheme=qsfdi", "3"}, {"operator.scheme=icspm", "3"},
-                               {"operator.scheme=cspm", "1"}, {"operator.scheme=lv", "0"}};
-    for (int k = 0; k < 4; ++k) {
+    const char *cases[5][2] = {{"operator.scheme=qsfdi", "3"}, {"operator.scheme=icspm", "3"},
+                               {"operator.scheme=lsmps", "3"}, {"operator.scheme=cspm", "1"},
+                               {"operator.scheme=lv", "0"}};
+    for (int k = 0; k < 5; ++k) {
         /* cspm and lv have no Hessian: their third task is a second gradient */
         const char *ov[3] = {tasks, cases[k][0], "tasks.2.type=gradient"};
-        pst_scene s = scene(ov, k >= 2 ? 3 : 2);
+        pst_scene s = scene(ov, k >= 3 ? 3 : 2);
         pst_plan p;
         pst_run_counters cnt;
         pst_cloud *c = run(&s, &cnt, &p, PST_OK);
