@@ -1,6 +1,6 @@
-/* The CSPM family's pair passes but the rows' (kernels/cspm_family.c): the volumes V_j, j's
- * number density with its own h, and the raw moments of a row, of the precompute; the data sums
- * of a row, of the derivatives. */
+/* The CSPM family's pair passes other than the rows' (kernels/cspm_family.c): the precompute's
+ * volumes V_j (j's number density with its own h) and raw moments of a row, and the data sums
+ * of a row that the derivatives read. */
 #include "cspm_family.h"
 #include "isa.h"
 #include "wls_sums.h"

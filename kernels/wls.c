@@ -2,9 +2,9 @@
  * moment pass, the moment matrix, the fallback levels and the precompute; its rows (matrix-free
  * apply, half-list rows, emission) are in wls_rows.c, the fit at the particles (gradient,
  * Hessian, the data pass) in wls_derivs.c, interpolation at points in wls_points.c, what they
- * share in wls_common.h. A scheme supplies only its
- * factorisation of the moment matrix (kernels/lsmps.c: LDL^T; kernels/lpmps.c: the Schur
- * complement); qsfdi and the mixed schemes use the vectorised moment sums (pst_wls_msums).
+ * share in wls_common.h. A scheme supplies only its factorisation of the moment matrix
+ * (kernels/lsmps.c: LDL^T; kernels/lpmps.c: the Schur complement); qsfdi and the mixed schemes
+ * use the vectorised moment sums (pst_wls_msums).
  *
  * Row I fits a full quadratic in the scaled offsets x^ = (x_j - x_I) / h_I (r_s = h,
  * choice 3) by weighted least squares with the quintic weight w_j = f(|x^_j|) (QSFDI eq. 9; the
@@ -21,10 +21,9 @@
  * of degree 0 (B) / 2 (A) to 4, one neighbour pass: the neighbours gathered into arrays, then
  * one vectorised reduction loop per degree), inversion (the scheme's factorisation) and weights
  * (the solve for lambda, or the fallback chain; with opts.keep the derivatives' kappas of the
- * same level, wls_derivs.c). Fallback chain: quadric fit (status ok or
- * ill-conditioned) -> the linear-exact fit on (x, y, |x|^2) (1 included for type B) -> a radial
- * row a_Ij = w_j |x^_j|^2 2D / (h^2 sum w |x^|^4) (exact for |x|^2) -> an empty row (no weighted
- * neighbour). Never NaN. */
+ * same level, wls_derivs.c). Fallback chain: quadric fit (status ok or ill-conditioned) -> the
+ * linear-exact fit on (x, y, |x|^2) (1 included for type B) -> a radial row a_Ij = w_j |x^_j|^2
+ * 2D / (h^2 sum w |x^|^4) (exact for |x|^2) -> an empty row (no weighted neighbour). Never NaN. */
 #include "isa.h"
 #include "lanes.h"
 #include "small_matrix.h"
