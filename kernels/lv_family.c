@@ -424,32 +424,22 @@ static double lv_scale(const pst_op *op, size_t i)
     return d->s[i];
 }
 
-/* <grad u>_I = sum_J V_J (u_J - u_I) C_I g_IJ (54). */
+/* <grad u>_I = sum_J V_J (u_J - u_I) C_I g_IJ (54): one pass over the neighbours with the kept
+ * C_I, a chunk at a time (lv_rows.c). */
 static void lv_gradient(const pst_op *op, const double *u, double *const grad[3])
 {
     lv_ctx k = make_ctx(op);
     const int64_t *off = pst_nlist_offsets(op->nl);
     const uint32_t *idx = pst_nlist_indices(op->nl);
+    const lv_gradient_row_fn row = lv_gradient_row_for(&k);
     int dim = k.c.dim;
 #pragma omp parallel for schedule(static)
     for (size_t b = 0; b < pst_chunks(op->n, PST_CHUNK); ++b)
         PST_CHUNK_ROWS(op->tally, b, op->n, PST_CHUNK, i) {
-            const double *C = k.d->C + (size_t)dim * dim * i;
-            double acc[3] = {0, 0, 0};
-            for (int64_t e = off[i]; e < off[i + 1]; ++e) {
-                size_t j = idx[e];
-                double x[3], g[3], d2;
-                pair_gradient(&k, dim, k.variant, i, j, x, g, &d2);
-                double du = k.c.V[j] * (u[j] - u[i]);
-                for (int c = 0; c < dim; ++c)
-                    acc[c] += du * g[c];
-            }
-            for (int a = 0; a < dim; ++a) {
-                double v = 0;
-                for (int c = 0; c < dim; ++c)
-                    v += C[a * dim + c] * acc[c];
-                grad[a][i] = v;
-            }
+            double g[3];
+            row(&k, off, idx, i, u, g);
+            for (int a = 0; a < dim; ++a)
+                grad[a][i] = g[a];
         }
 }
 

@@ -147,6 +147,11 @@ typedef void (*lv_row_fn)(const lv_ctx *k, const int64_t *off, const uint32_t *i
 /* The chunk row of k's operator: every operator (lv_rows.c). */
 lv_row_fn lv_row_for(const lv_ctx *k);
 
+/* The gradient (54) of row i into g (D entries), in chunks (lv_rows.c): k's gradient variant. */
+typedef void (*lv_gradient_row_fn)(const lv_ctx *k, const int64_t *off, const uint32_t *idx,
+                                   size_t i, const double *u, double *g);
+lv_gradient_row_fn lv_gradient_row_for(const lv_ctx *k);
+
 /* Row i of a half list in chunks (kernels/lv_half_rows.c): y_I and the y_J of its pairs. */
 typedef void (*lv_half_row_fn)(const lv_ctx *k, const int64_t *off, const uint32_t *idx,
                                size_t i, const double *u, double *y);
