@@ -183,6 +183,34 @@ size_t test_arrays_differ(double *const a[], double *const b[], int ncomp, size_
     return d;
 }
 
+size_t test_derivatives_thread_differ(const pst_op *op, const double *u, int dim, size_t n,
+                                      int hessian)
+{
+    const int nh = dim * (dim + 1) / 2, saved = omp_get_max_threads();
+    double *g[2][3], *h[2][6];
+    int ok = 1;
+    for (int t = 0; t < 2; ++t) {
+        for (int k = 0; k < 3; ++k)
+            g[t][k] = malloc(n * sizeof(double));
+        for (int k = 0; k < 6; ++k)
+            h[t][k] = malloc(n * sizeof(double));
+        omp_set_num_threads(t + 1);
+        ok = ok && pst_op_gradient(op, u, g[t]) == PST_OK;
+        ok = ok && (!hessian || pst_op_hessian(op, u, h[t]) == PST_OK);
+    }
+    omp_set_num_threads(saved);
+    size_t d = ok ? test_arrays_differ(g[0], g[1], dim, n) +
+                        (hessian ? test_arrays_differ(h[0], h[1], nh, n) : 0)
+                  : (size_t)-1;
+    for (int t = 0; t < 2; ++t) {
+        for (int k = 0; k < 3; ++k)
+            free(g[t][k]);
+        for (int k = 0; k < 6; ++k)
+            free(h[t][k]);
+    }
+    return d;
+}
+
 size_t test_flat_layout(pst_cloud *c)
 {
     int dim = pst_cloud_dim(c);

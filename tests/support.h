@@ -52,6 +52,12 @@ int test_inside(const pst_cloud *c, size_t i, double lo, double hi, double margi
 /* How many of the ncomp arrays a[k], b[k] of n doubles differ in any bit. */
 size_t test_arrays_differ(double *const a[], double *const b[], int ncomp, size_t n);
 
+/* How many of the gradient arrays (and, with hessian, Hessian arrays) of op, an operator on a
+ * cloud of n particles in dimension dim, for the field u differ in any bit between 1 and 2
+ * threads (the thread count is restored); (size_t)-1 when a call fails. */
+size_t test_derivatives_thread_differ(const pst_op *op, const double *u, int dim, size_t n,
+                                      int hessian);
+
 /* Every stride-th particle (0, stride, 2 stride, ..) that is Dirichlet becomes Neumann. */
 void test_make_neumann(pst_cloud *c, size_t stride);
 
